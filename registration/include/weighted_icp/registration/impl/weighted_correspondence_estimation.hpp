@@ -1,0 +1,257 @@
+#pragma once
+
+#include <cmath>
+#include <stdexcept>
+#include <thread>
+#include <utility>
+
+#include <pcl/console/print.h>
+
+#include "weighted_icp/registration/point_field_weights.h"
+#include "weighted_icp/registration/weighted_correspondence_estimation.h"
+
+namespace weighted_icp {
+
+namespace detail {
+
+/// Index (into the candidates, nearest first) of the heaviest candidate within
+/// `max_dist_sqr`; ties go to the nearer one. -1 when none is within range.
+inline int heaviestCandidate(const NearestNeighborIndex::Scratch& candidates, std::size_t found,
+                             double max_dist_sqr, const std::vector<double>& weights) {
+  const auto& sq_distances = candidates.squaredDistances();
+  if (found == 0 || sq_distances[0] > max_dist_sqr) return -1;
+  if (weights.empty()) return 0;  // uniform: the nearest
+  const auto& indices = candidates.indices();
+  int best = 0;
+  double best_weight = weights[indices[0]];
+  for (std::size_t j = 1; j < found && sq_distances[j] <= max_dist_sqr; ++j) {
+    const double w = weights[indices[j]];
+    if (w > best_weight) {
+      best = static_cast<int>(j);
+      best_weight = w;
+    }
+  }
+  return best;
+}
+
+template <typename PointT>
+bool loadXyz(const PointT& p, float* xyz) {
+  xyz[0] = p.x;
+  xyz[1] = p.y;
+  xyz[2] = p.z;
+  return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
+}
+
+inline int resolveThreads(unsigned int requested) {
+  if (requested > 0) return static_cast<int>(requested);
+  const unsigned int hardware = std::thread::hardware_concurrency();
+  return hardware > 0 ? static_cast<int>(hardware) : 1;
+}
+
+/// Weights for `cloud`: the explicit vector if set (size checked), else the
+/// named field, else uniform (empty). False, with `error` set, when unusable.
+template <typename PointT>
+bool resolveWeights(const pcl::PointCloud<PointT>& cloud, const std::vector<double>& explicit_weights,
+                    const std::string& field_name, const char* default_field,
+                    std::vector<double>& weights, std::string& error) {
+  if (!explicit_weights.empty()) {
+    if (explicit_weights.size() != cloud.size()) {
+      error = std::to_string(explicit_weights.size()) + " weights given for a cloud of " +
+              std::to_string(cloud.size()) + " points";
+      return false;
+    }
+    weights = explicit_weights;
+    return true;
+  }
+  auto from_field = readWeightField(cloud, field_name);
+  if (!from_field) {
+    weights.clear();
+    if (field_name == default_field) return true;
+    error = "the point type has no field '" + field_name + "'";
+    return false;
+  }
+  try {
+    checkWeights(*from_field, "field '" + field_name + "'");
+  } catch (const std::invalid_argument& e) {
+    error = e.what();
+    return false;
+  }
+  weights = std::move(*from_field);
+  return true;
+}
+
+}  // namespace detail
+
+template <typename PointSource, typename PointTarget, typename Scalar>
+WeightedCorrespondenceEstimation<PointSource, PointTarget, Scalar>::WeightedCorrespondenceEstimation(
+    unsigned int k) {
+  corr_name_ = "WeightedCorrespondenceEstimation";
+  setNumberOfNeighbors(k);
+}
+
+template <typename PointSource, typename PointTarget, typename Scalar>
+void WeightedCorrespondenceEstimation<PointSource, PointTarget, Scalar>::setNumberOfNeighbors(
+    unsigned int k) {
+  if (k == 0) throw std::invalid_argument(getClassName() + ": the number of neighbours must be >= 1");
+  k_ = k;
+}
+
+template <typename PointSource, typename PointTarget, typename Scalar>
+void WeightedCorrespondenceEstimation<PointSource, PointTarget, Scalar>::setTargetWeights(
+    std::vector<double> weights) {
+  checkWeights(weights, getClassName() + "::setTargetWeights");
+  target_weights_ = std::move(weights);
+  target_cloud_updated_ = true;
+}
+
+template <typename PointSource, typename PointTarget, typename Scalar>
+void WeightedCorrespondenceEstimation<PointSource, PointTarget, Scalar>::setTargetWeightField(
+    const std::string& field_name) {
+  target_weight_field_ = field_name;
+  target_cloud_updated_ = true;
+}
+
+template <typename PointSource, typename PointTarget, typename Scalar>
+void WeightedCorrespondenceEstimation<PointSource, PointTarget, Scalar>::setSourceWeights(
+    std::vector<double> weights) {
+  checkWeights(weights, getClassName() + "::setSourceWeights");
+  source_weights_ = std::move(weights);
+  source_cloud_updated_ = true;
+}
+
+template <typename PointSource, typename PointTarget, typename Scalar>
+void WeightedCorrespondenceEstimation<PointSource, PointTarget, Scalar>::setSourceWeightField(
+    const std::string& field_name) {
+  source_weight_field_ = field_name;
+  source_cloud_updated_ = true;
+}
+
+template <typename PointSource, typename PointTarget, typename Scalar>
+bool WeightedCorrespondenceEstimation<PointSource, PointTarget, Scalar>::initComputeWeighted() {
+  if (!target_) {
+    PCL_ERROR("[weighted_icp::%s::compute] No input target dataset was given!\n",
+              getClassName().c_str());
+    return false;
+  }
+  if (!pcl::PCLBase<PointSource>::initCompute()) return false;
+  if (target_cloud_updated_) {
+    target_index_.build(*target_, target_indices_.get());
+    std::string error;
+    if (!detail::resolveWeights(*target_, target_weights_, target_weight_field_,
+                                kDefaultWeightField, target_weights_in_use_, error)) {
+      PCL_ERROR("[weighted_icp::%s::compute] Target weights: %s.\n", getClassName().c_str(),
+                error.c_str());
+      return false;
+    }
+    target_cloud_updated_ = false;
+  }
+  if (target_index_.empty()) {
+    PCL_ERROR("[weighted_icp::%s::compute] The target has no finite point to match.\n",
+              getClassName().c_str());
+    return false;
+  }
+  return true;
+}
+
+template <typename PointSource, typename PointTarget, typename Scalar>
+bool WeightedCorrespondenceEstimation<PointSource, PointTarget, Scalar>::initComputeWeightedReciprocal() {
+  if (source_cloud_updated_) {
+    source_index_.build(*input_, indices_.get());
+    std::string error;
+    if (!detail::resolveWeights(*input_, source_weights_, source_weight_field_,
+                                kDefaultWeightField, source_weights_in_use_, error)) {
+      PCL_ERROR("[weighted_icp::%s::compute] Source weights: %s.\n", getClassName().c_str(),
+                error.c_str());
+      return false;
+    }
+    source_cloud_updated_ = false;
+  }
+  return true;
+}
+
+template <typename PointSource, typename PointTarget, typename Scalar>
+void WeightedCorrespondenceEstimation<PointSource, PointTarget, Scalar>::chooseTargets(
+    double max_dist_sqr, pcl::Correspondences& per_source) const {
+  const auto n = static_cast<std::ptrdiff_t>(indices_->size());
+  per_source.resize(indices_->size());
+  // Each source point is decided on its own and written to its own slot, so
+  // the result cannot depend on how the loop is split between threads.
+#pragma omp parallel num_threads(detail::resolveThreads(threads_)) if (n > 512)
+  {
+    NearestNeighborIndex::Scratch candidates(k_);
+#pragma omp for schedule(static)
+    for (std::ptrdiff_t i = 0; i < n; ++i) {
+      pcl::Correspondence& corr = per_source[i];
+      corr.index_query = (*indices_)[i];
+      corr.index_match = pcl::UNAVAILABLE;
+      float query[3];
+      if (!detail::loadXyz((*input_)[corr.index_query], query)) continue;
+      const std::size_t found = target_index_.knn(query, candidates);
+      const int best = detail::heaviestCandidate(candidates, found, max_dist_sqr, target_weights_in_use_);
+      if (best < 0) continue;
+      corr.index_match = candidates.indices()[best];
+      corr.distance = candidates.squaredDistances()[best];
+    }
+  }
+}
+
+namespace detail {
+/// Drops the unmatched slots, keeping the order of the source indices.
+inline void keepMatched(pcl::Correspondences& correspondences) {
+  std::size_t kept = 0;
+  for (const auto& corr : correspondences)
+    if (corr.index_match != pcl::UNAVAILABLE) correspondences[kept++] = corr;
+  correspondences.resize(kept);
+}
+}  // namespace detail
+
+template <typename PointSource, typename PointTarget, typename Scalar>
+void WeightedCorrespondenceEstimation<PointSource, PointTarget, Scalar>::determineCorrespondences(
+    pcl::Correspondences& correspondences, double max_distance) {
+  if (!initComputeWeighted()) {
+    correspondences.clear();
+    return;
+  }
+  chooseTargets(max_distance * max_distance, correspondences);
+  detail::keepMatched(correspondences);
+  this->deinitCompute();
+}
+
+template <typename PointSource, typename PointTarget, typename Scalar>
+void WeightedCorrespondenceEstimation<PointSource, PointTarget, Scalar>::determineReciprocalCorrespondences(
+    pcl::Correspondences& correspondences, double max_distance) {
+  if (!initComputeWeighted() || !initComputeWeightedReciprocal()) {
+    correspondences.clear();
+    return;
+  }
+  const double max_dist_sqr = max_distance * max_distance;
+  chooseTargets(max_dist_sqr, correspondences);
+  const auto n = static_cast<std::ptrdiff_t>(correspondences.size());
+#pragma omp parallel num_threads(detail::resolveThreads(threads_)) if (n > 512)
+  {
+    NearestNeighborIndex::Scratch candidates(k_);
+#pragma omp for schedule(static)
+    for (std::ptrdiff_t i = 0; i < n; ++i) {
+      pcl::Correspondence& corr = correspondences[i];
+      if (corr.index_match == pcl::UNAVAILABLE) continue;
+      float query[3];
+      detail::loadXyz((*target_)[corr.index_match], query);  // finite: it is in the index
+      const std::size_t found = source_index_.knn(query, candidates);
+      const int back = detail::heaviestCandidate(candidates, found, max_dist_sqr, source_weights_in_use_);
+      if (back < 0 || candidates.indices()[back] != corr.index_query) corr.index_match = pcl::UNAVAILABLE;
+    }
+  }
+  detail::keepMatched(correspondences);
+  this->deinitCompute();
+}
+
+template <typename PointSource, typename PointTarget, typename Scalar>
+typename WeightedCorrespondenceEstimation<PointSource, PointTarget, Scalar>::Base::Ptr
+WeightedCorrespondenceEstimation<PointSource, PointTarget, Scalar>::clone() const {
+  return std::make_shared<WeightedCorrespondenceEstimation<PointSource, PointTarget, Scalar>>(*this);
+}
+
+}  // namespace weighted_icp
+
+#define WEIGHTED_ICP_INSTANTIATE_WeightedCorrespondenceEstimation(PointSource, PointTarget, Scalar) \
+  template class weighted_icp::WeightedCorrespondenceEstimation<PointSource, PointTarget, Scalar>;

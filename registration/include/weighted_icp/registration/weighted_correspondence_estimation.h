@@ -1,0 +1,124 @@
+#pragma once
+// Confidence-weighted correspondence estimation, a drop-in for
+// pcl::registration::CorrespondenceEstimation:
+//
+//   auto ce = weighted_icp::WeightedCorrespondenceEstimation<P, P>::Ptr(...);
+//   ce->setNumberOfNeighbors(5);
+//   ce->setTargetWeights(weights);   // or a "weight" field of the target points
+//   icp.setCorrespondenceEstimation(ce);
+//
+// Rule: for each source point take its k nearest target points within the
+// maximum correspondence distance and choose the one with the largest target
+// weight; equal weights go to the nearer point. With k = 1 (or uniform
+// weights) it is exactly PCL's nearest-neighbour rule, with the same results.
+//
+// Unlike PCL's class it builds its target index once per target (re-setting
+// an unchanged target, as IterativeClosestPoint does on every align(), costs a
+// comparison, not a rebuild), searches in parallel with results independent of
+// the thread count, and allocates nothing per point. It keeps its own index,
+// so the tree given by setSearchMethodTarget() is not used.
+
+#include <limits>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <pcl/correspondence.h>
+#include <pcl/registration/correspondence_estimation.h>
+
+#include "weighted_icp/registration/nearest_neighbor_index.h"
+
+namespace weighted_icp {
+
+template <typename PointSource, typename PointTarget, typename Scalar = float>
+class WeightedCorrespondenceEstimation
+    : public pcl::registration::CorrespondenceEstimationBase<PointSource, PointTarget, Scalar> {
+ public:
+  using Ptr = std::shared_ptr<WeightedCorrespondenceEstimation<PointSource, PointTarget, Scalar>>;
+  using ConstPtr =
+      std::shared_ptr<const WeightedCorrespondenceEstimation<PointSource, PointTarget, Scalar>>;
+  using Base = pcl::registration::CorrespondenceEstimationBase<PointSource, PointTarget, Scalar>;
+
+  using Base::getClassName;
+
+  /// Name of the point field read as weight when no weight vector is given.
+  static constexpr const char* kDefaultWeightField = "weight";
+
+  explicit WeightedCorrespondenceEstimation(unsigned int k = 5);
+
+  /// Number of nearest target points among which the heaviest is chosen (>= 1).
+  void setNumberOfNeighbors(unsigned int k);
+  unsigned int getNumberOfNeighbors() const { return k_; }
+
+  /// One weight per target point (finite, >= 0), by cloud index. Takes
+  /// precedence over the weight field. The size is checked against the target
+  /// when correspondences are computed. Throws std::invalid_argument naming the
+  /// first bad weight.
+  void setTargetWeights(std::vector<double> weights);
+  const std::vector<double>& getTargetWeights() const { return target_weights_; }
+  /// Reads target weights from this point field when no vector is set (default
+  /// "weight"). A point type without that field gets uniform weights.
+  void setTargetWeightField(const std::string& field_name);
+  const std::string& getTargetWeightField() const { return target_weight_field_; }
+
+  /// The same for the source points, used by the reciprocal rule only.
+  void setSourceWeights(std::vector<double> weights);
+  const std::vector<double>& getSourceWeights() const { return source_weights_; }
+  void setSourceWeightField(const std::string& field_name);
+  const std::string& getSourceWeightField() const { return source_weight_field_; }
+
+  /// Threads for the search; 0 (default) uses every hardware thread.
+  void setNumberOfThreads(unsigned int threads) { threads_ = threads; }
+  unsigned int getNumberOfThreads() const { return threads_; }
+
+  void determineCorrespondences(
+      pcl::Correspondences& correspondences,
+      double max_distance = std::numeric_limits<double>::max()) override;
+
+  /// Keeps a pair (s, t) only if the same rule applied from t, among the k
+  /// nearest source points weighted by the source weights, chooses s.
+  void determineReciprocalCorrespondences(
+      pcl::Correspondences& correspondences,
+      double max_distance = std::numeric_limits<double>::max()) override;
+
+  typename Base::Ptr clone() const override;
+
+ protected:
+  using Base::corr_name_;
+  using Base::indices_;
+  using Base::input_;
+  using Base::source_cloud_updated_;
+  using Base::target_;
+  using Base::target_cloud_updated_;
+  using Base::target_indices_;
+
+ private:
+  /// Builds what the search needs (indices, target index and weights); false,
+  /// with a PCL_ERROR saying why, when it cannot run.
+  bool initComputeWeighted();
+  bool initComputeWeightedReciprocal();
+  /// For every source index, the chosen target (or UNAVAILABLE) and its
+  /// squared distance, written by slot so the thread count cannot matter.
+  void chooseTargets(double max_dist_sqr, pcl::Correspondences& per_source) const;
+
+  unsigned int k_;
+  unsigned int threads_ = 0;
+  std::vector<double> target_weights_;
+  std::vector<double> source_weights_;
+  std::string target_weight_field_ = kDefaultWeightField;
+  std::string source_weight_field_ = kDefaultWeightField;
+
+  NearestNeighborIndex target_index_;
+  NearestNeighborIndex source_index_;
+  std::vector<double> target_weights_in_use_;  // empty means uniform
+  std::vector<double> source_weights_in_use_;
+};
+
+}  // namespace weighted_icp
+
+// The library instantiates the class for pcl::PointXYZ, PointXYZI, PointNormal
+// and LandmarkPoint with Scalar float and double; for other point types
+// include the implementation, as PCL does for its own templates.
+#if defined(PCL_NO_PRECOMPILE) || defined(WEIGHTED_ICP_NO_PRECOMPILE)
+#include "weighted_icp/registration/impl/weighted_correspondence_estimation.hpp"
+#endif
