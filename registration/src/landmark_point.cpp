@@ -1,13 +1,18 @@
 #include "weighted_icp/registration/landmark_point.h"
 
+#include <pcl/impl/pcl_base.hpp>
 #include <pcl/kdtree/impl/kdtree_flann.hpp>
 #include <pcl/search/impl/kdtree.hpp>
+#include <pcl/search/impl/search.hpp>
 
 #include "weighted_icp/registration/weight_strategies.h"
 
-// PCL's kd-trees for LandmarkPoint, so that pcl::IterativeClosestPoint and
-// getFitnessScore() link for LandmarkCloud without PCL_NO_PRECOMPILE.
+// PCL's base class and kd-trees for LandmarkPoint, so that
+// pcl::IterativeClosestPoint and getFitnessScore() link for LandmarkCloud
+// without PCL_NO_PRECOMPILE.
+template class pcl::PCLBase<weighted_icp::LandmarkPoint>;
 template class pcl::KdTreeFLANN<weighted_icp::LandmarkPoint>;
+template class pcl::search::Search<weighted_icp::LandmarkPoint>;
 template class pcl::search::KdTree<weighted_icp::LandmarkPoint>;
 
 namespace weighted_icp {

@@ -1,0 +1,137 @@
+#include "tool_support.h"
+
+#include <boost/program_options/errors.hpp>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+
+#include <unistd.h>
+
+#include "weighted_icp/io/atomic_file.h"
+
+namespace weighted_icp::tools {
+
+int runTool(const std::string& tool, const std::function<int()>& body) {
+  try {
+    return body();
+  } catch (const boost::program_options::error& e) {
+    std::cerr << tool << ": error: " << e.what() << " (see " << tool << " --help)\n";
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << tool << ": error: " << e.what() << '\n';
+    return 1;
+  }
+}
+
+Progress::Progress(std::string label, std::size_t total)
+    : label_(std::move(label)),
+      total_(total),
+      terminal_(::isatty(STDERR_FILENO) != 0),
+      start_(std::chrono::steady_clock::now()),
+      last_print_(start_) {}
+
+void Progress::step(const std::string& detail) {
+  ++done_;
+  const auto now = std::chrono::steady_clock::now();
+  // In a log, one line per step would drown it: print every 10 % or so.
+  const bool milestone = total_ < 10 || done_ % (total_ / 10) == 0 || done_ == total_;
+  if (!terminal_ && !milestone) return;
+  const double elapsed = std::chrono::duration<double>(now - start_).count();
+  const double eta = done_ > 0 ? elapsed / done_ * (total_ - done_) : 0.0;
+  std::ostringstream line;
+  line << label_ << "  " << done_ << '/' << total_ << "  (" << (100 * done_ / std::max<std::size_t>(total_, 1))
+       << "%)  eta " << std::fixed << std::setprecision(0) << eta << " s";
+  if (!detail.empty()) line << "  " << detail;
+  if (terminal_) std::cerr << '\r' << line.str() << "\033[K" << std::flush;
+  else std::cerr << line.str() << '\n';
+  last_print_ = now;
+}
+
+void Progress::finish() {
+  if (terminal_) std::cerr << '\n';
+}
+
+namespace {
+std::string number(double value) {
+  if (!std::isfinite(value)) return "null";  // JSON has no NaN or infinity
+  std::ostringstream out;
+  out << std::setprecision(std::numeric_limits<double>::max_digits10) << value;
+  return out.str();
+}
+
+std::string quoted(const std::string& text) {
+  std::string out = "\"";
+  for (const char c : text) {
+    switch (c) {
+      case '"': out += "\\\""; break;
+      case '\\': out += "\\\\"; break;
+      case '\n': out += "\\n"; break;
+      case '\t': out += "\\t"; break;
+      default:
+        if (static_cast<unsigned char>(c) < 0x20) {
+          char buffer[8];
+          std::snprintf(buffer, sizeof(buffer), "\\u%04x", c);
+          out += buffer;
+        } else {
+          out += c;
+        }
+    }
+  }
+  return out + "\"";
+}
+}  // namespace
+
+JsonObject& JsonObject::add(const std::string& key, double value) {
+  members_.emplace_back(key, number(value));
+  return *this;
+}
+JsonObject& JsonObject::add(const std::string& key, int value) {
+  members_.emplace_back(key, std::to_string(value));
+  return *this;
+}
+JsonObject& JsonObject::add(const std::string& key, std::size_t value) {
+  members_.emplace_back(key, std::to_string(value));
+  return *this;
+}
+JsonObject& JsonObject::add(const std::string& key, bool value) {
+  members_.emplace_back(key, value ? "true" : "false");
+  return *this;
+}
+JsonObject& JsonObject::add(const std::string& key, const std::string& value) {
+  members_.emplace_back(key, quoted(value));
+  return *this;
+}
+JsonObject& JsonObject::add(const std::string& key, const Eigen::MatrixXd& value) {
+  std::string rows = "[";
+  for (Eigen::Index r = 0; r < value.rows(); ++r) {
+    rows += r ? ",[" : "[";
+    for (Eigen::Index c = 0; c < value.cols(); ++c) rows += (c ? "," : "") + number(value(r, c));
+    rows += "]";
+  }
+  members_.emplace_back(key, rows + "]");
+  return *this;
+}
+
+std::string JsonObject::str() const {
+  std::string out = "{";
+  for (std::size_t i = 0; i < members_.size(); ++i)
+    out += (i ? "," : "") + quoted(members_[i].first) + ":" + members_[i].second;
+  return out + "}";
+}
+
+void writeTextFile(const std::string& path, const std::string& content) {
+  io::writeAtomically(path, [&](const std::string& temporary) {
+    std::ofstream out(temporary);
+    if (!out) throw std::runtime_error("cannot create " + temporary);
+    out << content;
+    out.close();
+    if (!out) throw std::runtime_error("cannot write " + path);
+  });
+}
+
+}  // namespace weighted_icp::tools
