@@ -58,6 +58,14 @@ std::vector<LandmarkMap> LandmarkMap::splitIntoMiniMaps(std::size_t frames_per_m
   return minis;
 }
 
+std::pair<LandmarkMap, LandmarkMap> LandmarkMap::alternateHalves() const {
+  std::pair<LandmarkMap, LandmarkMap> halves;
+  halves.first.frames = halves.second.frames = frames;
+  for (std::size_t i = 0; i < landmarks.size(); ++i)
+    (i % 2 == 0 ? halves.first : halves.second).landmarks.push_back(landmarks[i]);
+  return halves;
+}
+
 void LandmarkMap::transform(const Eigen::Isometry3d& motion) {
   for (auto& [id, pose] : frames) pose = motion * pose;
   const Eigen::Matrix3d rotation = motion.linear();

@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <map>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -62,6 +63,12 @@ class LandmarkMap {
   /// Consecutive mini-maps of `frames_per_minimap` frames each, in frame-id
   /// order; the last one may be shorter.
   std::vector<LandmarkMap> splitIntoMiniMaps(std::size_t frames_per_minimap) const;
+
+  /// Two maps with every frame and alternate landmarks (even, odd positions):
+  /// disjoint point sets over the same scene, whose true relation is the
+  /// identity. The standard test pair for registration on one session map,
+  /// since mini-maps of distant frame ranges may share little of the scene.
+  std::pair<LandmarkMap, LandmarkMap> alternateHalves() const;
 
   /// Applies a rigid transform to frame poses and landmark positions, and
   /// rotates the covariances with it.
