@@ -6,7 +6,7 @@ set -euo pipefail
 packages=(
   build-essential cmake ninja-build pkg-config
   libpcl-dev libflann-dev libeigen3-dev libboost-dev libboost-program-options-dev
-  libopencv-dev libopencv-contrib-dev opencv-data
+  libopencv-dev libopencv-contrib-dev opencv-data libceres-dev
   libgtest-dev libbenchmark-dev
   python3-matplotlib python3-numpy
 )
