@@ -1,7 +1,10 @@
 #include "weighted_icp/io/map_format.h"
 
+#include <cctype>
+#include <cerrno>
 #include <charconv>
 #include <cmath>
+#include <cstring>
 #include <fstream>
 #include <set>
 #include <string_view>
@@ -87,9 +90,12 @@ Landmark parseLandmark(const std::vector<std::string_view>& fields, const FieldR
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 3; ++c) landmark.covariance(r, c) = f.number(5 + 3 * r + c, "covariance entry");
   const std::uint64_t n = f.id(14, "observation count n");
-  if (fields.size() != kLandmarkFixedFields + 3 * n)
-    f.fail("LANDMARK with n = " + std::to_string(n) + " observations needs " +
-           std::to_string(kLandmarkFixedFields + 3 * n) + " fields, found " + std::to_string(fields.size()));
+  // Compared as a count of triples, not as 15 + 3n: a huge n would wrap 3n
+  // around and could match, then ask for an impossible allocation.
+  const std::size_t extra_fields = fields.size() - kLandmarkFixedFields;
+  if (extra_fields % 3 != 0 || n != extra_fields / 3)
+    f.fail("LANDMARK with n = " + std::to_string(n) + " observations needs 15 + 3n fields, found " +
+           std::to_string(fields.size()) + " (" + std::to_string(extra_fields) + " after n)");
   landmark.observations.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
     const std::size_t at = kLandmarkFixedFields + 3 * i;
@@ -154,9 +160,36 @@ std::string exact(double value) {
   const auto result = std::to_chars(buffer, buffer + sizeof(buffer), value);
   return std::string(buffer, result.ptr);
 }
+
+/// Refuses, before anything is written, a map the reader would refuse, so a
+/// written map always reads back.
+void requireWritable(const LandmarkMap& map) {
+  const auto finite = [](const auto& matrix) { return matrix.allFinite(); };
+  for (const auto& [id, pose] : map.frames) {
+    const Eigen::Matrix3d rotation = pose.linear();
+    // The format stores a unit quaternion: anything else would be written as some other pose.
+    if (!finite(pose.matrix()) || !rotation.isUnitary(1e-9) || rotation.determinant() < 0.0)
+      throw std::invalid_argument("frame " + std::to_string(id) + " has a pose that is not a finite rigid motion");
+  }
+  std::set<LandmarkId> ids;
+  for (const auto& landmark : map.landmarks) {
+    const std::string name = "landmark " + std::to_string(landmark.id);
+    if (!ids.insert(landmark.id).second) throw std::invalid_argument(name + " appears twice");
+    if (!finite(landmark.position) || !finite(landmark.covariance))
+      throw std::invalid_argument(name + " has a non-finite position or covariance");
+    for (const auto& o : landmark.observations) {
+      if (!map.frames.count(o.frame_id))
+        throw std::invalid_argument(name + " is observed by frame " + std::to_string(o.frame_id) +
+                                    ", which the map does not have");
+      if (!std::isfinite(o.u) || !std::isfinite(o.v))
+        throw std::invalid_argument(name + " has a non-finite observation in frame " + std::to_string(o.frame_id));
+    }
+  }
+}
 }  // namespace
 
 void writeLandmarkMap(const LandmarkMap& map, std::ostream& out) {
+  requireWritable(map);
   for (const auto& [id, pose] : map.frames) {
     const Eigen::Quaterniond q(pose.linear());
     const Eigen::Vector3d& t = pose.translation();
@@ -175,13 +208,17 @@ void writeLandmarkMap(const LandmarkMap& map, std::ostream& out) {
 }
 
 void writeLandmarkMap(const LandmarkMap& map, const std::string& path) {
-  writeAtomically(path, [&](const std::string& temporary) {
-    std::ofstream out(temporary);
-    if (!out) throw std::runtime_error("cannot create " + temporary);
-    writeLandmarkMap(map, out);
-    out.close();
-    if (!out) throw std::runtime_error("cannot write " + path + " (disk full?)");
-  });
+  try {
+    writeAtomically(path, [&](const std::string& temporary) {
+      std::ofstream out(temporary);
+      if (!out) throw std::runtime_error("cannot write " + path + ": " + std::strerror(errno));
+      writeLandmarkMap(map, out);
+      out.close();
+      if (!out) throw std::runtime_error("cannot write " + path + " (disk full?)");
+    });
+  } catch (const std::invalid_argument& e) {  // the map itself cannot be written
+    throw std::runtime_error("cannot write " + path + ": " + e.what());
+  }
 }
 
 }  // namespace weighted_icp::io

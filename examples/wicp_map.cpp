@@ -1,0 +1,301 @@
+// wicp_map: inspects and prepares landmark maps in the paper's map format.
+//   stats    counts, observation histogram, extents and metric/weight distributions
+//   cut      mini-maps of consecutive frames, the units the paper's experiments align
+//   convert  a weighted LandmarkCloud as PCD or PLY
+//
+// Exit codes (tools::runTool): 0 done, 1 bad data (the message names file and
+// line), 2 bad command line.
+
+#include <algorithm>
+#include <array>
+#include <charconv>
+#include <filesystem>
+#include <iomanip>
+#include <iostream>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <boost/program_options.hpp>
+
+#include "tool_support.h"
+#include "weighted_icp/io/cloud_io.h"
+#include "weighted_icp/io/map_format.h"
+#include "weighted_icp/registration/landmark_point.h"
+#include "weighted_icp/registration/weight_strategies.h"
+
+namespace po = boost::program_options;
+namespace fs = std::filesystem;
+using namespace weighted_icp;
+
+namespace {
+
+const char* const kUsage =
+    "usage: wicp_map stats|cut|convert MAP [options]   (wicp_map COMMAND --help for each)";
+
+/// boost::program_options reads "-1" into an unsigned option as 2^64 - 1, so
+/// counts are read signed and checked here.
+std::size_t nonNegative(long long value, const std::string& option) {
+  if (value < 0) throw po::error("--" + option + " must be >= 0, got " + std::to_string(value));
+  return static_cast<std::size_t>(value);
+}
+
+/// Parses one command's arguments; argv[0] is the command's name. The
+/// positional arguments are declared in `positional_options` and explained in
+/// the usage line of `visible`, which alone --help prints. Returns false after
+/// printing the help.
+bool parseArguments(int argc, char** argv, po::options_description& visible,
+                    const po::options_description& positional_options,
+                    const po::positional_options_description& positional, po::variables_map& vm) {
+  visible.add_options()("help,h", "print this help");
+  po::options_description all;
+  all.add(visible).add(positional_options);
+  po::store(po::command_line_parser(argc, argv).options(all).positional(positional).run(), vm);
+  if (vm.count("help")) {
+    std::cout << visible << '\n';
+    return false;
+  }
+  po::notify(vm);
+  return true;
+}
+
+/// Linear interpolation between order statistics (numpy's default), so the
+/// median of an even count is the mean of the middle two.
+double quantile(const std::vector<double>& sorted, double p) {
+  const double position = p * static_cast<double>(sorted.size() - 1);
+  const auto below = static_cast<std::size_t>(position);
+  const std::size_t above = std::min(below + 1, sorted.size() - 1);
+  return sorted[below] + (position - static_cast<double>(below)) * (sorted[above] - sorted[below]);
+}
+
+void printDistribution(const std::string& label, std::vector<double> values) {
+  std::sort(values.begin(), values.end());
+  std::cout << "  " << std::left << std::setw(30) << label << std::right;
+  for (const double p : {0.0, 0.5, 0.9, 1.0}) std::cout << std::setw(13) << quantile(values, p);
+  std::cout << '\n';
+}
+
+int stats(int argc, char** argv) {
+  std::string map_path;
+  long long min_observations = 2;
+  po::options_description visible(
+      "wicp_map stats MAP [--min-observations N]\n"
+      "Frames, landmarks and their histogram of observation counts; then, over the landmarks\n"
+      "with >= N observations, the bounding box and min/median/90th percentile/max of the\n"
+      "covariance Frobenius norm, the mean observation distance and each strategy's weight.\n"
+      "Options");
+  visible.add_options()("min-observations", po::value(&min_observations)->default_value(min_observations),
+                        "landmarks the extents and distributions are over (the paper aligns those with >= 2)");
+  po::options_description positional_options;
+  positional_options.add_options()("map", po::value(&map_path)->required(), "landmark map");
+  po::positional_options_description positional;
+  positional.add("map", 1);
+  po::variables_map vm;
+  if (!parseArguments(argc, argv, visible, positional_options, positional, vm)) return 0;
+  const std::size_t min_count = nonNegative(min_observations, "min-observations");
+
+  const LandmarkMap map = io::readLandmarkMap(map_path);
+  std::cout << "map         " << map_path << '\n' << "frames      " << map.frames.size();
+  if (!map.frames.empty())
+    std::cout << " (ids " << map.frames.begin()->first << '-' << map.frames.rbegin()->first << ')';
+  std::cout << '\n' << "landmarks   " << map.landmarks.size() << '\n';
+
+  // Buckets 0, 1, 2, 3, 4, 5-9, 10+.
+  std::array<std::size_t, 7> histogram{};
+  for (const auto& landmark : map.landmarks) {
+    const std::size_t n = landmark.observations.size();
+    ++histogram[n < 5 ? n : n < 10 ? 5 : 6];
+  }
+  const std::array<const char*, 7> bucket_names{"0", "1", "2", "3", "4", "5-9", "10+"};
+  std::cout << "observations per landmark:";
+  for (std::size_t i = 0; i < histogram.size(); ++i) std::cout << "  " << bucket_names[i] << ": " << histogram[i];
+  std::cout << '\n';
+
+  const LandmarkMap selected = map.withMinObservations(min_count);
+  std::cout << "landmarks with >= " << min_count << " observations: " << selected.landmarks.size() << '\n';
+  if (selected.landmarks.empty()) return 0;
+
+  Eigen::Vector3d low = selected.landmarks.front().position, high = low;
+  std::vector<double> covariance_norms, mean_distances;
+  for (const auto& landmark : selected.landmarks) {
+    low = low.cwiseMin(landmark.position);
+    high = high.cwiseMax(landmark.position);
+    covariance_norms.push_back(landmark.covariance.norm());
+    mean_distances.push_back(selected.meanObservationDistance(landmark));
+  }
+  const Eigen::IOFormat row(Eigen::StreamPrecision, Eigen::DontAlignCols, " ", " ", "", "", "(", ")");
+  std::cout << "over these " << selected.landmarks.size() << " landmarks:\n"
+            << "  bounding box  min " << low.transpose().format(row) << "  max " << high.transpose().format(row)
+            << "  size " << (high - low).transpose().format(row) << " m\n"
+            << "  " << std::setw(30) << "" << std::setw(13) << "min" << std::setw(13) << "median" << std::setw(13)
+            << "p90" << std::setw(13) << "max" << '\n';
+  printDistribution("covariance norm (Frobenius)", covariance_norms);
+  printDistribution("mean observation distance (m)", mean_distances);
+  for (const WeightStrategy strategy : allWeightStrategies())
+    printDistribution("weight " + toString(strategy), computeWeights(selected, weightFunction(strategy)));
+  return 0;
+}
+
+struct FrameRange {
+  FrameId first = 0;
+  FrameId last = 0;
+};
+
+FrameId parseFrameId(const std::string& text, const std::string& range) {
+  FrameId id = 0;
+  const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), id);
+  if (text.empty() || error != std::errc() || end != text.data() + text.size())
+    throw po::error("--ranges: '" + range + "' is not FIRST-LAST with frame ids FIRST <= LAST");
+  return id;
+}
+
+/// "0-119,120-239" -> {0, 119}, {120, 239}; ranges may overlap.
+std::vector<FrameRange> parseRanges(const std::string& text) {
+  std::vector<FrameRange> ranges;
+  std::size_t start = 0;
+  while (start <= text.size()) {
+    const std::size_t comma = std::min(text.find(',', start), text.size());
+    const std::string range = text.substr(start, comma - start);
+    const std::size_t dash = range.find('-');
+    const FrameRange parsed{parseFrameId(range.substr(0, dash), range),
+                            parseFrameId(dash == std::string::npos ? "" : range.substr(dash + 1), range)};
+    if (parsed.first > parsed.last)
+      throw po::error("--ranges: '" + range + "' is not FIRST-LAST with frame ids FIRST <= LAST");
+    ranges.push_back(parsed);
+    start = comma + 1;
+  }
+  return ranges;
+}
+
+std::string miniMapName(std::size_t index) {
+  std::ostringstream name;
+  name << "minimap_" << std::setw(3) << std::setfill('0') << index << ".txt";
+  return name.str();
+}
+
+/// A mini-map file left by an earlier cut into more pieces would be taken for
+/// one of this cut's, so the folder may hold no minimap_*.txt but ours.
+void requireNoStaleMiniMaps(const fs::path& folder, const std::set<std::string>& names) {
+  if (!fs::is_directory(folder)) return;
+  for (const auto& entry : fs::directory_iterator(folder)) {
+    const std::string name = entry.path().filename().string();
+    if (name.rfind("minimap_", 0) == 0 && entry.path().extension() == ".txt" && !names.count(name))
+      throw std::runtime_error((folder / name).string() +
+                               " is left from an earlier cut; remove it or choose another --out folder");
+  }
+}
+
+int cut(int argc, char** argv) {
+  std::string map_path, out_dir, ranges_text;
+  long long frames_per_minimap = 0, min_observations = 1;
+  po::options_description visible(
+      "wicp_map cut MAP --out DIR (--frames-per-minimap N | --ranges \"0-119,120-239\") [--min-observations N]\n"
+      "Writes DIR/minimap_000.txt, ... in the map format: the frames of each mini-map and every landmark\n"
+      "they saw, with only their observations (LandmarkMap::miniMap). Options");
+  visible.add_options()
+      ("out", po::value(&out_dir)->required(), "output folder (created if missing)")
+      ("frames-per-minimap", po::value(&frames_per_minimap),
+       "consecutive frames per mini-map, in frame-id order; the last may be shorter")
+      ("ranges", po::value(&ranges_text), "frame-id ranges FIRST-LAST, comma separated; may overlap")
+      ("min-observations", po::value(&min_observations)->default_value(min_observations),
+       "drop landmarks observed fewer times within the mini-map; 1 keeps every landmark it saw "
+       "(0 is the same: a mini-map has no landmark it did not see)");
+  po::options_description positional_options;
+  positional_options.add_options()("map", po::value(&map_path)->required(), "landmark map");
+  po::positional_options_description positional;
+  positional.add("map", 1);
+  po::variables_map vm;
+  if (!parseArguments(argc, argv, visible, positional_options, positional, vm)) return 0;
+  if (vm.count("frames-per-minimap") == vm.count("ranges"))
+    throw po::error("give either --frames-per-minimap or --ranges");
+  if (vm.count("frames-per-minimap") && frames_per_minimap < 1)
+    throw po::error("--frames-per-minimap must be >= 1, got " + std::to_string(frames_per_minimap));
+  const std::vector<FrameRange> ranges = vm.count("ranges") ? parseRanges(ranges_text) : std::vector<FrameRange>{};
+  const std::size_t min_count = nonNegative(min_observations, "min-observations");
+
+  const LandmarkMap map = io::readLandmarkMap(map_path);
+  std::vector<LandmarkMap> minis;
+  if (ranges.empty()) {
+    minis = map.splitIntoMiniMaps(static_cast<std::size_t>(frames_per_minimap));
+  } else {
+    for (const auto& range : ranges) {
+      LandmarkMap mini = map.miniMap(range.first, range.last);
+      if (mini.frames.empty())
+        throw std::runtime_error(map_path + " has no frame in the range " + std::to_string(range.first) + "-" +
+                                 std::to_string(range.last));
+      minis.push_back(std::move(mini));
+    }
+  }
+  if (minis.empty()) {
+    std::cout << map_path << " has no frames: no mini-map written\n";
+    return 0;
+  }
+
+  std::set<std::string> names;
+  for (std::size_t i = 0; i < minis.size(); ++i) names.insert(miniMapName(i));
+  requireNoStaleMiniMaps(out_dir, names);
+  fs::create_directories(out_dir);
+  for (std::size_t i = 0; i < minis.size(); ++i) {
+    const LandmarkMap mini = minis[i].withMinObservations(min_count);
+    const std::string path = (fs::path(out_dir) / miniMapName(i)).string();
+    io::writeLandmarkMap(mini, path);
+    std::cout << path << "  frames " << mini.frames.begin()->first << '-' << mini.frames.rbegin()->first << " ("
+              << mini.frames.size() << " frames)  " << mini.landmarks.size() << " landmarks\n";
+  }
+  return 0;
+}
+
+int convert(int argc, char** argv) {
+  std::string map_path, output_path, strategy_name = "covariance";
+  long long min_observations = 2;
+  po::options_description visible(
+      "wicp_map convert MAP OUT.pcd|OUT.ply [--strategy covariance] [--min-observations 2]\n"
+      "Saves the landmarks as a weighted LandmarkCloud (x y z weight covariance_norm\n"
+      "mean_observation_distance num_observations). A map without landmarks gives an empty\n"
+      "cloud, which only PCD can hold. Options");
+  visible.add_options()
+      ("strategy", po::value(&strategy_name)->default_value(strategy_name),
+       "weight: base, covariance, observations, mean-distance")
+      ("min-observations", po::value(&min_observations)->default_value(min_observations),
+       "drop landmarks observed fewer times (the paper uses 2)");
+  po::options_description positional_options;
+  positional_options.add_options()
+      ("map", po::value(&map_path)->required(), "landmark map")
+      ("output", po::value(&output_path)->required(), "output cloud");
+  po::positional_options_description positional;
+  positional.add("map", 1).add("output", 1);
+  po::variables_map vm;
+  if (!parseArguments(argc, argv, visible, positional_options, positional, vm)) return 0;
+  const std::size_t min_count = nonNegative(min_observations, "min-observations");
+  WeightStrategy strategy = WeightStrategy::Covariance;
+  try {
+    strategy = parseWeightStrategy(strategy_name);
+  } catch (const std::invalid_argument& e) {
+    throw po::error(std::string("--strategy: ") + e.what());
+  }
+
+  const LandmarkMap map = io::readLandmarkMap(map_path).withMinObservations(min_count);
+  const LandmarkCloud::Ptr cloud = toLandmarkCloud(map, weightFunction(strategy));
+  io::saveLandmarkCloud(*cloud, output_path);
+  std::cout << output_path << ": " << cloud->size() << " landmarks with >= " << min_count
+            << " observations, weight " << toString(strategy) << '\n';
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return tools::runTool("wicp_map", [&] {
+    const std::string command = argc > 1 ? argv[1] : "";
+    if (command == "--help" || command == "-h") {
+      std::cout << kUsage << '\n';
+      return 0;
+    }
+    if (command == "stats") return stats(argc - 1, argv + 1);
+    if (command == "cut") return cut(argc - 1, argv + 1);
+    if (command == "convert") return convert(argc - 1, argv + 1);
+    throw po::error(command.empty() ? std::string("no command given; ") + kUsage
+                                    : "unknown command '" + command + "'; " + kUsage);
+  });
+}
