@@ -1,0 +1,118 @@
+#pragma once
+// A synthetic RGB-D sequence with exact ground truth, for developing and
+// testing the visual SLAM front end without external data: a hand-held-like
+// camera moving through a textured room (walls, floor, ceiling, a desk,
+// boxes), rendered by ray casting into colour and depth images as a
+// Kinect-like sensor would record them.
+//
+// Conventions: world z is up, the floor is z = 0 and the room is centred on
+// x = y = 0. Cameras look along their +z axis with x right and y down (as
+// OpenCV and TUM). Everything is deterministic for a seed.
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <opencv2/core.hpp>
+
+#include "weighted_icp/io/camera.h"
+
+namespace weighted_icp::io {
+
+/// TUM freiburg 1's RGB intrinsics without its lens distortion, 640 x 480,
+/// depth factor 5000.
+PinholeCamera syntheticRgbdCamera();
+
+struct SyntheticRgbdOptions {
+  /// Drives the textures, the camera path's phases, the moving object's
+  /// texture and all noise. Options other than the seed do not change what
+  /// the seed chose (e.g. turning the moving object on keeps the room).
+  std::uint64_t seed = 1;
+  std::size_t frames = 150;
+  double fps = 30.0;  // timestamps are frame / fps seconds
+  /// Must have no distortion: the renderer casts undistorted rays.
+  PinholeCamera camera = syntheticRgbdCamera();
+
+  /// A textured box carried across the view now and then, covering up to
+  /// about a fifth of the image while it passes.
+  bool moving_object = false;
+  /// A dim, low-contrast, noisy image (gain, gamma, sensor noise) on which a
+  /// plain corner detector struggles.
+  bool dim_lighting = false;
+
+  /// Kinect-like depth error: Gaussian noise of sigma_z = coefficient * z^2,
+  /// then quantisation of the disparity to 1/8 pixel. Off: depth is exact up
+  /// to the depth image's resolution (1 / camera.depth_factor).
+  bool depth_noise = true;
+  double depth_noise_coefficient = 0.0015;
+  /// Sensor limits, applied with or without noise: depth is 0 (invalid)
+  /// outside [min_depth, max_depth] (metres along the optical axis) and where
+  /// the ray meets the surface more than max_incidence_deg from its normal.
+  double min_depth = 0.4;
+  double max_depth = 4.5;
+  double max_incidence_deg = 75.0;
+};
+
+/// An axis-aligned box turned by `yaw` about the vertical axis through its centre.
+struct SceneBox {
+  Eigen::Vector3d center = Eigen::Vector3d::Zero();
+  Eigen::Vector3d size = Eigen::Vector3d::Ones();  // metres along its own x, y, z
+  double yaw = 0.0;                                // radians
+};
+
+struct SyntheticRgbdFrame {
+  double timestamp = 0.0;
+  cv::Mat color;  // CV_8UC3, BGR
+  cv::Mat depth;  // CV_16UC1, metres * camera.depth_factor, 0 = invalid
+  Eigen::Isometry3d camera_to_world = Eigen::Isometry3d::Identity();
+  cv::Mat moving_object_mask;  // CV_8UC1, 255 where the moving object is seen
+};
+
+class SyntheticRgbdSequence {
+ public:
+  /// Draws the scene's textures (some 0.3 s of CPU). Throws std::invalid_argument
+  /// naming the first option out of range.
+  explicit SyntheticRgbdSequence(const SyntheticRgbdOptions& options);
+  ~SyntheticRgbdSequence();
+  SyntheticRgbdSequence(SyntheticRgbdSequence&&) noexcept;
+  SyntheticRgbdSequence& operator=(SyntheticRgbdSequence&&) noexcept;
+
+  std::size_t size() const;
+  const SyntheticRgbdOptions& options() const;
+
+  /// Renders frame i (0 <= i < size(), else std::out_of_range).
+  SyntheticRgbdFrame frame(std::size_t i) const;
+  /// The true camera-to-world pose and timestamp of frame i, without rendering.
+  Eigen::Isometry3d cameraToWorld(std::size_t i) const;
+  double timestamp(std::size_t i) const;
+
+  /// The scene: the room spans [-x/2, x/2] x [-y/2, y/2] x [0, z] of this
+  /// size; the furniture stands in it; the moving object, when on and
+  /// present in frame i, is one more box.
+  Eigen::Vector3d roomSize() const;
+  const std::vector<SceneBox>& furniture() const;
+  std::optional<SceneBox> movingObject(std::size_t i) const;
+
+ private:
+  struct Scene;
+  SyntheticRgbdOptions options_;
+  std::unique_ptr<const Scene> scene_;
+};
+
+/// Writes the sequence in the TUM RGB-D layout: rgb/ and depth/ (PNG, named
+/// by timestamp), rgb.txt and depth.txt (the same timestamps), groundtruth.txt
+/// (`timestamp tx ty tz qx qy qz qw`, camera-to-world, digits enough to read
+/// back the exact doubles). The folder appears complete or not at all: it is
+/// written beside `dir` under a temporary name and renamed at the end. An
+/// existing non-empty `dir` is refused (std::runtime_error) unless
+/// `overwrite`. `frame_written(i)` is called after each frame, for progress.
+void writeTumSequence(const SyntheticRgbdSequence& sequence, const std::string& dir, bool overwrite = false,
+                      const std::function<void(std::size_t)>& frame_written = {});
+
+}  // namespace weighted_icp::io
