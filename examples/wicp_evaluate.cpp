@@ -1,0 +1,111 @@
+// wicp_evaluate: the TUM RGB-D benchmark's trajectory errors of an estimated
+// trajectory against ground truth, both in TUM format
+// (timestamp tx ty tz qx qy qz qw): the absolute trajectory error as
+// evaluate_ate.py and the relative pose error as evaluate_rpe.py --fixed_delta.
+//
+// Contract other tools rely on: with --json the last line of stdout is one
+// JSON object with pairs, ate_rmse_m, ate_mean_m, ate_median_m, ate_max_m,
+// alignment (4x4, estimate -> ground truth), rpe_pairs,
+// rpe_translation_rmse_m, rpe_rotation_rmse_deg (and more).
+
+#include <iomanip>
+#include <iostream>
+#include <sstream>
+
+#include <boost/program_options.hpp>
+
+#include "tool_support.h"
+#include "weighted_icp/io/trajectory.h"
+
+namespace po = boost::program_options;
+using namespace weighted_icp;
+
+namespace {
+std::string metres(double value) {
+  std::ostringstream text;
+  text << std::fixed << std::setprecision(6) << value << " m (" << std::setprecision(2) << 100.0 * value << " cm)";
+  return text.str();
+}
+
+std::string degrees(double value) {
+  std::ostringstream text;
+  text << std::fixed << std::setprecision(4) << value << " deg";
+  return text.str();
+}
+
+void printStatistics(const char* label, const io::ErrorStatistics& s, std::string (*format)(double)) {
+  std::cout << label << "  rmse " << format(s.rmse) << "  mean " << format(s.mean) << "  median " << format(s.median)
+            << "  max " << format(s.max) << '\n';
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+  return tools::runTool("wicp_evaluate", [&] {
+    std::string groundtruth_path, estimate_path, rpe_unit_name = "s";
+    double max_difference = 0.02, rpe_delta = 1.0;
+    po::options_description options(
+        "wicp_evaluate GROUNDTRUTH.txt ESTIMATE.txt [options]\n"
+        "Absolute trajectory error and relative pose error of ESTIMATE against GROUNDTRUTH (TUM format). Options");
+    options.add_options()
+        ("help,h", "print this help")
+        ("groundtruth", po::value(&groundtruth_path)->required(), "ground-truth trajectory")
+        ("estimate", po::value(&estimate_path)->required(), "estimated trajectory")
+        ("max-difference", po::value(&max_difference)->default_value(max_difference),
+         "ATE: pair poses whose timestamps differ by less than this (seconds)")
+        ("rpe-delta", po::value(&rpe_delta)->default_value(rpe_delta), "RPE: compare poses this far apart")
+        ("rpe-unit", po::value(&rpe_unit_name)->default_value(rpe_unit_name),
+         "unit of --rpe-delta: s (seconds) or f (frames)")
+        ("json", "print the result as one JSON object on the last line of stdout");
+    po::positional_options_description positional;
+    positional.add("groundtruth", 1).add("estimate", 1);
+    po::variables_map vm;
+    po::store(po::command_line_parser(argc, argv).options(options).positional(positional).run(), vm);
+    if (vm.count("help")) {
+      std::cout << options << '\n';
+      return 0;
+    }
+    po::notify(vm);
+    if (rpe_unit_name != "s" && rpe_unit_name != "f")
+      throw po::validation_error(po::validation_error::invalid_option_value, "rpe-unit", rpe_unit_name);
+    const io::DeltaUnit rpe_unit = rpe_unit_name == "s" ? io::DeltaUnit::Seconds : io::DeltaUnit::Frames;
+
+    const io::Trajectory groundtruth = io::readTrajectory(groundtruth_path);
+    const io::Trajectory estimate = io::readTrajectory(estimate_path);
+    const io::AbsoluteTrajectoryError ate = io::computeAte(groundtruth, estimate, max_difference);
+    const io::RelativePoseError rpe = io::computeRpe(groundtruth, estimate, rpe_delta, rpe_unit);
+
+    std::cout << "ground truth " << groundtruth.size() << " poses, estimate " << estimate.size() << " poses, "
+              << ate.pairs << " pairs within " << max_difference << " s\n";
+    printStatistics("ATE", ate.translation, metres);
+    std::cout << "RPE over " << rpe.pairs << " pose pairs " << rpe_delta
+              << (rpe_unit == io::DeltaUnit::Seconds ? " s" : " frame(s)") << " apart\n";
+    printStatistics("RPE translation", rpe.translation, metres);
+    printStatistics("RPE rotation", rpe.rotation_deg, degrees);
+    std::cout << "alignment (estimate -> ground truth):\n" << ate.alignment.matrix() << '\n';
+    if (vm.count("json")) {
+      tools::JsonObject json;
+      json.add("groundtruth_poses", groundtruth.size())
+          .add("estimate_poses", estimate.size())
+          .add("max_difference", max_difference)
+          .add("pairs", ate.pairs)
+          .add("ate_rmse_m", ate.translation.rmse)
+          .add("ate_mean_m", ate.translation.mean)
+          .add("ate_median_m", ate.translation.median)
+          .add("ate_max_m", ate.translation.max)
+          .add("alignment", Eigen::MatrixXd(ate.alignment.matrix()))
+          .add("rpe_delta", rpe_delta)
+          .add("rpe_unit", rpe_unit_name)
+          .add("rpe_pairs", rpe.pairs)
+          .add("rpe_translation_rmse_m", rpe.translation.rmse)
+          .add("rpe_translation_mean_m", rpe.translation.mean)
+          .add("rpe_translation_median_m", rpe.translation.median)
+          .add("rpe_translation_max_m", rpe.translation.max)
+          .add("rpe_rotation_rmse_deg", rpe.rotation_deg.rmse)
+          .add("rpe_rotation_mean_deg", rpe.rotation_deg.mean)
+          .add("rpe_rotation_median_deg", rpe.rotation_deg.median)
+          .add("rpe_rotation_max_deg", rpe.rotation_deg.max);
+      std::cout << json.str() << std::endl;
+    }
+    return 0;
+  });
+}

@@ -1,0 +1,173 @@
+#include "weighted_icp/io/camera.h"
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <stdexcept>
+#include <vector>
+
+#include "weighted_icp/io/atomic_file.h"
+
+namespace weighted_icp::io {
+
+cv::Matx33d PinholeCamera::cameraMatrix() const { return {fx, 0.0, cx, 0.0, fy, cy, 0.0, 0.0, 1.0}; }
+
+cv::Mat PinholeCamera::distortionCoefficients() const {
+  cv::Mat coefficients(1, 5, CV_64F);
+  for (int i = 0; i < 5; ++i) coefficients.at<double>(i) = distortion[static_cast<std::size_t>(i)];
+  return coefficients;
+}
+
+bool PinholeCamera::hasDistortion() const {
+  for (const double k : distortion)
+    if (k != 0.0) return true;
+  return false;
+}
+
+Eigen::Vector2d PinholeCamera::project(const Eigen::Vector3d& point_camera) const {
+  // A point on or behind the image plane has no pixel; NaN makes inImage() false.
+  if (!(point_camera.z() > 0.0)) return Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
+  return {fx * point_camera.x() / point_camera.z() + cx, fy * point_camera.y() / point_camera.z() + cy};
+}
+
+Eigen::Vector3d PinholeCamera::backProject(double u, double v, double depth) const {
+  return {(u - cx) / fx * depth, (v - cy) / fy * depth, depth};
+}
+
+bool PinholeCamera::inImage(const Eigen::Vector2d& pixel) const {
+  // Pixel centres are at integer coordinates: inside [0, size - 1] both the
+  // rounded pixel and the bilinear neighbours exist.
+  return pixel.x() >= 0.0 && pixel.y() >= 0.0 && pixel.x() <= width - 1 && pixel.y() <= height - 1;
+}
+
+PinholeCamera tumCamera(int freiburg) {
+  PinholeCamera camera;
+  switch (freiburg) {
+    case 1:
+      camera.fx = 517.306408, camera.fy = 516.469215, camera.cx = 318.643040, camera.cy = 255.313989;
+      camera.distortion = {0.262383, -0.953104, -0.005358, 0.002628, 1.163314};
+      break;
+    case 2:
+      camera.fx = 520.908620, camera.fy = 521.007327, camera.cx = 325.141442, camera.cy = 249.701764;
+      camera.distortion = {0.231222, -0.784899, -0.003257, -0.000105, 0.917205};
+      break;
+    case 3:
+      camera.fx = 535.4, camera.fy = 539.2, camera.cx = 320.1, camera.cy = 247.6;
+      break;
+    default:
+      throw std::invalid_argument("no TUM RGB-D camera freiburg " + std::to_string(freiburg) + " (expected 1, 2 or 3)");
+  }
+  return camera;
+}
+
+namespace {
+
+const char* const kDistortionKeys[5] = {"k1", "k2", "p1", "p2", "k3"};
+
+/// A key of the camera file and what is wrong with it.
+struct KeyProblem {
+  std::string key, what;
+};
+
+/// What makes `camera` unusable; empty when it is valid.
+std::vector<KeyProblem> invalidKeys(const PinholeCamera& camera) {
+  std::vector<KeyProblem> problems;
+  const auto positive = [&](const char* key, double value) {
+    if (!(std::isfinite(value) && value > 0.0)) problems.push_back({key, "must be a finite number > 0"});
+  };
+  const auto finite = [&](const char* key, double value) {
+    if (!std::isfinite(value)) problems.push_back({key, "must be finite"});
+  };
+  positive("fx", camera.fx);
+  positive("fy", camera.fy);
+  finite("cx", camera.cx);
+  finite("cy", camera.cy);
+  for (std::size_t i = 0; i < camera.distortion.size(); ++i) finite(kDistortionKeys[i], camera.distortion[i]);
+  if (camera.width <= 0) problems.push_back({"width", "must be > 0"});
+  if (camera.height <= 0) problems.push_back({"height", "must be > 0"});
+  positive("depth_factor", camera.depth_factor);
+  return problems;
+}
+
+std::string describe(const std::vector<KeyProblem>& problems) {
+  std::string text;
+  for (const auto& problem : problems) text += (text.empty() ? "" : "; ") + problem.key + " " + problem.what;
+  return text;
+}
+
+PinholeCamera readCameraFile(const std::string& path) {
+  // Checked first: FileStorage would log its own error on stderr, or say just "buf".
+  if (!std::filesystem::is_regular_file(path))
+    throw std::runtime_error(path + ": no such file (and not a camera preset fr1, fr2 or fr3)");
+  if (std::filesystem::is_empty(path)) throw std::runtime_error(path + ": empty camera file");
+  cv::FileStorage storage;
+  try {
+    storage.open(path, cv::FileStorage::READ);
+  } catch (const cv::Exception& e) {  // a file that is not YAML, XML or JSON
+    throw std::runtime_error(path + ": not a camera file: " + e.err);
+  }
+  if (!storage.isOpened()) throw std::runtime_error(path + ": cannot open the camera file");
+  if (!storage.root().isMap()) throw std::runtime_error(path + ": not a camera file: expected \"key: value\" lines");
+
+  std::vector<KeyProblem> problems;
+  const auto real = [&](const char* key, double& value) {
+    const cv::FileNode node = storage[key];
+    if (node.empty()) problems.push_back({key, "is missing"});
+    else if (!node.isReal() && !node.isInt()) problems.push_back({key, "is not a number"});
+    else value = static_cast<double>(node);
+  };
+  const auto integer = [&](const char* key, int& value) {
+    const cv::FileNode node = storage[key];
+    if (node.empty()) problems.push_back({key, "is missing"});
+    else if (!node.isInt()) problems.push_back({key, "is not an integer"});
+    else value = static_cast<int>(node);
+  };
+  PinholeCamera camera;
+  real("fx", camera.fx);
+  real("fy", camera.fy);
+  real("cx", camera.cx);
+  real("cy", camera.cy);
+  for (std::size_t i = 0; i < camera.distortion.size(); ++i) real(kDistortionKeys[i], camera.distortion[i]);
+  integer("width", camera.width);
+  integer("height", camera.height);
+  real("depth_factor", camera.depth_factor);
+  // A key already reported as missing or not a number holds its default: report it once.
+  const std::size_t unread = problems.size();
+  for (auto& problem : invalidKeys(camera)) {
+    bool reported = false;
+    for (std::size_t i = 0; i < unread; ++i) reported |= problems[i].key == problem.key;
+    if (!reported) problems.push_back(std::move(problem));
+  }
+  if (!problems.empty()) throw std::runtime_error(path + ": invalid camera: " + describe(problems));
+  return camera;
+}
+
+}  // namespace
+
+PinholeCamera loadCamera(const std::string& preset_or_path) {
+  if (preset_or_path == "fr1") return tumCamera(1);
+  if (preset_or_path == "fr2") return tumCamera(2);
+  if (preset_or_path == "fr3") return tumCamera(3);
+  return readCameraFile(preset_or_path);
+}
+
+void saveCamera(const PinholeCamera& camera, const std::string& path) {
+  // Refused before writing, so a saved camera always loads back.
+  if (const auto problems = invalidKeys(camera); !problems.empty())
+    throw std::runtime_error("cannot write " + path + ": invalid camera: " + describe(problems));
+  cv::FileStorage storage(".yml", cv::FileStorage::WRITE | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_YAML);
+  storage << "fx" << camera.fx << "fy" << camera.fy << "cx" << camera.cx << "cy" << camera.cy;
+  for (std::size_t i = 0; i < camera.distortion.size(); ++i) storage << kDistortionKeys[i] << camera.distortion[i];
+  storage << "width" << camera.width << "height" << camera.height << "depth_factor" << camera.depth_factor;
+  const std::string text = storage.releaseAndGetString();
+  writeAtomically(path, [&](const std::string& temporary) {
+    std::ofstream out(temporary);
+    if (!out) throw std::runtime_error("cannot create " + temporary);
+    out << text;
+    out.close();
+    if (!out) throw std::runtime_error("cannot write " + path);
+  });
+}
+
+}  // namespace weighted_icp::io

@@ -1,0 +1,112 @@
+#include "weighted_icp/io/tum_sequence.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <stdexcept>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+namespace weighted_icp::io {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+/// The benchmark's association limit between colour and depth images.
+constexpr double kMaxRgbDepthDifference = 0.02;
+
+std::string sizeText(const cv::Mat& image) { return std::to_string(image.cols) + "x" + std::to_string(image.rows); }
+
+cv::Mat readImage(const std::string& path, int flags) {
+  if (!fs::is_regular_file(path)) throw std::runtime_error(path + ": no such image file");
+  cv::Mat image = cv::imread(path, flags);
+  if (image.empty()) throw std::runtime_error(path + ": cannot read the image (unreadable or not an image format)");
+  return image;
+}
+
+}  // namespace
+
+TumSequence TumSequence::open(const std::string& directory) {
+  if (!fs::is_directory(directory)) throw std::runtime_error(directory + ": no such folder");
+  const fs::path folder(directory);
+  const std::string rgb_list = (folder / "rgb.txt").string();
+  const std::string depth_list = (folder / "depth.txt").string();
+  const auto rgb = readTimestampedLines(rgb_list, 1);
+  const auto depth = readTimestampedLines(depth_list, 1);
+
+  const auto stamps = [](const std::vector<TimestampedLine>& lines) {
+    std::vector<double> values;
+    for (const auto& line : lines) values.push_back(line.timestamp);
+    return values;
+  };
+  TumSequence sequence;
+  sequence.directory_ = directory;
+  for (const auto& [r, d] : associate(stamps(rgb), stamps(depth), kMaxRgbDepthDifference)) {
+    TumFrame frame;
+    frame.rgb_timestamp = rgb[r].timestamp;
+    frame.depth_timestamp = depth[d].timestamp;
+    frame.rgb_path = (folder / rgb[r].fields[0]).string();
+    frame.depth_path = (folder / depth[d].fields[0]).string();
+    // Checked now, so a long run does not stop at its 500th frame.
+    if (!fs::is_regular_file(frame.rgb_path))
+      throw std::runtime_error(rgb_list + ":" + std::to_string(rgb[r].line) + ": no such image file " + frame.rgb_path);
+    if (!fs::is_regular_file(frame.depth_path))
+      throw std::runtime_error(depth_list + ":" + std::to_string(depth[d].line) + ": no such image file " +
+                               frame.depth_path);
+    sequence.frames_.push_back(std::move(frame));
+  }
+  if (sequence.frames_.empty())
+    throw std::runtime_error(directory + ": no colour and depth images less than " + std::to_string(kMaxRgbDepthDifference) +
+                             " s apart (" + std::to_string(rgb.size()) + " in rgb.txt, " + std::to_string(depth.size()) +
+                             " in depth.txt)");
+
+  const fs::path groundtruth_path = folder / "groundtruth.txt";
+  if (fs::exists(groundtruth_path)) {
+    Trajectory groundtruth = readTrajectory(groundtruth_path.string());
+    if (groundtruth.empty()) throw std::runtime_error(groundtruth_path.string() + ": no poses");
+    std::sort(groundtruth.begin(), groundtruth.end(),
+              [](const StampedPose& a, const StampedPose& b) { return a.timestamp < b.timestamp; });
+    sequence.groundtruth_ = std::move(groundtruth);
+  }
+  return sequence;
+}
+
+const TumFrame& TumSequence::frame(std::size_t index) const {
+  if (index >= frames_.size())
+    throw std::out_of_range(directory_ + ": frame " + std::to_string(index) + " of " + std::to_string(frames_.size()));
+  return frames_[index];
+}
+
+RgbdImages TumSequence::loadFrame(std::size_t index, const PinholeCamera& camera) const {
+  if (!(std::isfinite(camera.depth_factor) && camera.depth_factor > 0.0))
+    throw std::invalid_argument("the camera's depth_factor must be a finite number > 0");
+  const TumFrame& paths = frame(index);
+  RgbdImages images;
+  images.color = readImage(paths.rgb_path, cv::IMREAD_COLOR);
+  const cv::Mat raw_depth = readImage(paths.depth_path, cv::IMREAD_UNCHANGED);
+  if (raw_depth.type() != CV_16UC1)
+    throw std::runtime_error(paths.depth_path + ": a depth image must be 16-bit single-channel, found " +
+                             std::to_string(raw_depth.channels()) + " channel(s) of " +
+                             std::to_string(8 * raw_depth.elemSize1()) + " bits");
+  if (raw_depth.size() != images.color.size())
+    throw std::runtime_error(paths.depth_path + ": depth image is " + sizeText(raw_depth) + " but the colour image " +
+                             paths.rgb_path + " is " + sizeText(images.color));
+  if (images.color.cols != camera.width || images.color.rows != camera.height)
+    throw std::runtime_error(paths.rgb_path + ": image is " + sizeText(images.color) + " but the camera's is " +
+                             std::to_string(camera.width) + "x" + std::to_string(camera.height));
+  cv::cvtColor(images.color, images.gray, cv::COLOR_BGR2GRAY);
+  raw_depth.convertTo(images.depth, CV_32F, 1.0 / camera.depth_factor);  // 0 (no reading) stays 0
+  images.valid_depth_pixels = static_cast<std::size_t>(cv::countNonZero(raw_depth));
+  return images;
+}
+
+std::optional<Eigen::Isometry3d> TumSequence::groundTruthAt(double timestamp, double max_difference) const {
+  if (groundtruth_.empty()) throw std::runtime_error(directory_ + ": the sequence has no groundtruth.txt");
+  const StampedPose& nearest = groundtruth_[nearestInTime(groundtruth_, timestamp)];
+  if (!(std::abs(nearest.timestamp - timestamp) < max_difference)) return std::nullopt;
+  return nearest.pose;
+}
+
+}  // namespace weighted_icp::io

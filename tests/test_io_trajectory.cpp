@@ -1,0 +1,349 @@
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <random>
+#include <stdexcept>
+#include <string>
+#include <tuple>
+
+#include <gtest/gtest.h>
+
+#include "test_support.h"
+#include "weighted_icp/io/trajectory.h"
+
+using namespace weighted_icp;
+namespace fs = std::filesystem;
+using Pairs = std::vector<std::pair<std::size_t, std::size_t>>;
+
+namespace {
+
+Eigen::Isometry3d rigidMotion(double x, double y, double z, double roll, double pitch, double yaw) {
+  Eigen::Isometry3d motion = Eigen::Isometry3d::Identity();
+  motion.linear() = (Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY()) *
+                     Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitX()))
+                        .toRotationMatrix();
+  motion.translation() = Eigen::Vector3d(x, y, z);
+  return motion;
+}
+
+/// A camera moving along a 3D curve (no three positions collinear) and turning, at 30 Hz.
+io::Trajectory curvedTrajectory(std::size_t n) {
+  io::Trajectory trajectory;
+  for (std::size_t k = 0; k < n; ++k) {
+    const double t = 0.0333 * static_cast<double>(k);
+    trajectory.push_back({1305031102.0 + t, rigidMotion(std::cos(t), std::sin(1.3 * t), 0.2 * t, 0.1 * t, -0.05 * t,
+                                                        0.3 * std::sin(t))});
+  }
+  return trajectory;
+}
+
+/// `trajectory` seen from another world frame: every pose premultiplied by `motion`.
+io::Trajectory moved(io::Trajectory trajectory, const Eigen::Isometry3d& motion) {
+  for (auto& stamped : trajectory) stamped.pose = motion * stamped.pose;
+  return trajectory;
+}
+
+std::string writeText(const fs::path& path, const std::string& text) {
+  std::ofstream out(path);
+  out << text;
+  return path.string();
+}
+
+std::string readError(const std::string& path) {
+  try {
+    io::readTrajectory(path);
+  } catch (const std::runtime_error& e) {
+    return e.what();
+  }
+  return {};
+}
+
+/// associate.py transcribed literally: every pair compared, tuples sorted.
+Pairs bruteForceAssociate(const std::vector<double>& first, const std::vector<double>& second, double max_difference) {
+  std::vector<std::tuple<double, double, double, std::size_t, std::size_t>> candidates;
+  for (std::size_t i = 0; i < first.size(); ++i)
+    for (std::size_t j = 0; j < second.size(); ++j)
+      if (std::abs(first[i] - second[j]) < max_difference)
+        candidates.emplace_back(std::abs(first[i] - second[j]), first[i], second[j], i, j);
+  std::sort(candidates.begin(), candidates.end());
+  std::vector<bool> first_used(first.size()), second_used(second.size());
+  std::vector<std::tuple<double, double, std::size_t, std::size_t>> matches;
+  for (const auto& [difference, a, b, i, j] : candidates) {
+    if (first_used[i] || second_used[j]) continue;
+    first_used[i] = second_used[j] = true;
+    matches.emplace_back(a, b, i, j);
+  }
+  std::sort(matches.begin(), matches.end());
+  Pairs result;
+  for (const auto& [a, b, i, j] : matches) result.emplace_back(i, j);
+  return result;
+}
+
+}  // namespace
+
+TEST(Trajectory, RoundTripKeepsTimestampsAndPoses) {
+  const auto dir = weighted_icp::testing::scratchDir("trajectory_round_trip");
+  const io::Trajectory trajectory = curvedTrajectory(50);
+  const std::string path = (dir / "trajectory.txt").string();
+  io::writeTrajectory(trajectory, path);
+  const io::Trajectory read = io::readTrajectory(path);
+  ASSERT_EQ(read.size(), trajectory.size());
+  for (std::size_t k = 0; k < read.size(); ++k) {
+    EXPECT_EQ(read[k].timestamp, trajectory[k].timestamp);
+    EXPECT_EQ(read[k].pose.translation(), trajectory[k].pose.translation());
+    EXPECT_TRUE(read[k].pose.linear().isApprox(trajectory[k].pose.linear(), 1e-14));
+  }
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir), fs::directory_iterator()), 1);  // no temporary left
+}
+
+TEST(Trajectory, ReadsQuaternionsScalarLast) {
+  const auto dir = weighted_icp::testing::scratchDir("trajectory_scalar_last");
+  // 90 degrees about z: qz = qw = sqrt(1/2).
+  const std::string path = writeText(dir / "t.txt", "# timestamp tx ty tz qx qy qz qw\n\n"
+                                                    "10.5 1 2 3 0 0 0.70710678 0.70710678\n");
+  const io::Trajectory trajectory = io::readTrajectory(path);
+  ASSERT_EQ(trajectory.size(), 1u);
+  EXPECT_EQ(trajectory[0].timestamp, 10.5);
+  EXPECT_TRUE(trajectory[0].pose.translation().isApprox(Eigen::Vector3d(1, 2, 3)));
+  EXPECT_TRUE((trajectory[0].pose.linear() * Eigen::Vector3d::UnitX()).isApprox(Eigen::Vector3d::UnitY(), 1e-7));
+}
+
+TEST(Trajectory, ReadsTheRealGroundTruth) {
+  const fs::path path = weighted_icp::testing::dataDir() / "tum_fr1_xyz_head" / "groundtruth.txt";
+  WEIGHTED_ICP_REQUIRE_FILE(path);
+  std::ifstream in(path);
+  std::size_t data_lines = 0;
+  std::string line, first_data_line;
+  while (std::getline(in, line))
+    if (!line.empty() && line[0] != '#' && data_lines++ == 0) first_data_line = line;
+  const io::Trajectory trajectory = io::readTrajectory(path.string());
+  ASSERT_EQ(trajectory.size(), data_lines);
+  std::istringstream fields(first_data_line);
+  double timestamp, tx, ty, tz;
+  fields >> timestamp >> tx >> ty >> tz;
+  EXPECT_EQ(trajectory[0].timestamp, timestamp);
+  EXPECT_TRUE(trajectory[0].pose.translation().isApprox(Eigen::Vector3d(tx, ty, tz)));
+}
+
+TEST(Trajectory, MalformedLinesNameFileAndLine) {
+  const auto dir = weighted_icp::testing::scratchDir("trajectory_malformed");
+  const std::string good = "# header\n1.0 0 0 0 0 0 0 1\n";
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"1.1 0 0 0 0 0 1\n", "field"},                  // qw missing
+      {"1.1 0 0 zero 0 0 0 1\n", "tz 'zero'"},         // not a number
+      {"1.1 0 nan 0 0 0 0 1\n", "ty"},                 // not finite
+      {"1.1 0 0 0 0 0 0 0\n", "quaternion"},           // no rotation
+      {"1.0 0 0 0 0 0 0 1\n", "already appears on line 2"},  // repeated timestamp
+      {"1.1 0 0 0 0 0 0 1 7\n", "field"},              // one field too many
+  };
+  for (std::size_t c = 0; c < cases.size(); ++c) {
+    const std::string path = writeText(dir / ("case" + std::to_string(c) + ".txt"), good + cases[c].first);
+    const std::string error = readError(path);
+    EXPECT_NE(error.find(path + ":3:"), std::string::npos) << error;
+    EXPECT_NE(error.find(cases[c].second), std::string::npos) << error;
+  }
+  const std::string missing = (dir / "absent.txt").string();
+  EXPECT_NE(readError(missing).find(missing), std::string::npos);
+}
+
+TEST(Trajectory, NonRigidPosesAreNotWritten) {
+  const auto dir = weighted_icp::testing::scratchDir("trajectory_write_invalid");
+  io::Trajectory trajectory = curvedTrajectory(3);
+  trajectory[1].pose.translation().x() = std::numeric_limits<double>::quiet_NaN();
+  const std::string path = (dir / "t.txt").string();
+  EXPECT_THROW(io::writeTrajectory(trajectory, path), std::runtime_error);
+  trajectory = curvedTrajectory(3);
+  trajectory[2].pose.linear() *= 2.0;
+  EXPECT_THROW(io::writeTrajectory(trajectory, path), std::runtime_error);
+  EXPECT_FALSE(fs::exists(path));
+}
+
+TEST(TrajectoryAssociate, TakesPairsByIncreasingDifference) {
+  // 1.010 and 1.008 differ least, so 1.000 is left without a partner even
+  // though 1.008 is its nearest timestamp.
+  EXPECT_EQ(io::associate(std::vector<double>{1.000, 1.010}, std::vector<double>{1.008}, 0.02), (Pairs{{1, 0}}));
+  // Each timestamp at most once; unpaired ones are dropped.
+  EXPECT_EQ(io::associate(std::vector<double>{1.0, 2.0, 3.0}, std::vector<double>{3.01, 1.005, 2.5}, 0.02),
+            (Pairs{{0, 1}, {2, 0}}));
+  // Sorted by the first list's timestamps, whatever the input order.
+  EXPECT_EQ(io::associate(std::vector<double>{3.0, 1.0}, std::vector<double>{1.001, 3.001}, 0.02),
+            (Pairs{{1, 0}, {0, 1}}));
+  // The difference must be strictly below the limit (0.5 and 0.25 are exact in binary).
+  EXPECT_TRUE(io::associate(std::vector<double>{1.0}, std::vector<double>{1.5}, 0.5).empty());
+  EXPECT_EQ(io::associate(std::vector<double>{1.0}, std::vector<double>{1.25}, 0.5), (Pairs{{0, 0}}));
+}
+
+TEST(TrajectoryAssociate, MatchesALiteralTranscriptionOfAssociatePy) {
+  std::mt19937 random(7);
+  std::uniform_real_distribution<double> jitter(-0.02, 0.02);
+  for (int trial = 0; trial < 20; ++trial) {
+    std::vector<double> first, second;
+    for (int k = 0; k < 200; ++k) {
+      first.push_back(100.0 + 0.033 * k + jitter(random));
+      if (k % 7 != 3) second.push_back(100.0 + 0.033 * k + jitter(random));
+    }
+    std::shuffle(second.begin(), second.end(), random);
+    EXPECT_EQ(io::associate(first, second, 0.02), bruteForceAssociate(first, second, 0.02));
+  }
+}
+
+TEST(TrajectoryAssociate, RefusesBadInput) {
+  const std::vector<double> stamps{1.0, 2.0};
+  EXPECT_THROW(io::associate(stamps, stamps, 0.0), std::invalid_argument);
+  EXPECT_THROW(io::associate(stamps, stamps, -1.0), std::invalid_argument);
+  EXPECT_THROW(io::associate(stamps, stamps, std::numeric_limits<double>::infinity()), std::invalid_argument);
+  EXPECT_THROW(io::associate(stamps, std::vector<double>{std::nan("")}, 0.02), std::invalid_argument);
+}
+
+TEST(TrajectoryAte, RigidlyMovedTrajectoryHasNoErrorAndTheAlignmentUndoesTheMotion) {
+  const io::Trajectory truth = curvedTrajectory(60);
+  const Eigen::Isometry3d motion = rigidMotion(0.5, -2.0, 1.0, 0.3, -0.2, 1.1);
+  const io::AbsoluteTrajectoryError ate = io::computeAte(truth, moved(truth, motion));
+  EXPECT_EQ(ate.pairs, truth.size());
+  EXPECT_LT(ate.translation.rmse, 1e-9);
+  EXPECT_LT(ate.translation.max, 1e-9);
+  EXPECT_TRUE(ate.alignment.isApprox(motion.inverse(), 1e-9)) << ate.alignment.matrix();
+}
+
+TEST(TrajectoryAte, ErrorOfAddedNoiseIsTheNoiseRms) {
+  const io::Trajectory truth = curvedTrajectory(2000);
+  io::Trajectory estimate = truth;
+  std::mt19937 random(3);
+  std::normal_distribution<double> noise(0.0, 0.01);
+  double sum_squares = 0.0;
+  for (auto& stamped : estimate) {
+    const Eigen::Vector3d offset(noise(random), noise(random), noise(random));
+    stamped.pose.translation() += offset;
+    sum_squares += offset.squaredNorm();
+  }
+  const double noise_rms = std::sqrt(sum_squares / static_cast<double>(estimate.size()));
+  const io::AbsoluteTrajectoryError ate =
+      io::computeAte(truth, moved(estimate, rigidMotion(3.0, 1.0, -1.0, 0.0, 0.4, -0.7)));
+  // The identity alignment leaves exactly the noise, and the best one cannot
+  // do worse; six degrees of freedom over 2000 poses absorb little of it.
+  EXPECT_LE(ate.translation.rmse, noise_rms * (1.0 + 1e-9));
+  EXPECT_GT(ate.translation.rmse, 0.97 * noise_rms);
+  EXPECT_LE(ate.translation.mean, ate.translation.rmse);
+  EXPECT_LE(ate.translation.median, ate.translation.max);
+  EXPECT_GT(ate.translation.max, ate.translation.rmse);
+}
+
+TEST(TrajectoryAte, AlignmentHasNoScale) {
+  const io::Trajectory truth = curvedTrajectory(100);
+  io::Trajectory estimate = truth;
+  for (auto& stamped : estimate) stamped.pose.translation() *= 2.0;
+  const io::AbsoluteTrajectoryError ate = io::computeAte(truth, estimate);
+  const Eigen::Matrix3d rotation = ate.alignment.linear();
+  EXPECT_TRUE((rotation.transpose() * rotation).isIdentity(1e-9));
+  EXPECT_NEAR(rotation.determinant(), 1.0, 1e-9);
+  EXPECT_GT(ate.translation.rmse, 0.1);  // a scaled copy cannot be matched without scale
+}
+
+TEST(TrajectoryAte, AssociatesByTimestamp) {
+  const io::Trajectory truth = curvedTrajectory(40);
+  io::Trajectory estimate = truth;
+  for (auto& stamped : estimate) stamped.timestamp += 0.005;
+  EXPECT_EQ(io::computeAte(truth, estimate).pairs, truth.size());
+  EXPECT_EQ(io::computeAte(truth, estimate, 0.006).pairs, truth.size());
+  EXPECT_THROW(io::computeAte(truth, estimate, 0.004), std::runtime_error);
+}
+
+TEST(TrajectoryAte, FewerThanThreePairsThrow) {
+  const io::Trajectory truth = curvedTrajectory(40);
+  const io::Trajectory two(truth.begin(), truth.begin() + 2);
+  try {
+    io::computeAte(truth, two);
+    FAIL() << "two pairs accepted";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("at least 3"), std::string::npos) << e.what();
+  }
+  const io::Trajectory three(truth.begin(), truth.begin() + 3);
+  EXPECT_EQ(io::computeAte(truth, three).pairs, 3u);
+}
+
+TEST(TrajectoryAte, NonFinitePosesAreRefused) {
+  const io::Trajectory truth = curvedTrajectory(10);
+  io::Trajectory estimate = truth;
+  estimate[4].pose.translation().y() = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(io::computeAte(truth, estimate), std::invalid_argument);
+  EXPECT_THROW(io::computeRpe(truth, estimate), std::invalid_argument);
+}
+
+TEST(TrajectoryRpe, ConstantWorldOffsetHasNoError) {
+  const io::Trajectory truth = curvedTrajectory(100);
+  const io::RelativePoseError rpe = io::computeRpe(truth, moved(truth, rigidMotion(1.0, 2.0, 3.0, 0.5, 0.1, -0.3)));
+  EXPECT_GT(rpe.pairs, 0u);
+  EXPECT_LT(rpe.translation.rmse, 1e-9);
+  EXPECT_LT(rpe.rotation_deg.rmse, 1e-6);
+}
+
+namespace {
+/// Ground truth moving along x at `speed` m/s and turning about z at `turn_rate` rad/s, sampled at 10 Hz.
+io::Trajectory straightRun(std::size_t n, double speed, double turn_rate) {
+  io::Trajectory trajectory;
+  for (std::size_t k = 0; k < n; ++k) {
+    const double t = 0.1 * static_cast<double>(k);
+    trajectory.push_back({50.0 + t, rigidMotion(speed * t, 0.0, 0.0, 0.0, 0.0, turn_rate * t)});
+  }
+  return trajectory;
+}
+}  // namespace
+
+TEST(TrajectoryRpe, ScaleDriftGivesItsTranslationPerDelta) {
+  // The estimate runs 5 % too far: over 1 s at 0.4 m/s that is 0.02 m, on every pair.
+  const io::Trajectory truth = straightRun(50, 0.4, 0.0);
+  const io::Trajectory estimate = straightRun(50, 0.42, 0.0);
+  for (const auto& [delta, unit] : {std::pair{1.0, io::DeltaUnit::Seconds}, std::pair{10.0, io::DeltaUnit::Frames}}) {
+    const io::RelativePoseError rpe = io::computeRpe(truth, estimate, delta, unit);
+    // Pairs (i, i + 10) whose partner is not the last pose: i = 0 .. 38.
+    EXPECT_EQ(rpe.pairs, 39u);
+    EXPECT_NEAR(rpe.translation.rmse, 0.02, 1e-9);
+    EXPECT_NEAR(rpe.translation.median, 0.02, 1e-9);
+    EXPECT_NEAR(rpe.translation.max, 0.02, 1e-9);
+    EXPECT_LT(rpe.rotation_deg.max, 1e-6);
+  }
+}
+
+TEST(TrajectoryRpe, TurnRateErrorGivesItsAnglePerDelta) {
+  // Turning 2 degrees per second too fast: 4 degrees over 2 s.
+  const double degree = EIGEN_PI / 180.0;
+  const io::Trajectory truth = straightRun(60, 0.0, 10.0 * degree);
+  const io::Trajectory estimate = straightRun(60, 0.0, 12.0 * degree);
+  const io::RelativePoseError rpe = io::computeRpe(truth, estimate, 2.0);
+  EXPECT_EQ(rpe.pairs, 60u - 20u - 1u);
+  EXPECT_NEAR(rpe.rotation_deg.rmse, 4.0, 1e-9);
+  EXPECT_NEAR(rpe.rotation_deg.mean, 4.0, 1e-9);
+  EXPECT_LT(rpe.translation.max, 1e-12);
+}
+
+TEST(TrajectoryRpe, PosesWithoutNearbyGroundTruthAreNotCompared) {
+  const io::Trajectory truth = straightRun(50, 0.4, 0.0);  // 50.0 .. 54.9 s
+  io::Trajectory estimate = truth;
+  for (auto& stamped : estimate) stamped.timestamp += 2.55;  // 52.55 .. 57.45 s
+  // Ground truth is near (within twice its 0.1 s interval) for poses up to
+  // 55.05 s, k <= 25; pairs (k, k + 10) need both: k = 0 .. 15.
+  EXPECT_EQ(io::computeRpe(truth, estimate).pairs, 16u);
+  for (auto& stamped : estimate) stamped.timestamp += 10.0;  // after the ground truth ends
+  EXPECT_THROW(io::computeRpe(truth, estimate), std::runtime_error);
+}
+
+TEST(TrajectoryRpe, RefusesBadDeltas) {
+  const io::Trajectory truth = straightRun(50, 0.4, 0.0);
+  EXPECT_THROW(io::computeRpe(truth, truth, 0.0), std::invalid_argument);
+  EXPECT_THROW(io::computeRpe(truth, truth, -1.0), std::invalid_argument);
+  EXPECT_THROW(io::computeRpe(truth, truth, 2.5, io::DeltaUnit::Frames), std::invalid_argument);
+  EXPECT_THROW(io::computeRpe(truth, truth, std::nan("")), std::invalid_argument);
+  // Longer than the trajectory: no pair is left.
+  EXPECT_THROW(io::computeRpe(truth, truth, 100.0), std::runtime_error);
+  EXPECT_THROW(io::computeRpe(truth, truth, 1e300, io::DeltaUnit::Frames), std::runtime_error);
+}
+
+TEST(TrajectoryNearestInTime, FindsTheClosestPose) {
+  const io::Trajectory trajectory = straightRun(5, 1.0, 0.0);  // 50.0, 50.1, ... 50.4
+  EXPECT_EQ(io::nearestInTime(trajectory, 0.0), 0u);
+  EXPECT_EQ(io::nearestInTime(trajectory, 50.13), 1u);
+  EXPECT_EQ(io::nearestInTime(trajectory, 50.17), 2u);
+  EXPECT_EQ(io::nearestInTime(trajectory, 99.0), 4u);
+  EXPECT_THROW(io::nearestInTime(io::Trajectory{}, 1.0), std::invalid_argument);
+}
