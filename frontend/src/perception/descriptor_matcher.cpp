@@ -1,0 +1,109 @@
+#include "weighted_icp/frontend/descriptor_matcher.h"
+
+#include <algorithm>
+#include <stdexcept>
+
+#include <opencv2/flann.hpp>
+
+namespace weighted_icp::frontend {
+namespace {
+
+void requireOption(bool valid, const std::string& what) {
+  if (!valid) throw std::invalid_argument("DescriptorMatcher: " + what);
+}
+
+void requireBinary(const cv::Mat& descriptors, const char* role) {
+  if (!descriptors.empty() && descriptors.type() != CV_8UC1)
+    throw std::invalid_argument(std::string("DescriptorMatcher: ") + role +
+                                " descriptors must be CV_8UC1 (binary), got type " +
+                                cv::typeToString(descriptors.type()));
+}
+
+cv::Ptr<cv::DescriptorMatcher> buildMatcher(const DescriptorMatcherOptions& o, const cv::Mat& reference) {
+  cv::Ptr<cv::DescriptorMatcher> matcher;
+  if (o.kind == MatcherKind::BruteForce) {
+    matcher = cv::makePtr<cv::BFMatcher>(cv::NORM_HAMMING);
+  } else {
+    matcher = cv::makePtr<cv::FlannBasedMatcher>(
+        cv::makePtr<cv::flann::LshIndexParams>(o.lsh_tables, o.lsh_key_bits, o.lsh_multi_probe_level));
+  }
+  matcher->add(std::vector<cv::Mat>{reference});
+  // FLANN draws the LSH key bits from the calling thread's cv::theRNG(); a
+  // fixed seed, restored afterwards, makes the index the same on every build.
+  cv::RNG& rng = cv::theRNG();
+  const cv::RNG saved = rng;
+  rng = cv::RNG(o.lsh_seed);
+  try {
+    matcher->train();
+  } catch (...) {
+    rng = saved;
+    throw;
+  }
+  rng = saved;
+  return matcher;
+}
+
+}  // namespace
+
+DescriptorMatcher::DescriptorMatcher(DescriptorMatcherOptions options) : options_(options) {
+  requireOption(options_.ratio > 0.0f && options_.ratio <= 1.0f, "ratio must be in (0, 1]");
+  requireOption(options_.max_hamming_distance >= 0, "max_hamming_distance must be >= 0");
+  requireOption(options_.lsh_tables >= 1, "lsh_tables must be >= 1");
+  requireOption(options_.lsh_key_bits >= 1 && options_.lsh_key_bits <= 32, "lsh_key_bits must be in [1, 32]");
+  requireOption(options_.lsh_multi_probe_level >= 0, "lsh_multi_probe_level must be >= 0");
+}
+
+void DescriptorMatcher::setReference(const cv::Mat& descriptors) {
+  requireBinary(descriptors, "reference");
+  matcher_.release();
+  reference_rows_ = descriptors.empty() ? 0 : descriptors.rows;
+  reference_cols_ = descriptors.empty() ? 0 : descriptors.cols;
+  if (reference_rows_ > 0) matcher_ = buildMatcher(options_, descriptors);
+}
+
+std::vector<cv::DMatch> DescriptorMatcher::match(const cv::Mat& query) const {
+  requireBinary(query, "query");
+  if (query.empty() || !matcher_) return {};
+  if (query.cols != reference_cols_)
+    throw std::invalid_argument("DescriptorMatcher: query rows have " + std::to_string(query.cols) +
+                                " bytes, reference rows " + std::to_string(reference_cols_));
+  if (reference_rows_ < 2) return {};  // no second nearest for the ratio test
+
+  std::vector<std::vector<cv::DMatch>> nearest;
+  matcher_->knnMatch(query, nearest, 2);
+
+  std::vector<cv::DMatch> matches;
+  for (const std::vector<cv::DMatch>& candidates : nearest) {
+    if (candidates.size() < 2) continue;
+    const cv::DMatch& best = candidates[0];
+    if (best.distance < options_.ratio * candidates[1].distance &&
+        best.distance <= static_cast<float>(options_.max_hamming_distance))
+      matches.push_back(best);
+  }
+
+  if (options_.cross_check_unique) {
+    // Best per reference row: smallest distance, then smallest query index.
+    std::vector<int> winner(static_cast<std::size_t>(reference_rows_), -1);
+    for (int i = 0; i < static_cast<int>(matches.size()); ++i) {
+      int& current = winner[static_cast<std::size_t>(matches[i].trainIdx)];
+      if (current < 0 || matches[i].distance < matches[current].distance) current = i;
+    }
+    std::vector<cv::DMatch> unique;
+    for (int i = 0; i < static_cast<int>(matches.size()); ++i)
+      if (winner[static_cast<std::size_t>(matches[i].trainIdx)] == i) unique.push_back(matches[i]);
+    matches.swap(unique);
+  }
+  return matches;  // knnMatch returns one list per query row, in order
+}
+
+MatcherKind parseMatcherKind(const std::string& name) {
+  if (name == "flann") return MatcherKind::FlannLsh;
+  if (name == "brute-force") return MatcherKind::BruteForce;
+  throw std::invalid_argument("unknown matcher \"" + name + "\": expected \"flann\" or \"brute-force\"");
+}
+
+std::string matcherKindName(MatcherKind kind) {
+  return kind == MatcherKind::FlannLsh ? "flann" : "brute-force";
+}
+
+}  // namespace weighted_icp::frontend

@@ -1,0 +1,162 @@
+#include "weighted_icp/frontend/feature_extractor.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include <opencv2/imgproc.hpp>
+
+namespace weighted_icp::frontend {
+namespace {
+
+constexpr int kOrbPatchSize = 31;
+constexpr int kOrbHalfPatch = kOrbPatchSize / 2;
+// ORB describes keypoints at least its edgeThreshold from the border; corners
+// are only sought inside that margin so that none is detected in vain.
+constexpr int kOrbBorder = kOrbPatchSize;
+
+void requireOption(bool valid, const std::string& what) {
+  if (!valid) throw std::invalid_argument("FeatureExtractor: " + what);
+}
+
+void validate(const FeatureExtractorOptions& o) {
+  requireOption(o.max_features >= 1, "max_features must be >= 1");
+  requireOption(o.grid_cols >= 1 && o.grid_rows >= 1, "grid_cols and grid_rows must be >= 1");
+  requireOption(o.quality_level > 0.0 && o.quality_level < 1.0, "quality_level must be in (0, 1)");
+  requireOption(o.min_distance_px >= 0.0, "min_distance_px must be >= 0");
+  requireOption(o.min_features_before_clahe >= 0, "min_features_before_clahe must be >= 0");
+  requireOption(o.clahe.clip_limit > 0.0 && o.clahe.tile_grid >= 1, "clahe needs clip_limit > 0 and tile_grid >= 1");
+  requireOption(o.min_corner_response >= 0.0, "min_corner_response must be >= 0");
+}
+
+/// ORB's orientation (Rublee et al. 2011): the direction from the keypoint to
+/// the intensity centroid of the circular patch the descriptor samples.
+/// cv::ORB computes it only for keypoints it detects itself; without it the
+/// descriptors would be unrotated BRIEF.
+void assignOrientation(const cv::Mat& image, std::vector<cv::KeyPoint>& keypoints) {
+  static const cv::Mat disc = [] {
+    cv::Mat mask = cv::Mat::zeros(kOrbPatchSize, kOrbPatchSize, CV_8U);
+    cv::circle(mask, {kOrbHalfPatch, kOrbHalfPatch}, kOrbHalfPatch, 255, cv::FILLED);
+    return mask;
+  }();
+  cv::Mat patch;
+  for (cv::KeyPoint& keypoint : keypoints) {
+    const cv::Rect around(cvRound(keypoint.pt.x) - kOrbHalfPatch, cvRound(keypoint.pt.y) - kOrbHalfPatch,
+                          kOrbPatchSize, kOrbPatchSize);
+    cv::bitwise_and(image(around), disc, patch);
+    const cv::Moments m = cv::moments(patch);
+    keypoint.angle = cv::fastAtan2(static_cast<float>(m.m01 - kOrbHalfPatch * m.m00),
+                                   static_cast<float>(m.m10 - kOrbHalfPatch * m.m00));
+  }
+}
+
+}  // namespace
+
+FeatureExtractor::FeatureExtractor(FeatureExtractorOptions options) : options_(options) {
+  validate(options_);
+  // One pyramid level: GFTT corners are single-scale.
+  orb_ = cv::ORB::create(options_.max_features, 1.2f, 1, kOrbBorder, 0, 2, cv::ORB::HARRIS_SCORE, kOrbPatchSize);
+}
+
+std::vector<cv::KeyPoint> FeatureExtractor::detectBucketed(const cv::Mat& gray) const {
+  const cv::Rect interior(kOrbBorder, kOrbBorder, gray.cols - 2 * kOrbBorder, gray.rows - 2 * kOrbBorder);
+  if (interior.width <= 0 || interior.height <= 0) return {};
+
+  // GFTT in each cell on its own, so that quality_level is relative to the
+  // cell's strongest corner: weakly textured parts of the frame keep their
+  // corners instead of losing them to one bright, busy region.
+  struct Candidate {
+    cv::Point2f pt;
+    float response;
+    int cell;
+  };
+  std::vector<Candidate> candidates;
+  std::vector<cv::Point2f> corners;
+  std::vector<float> responses;
+  for (int row = 0; row < options_.grid_rows; ++row) {
+    for (int col = 0; col < options_.grid_cols; ++col) {
+      const int x0 = interior.x + col * interior.width / options_.grid_cols;
+      const int y0 = interior.y + row * interior.height / options_.grid_rows;
+      const int x1 = interior.x + (col + 1) * interior.width / options_.grid_cols;
+      const int y1 = interior.y + (row + 1) * interior.height / options_.grid_rows;
+      if (x1 <= x0 || y1 <= y0) continue;
+      // Pixels outside the cell still feed its gradients (no isolated border).
+      cv::goodFeaturesToTrack(gray(cv::Rect(x0, y0, x1 - x0, y1 - y0)), corners, 0, options_.quality_level,
+                              options_.min_distance_px, cv::noArray(), responses);
+      for (std::size_t i = 0; i < corners.size() && responses[i] >= options_.min_corner_response; ++i)
+        candidates.push_back({corners[i] + cv::Point2f(static_cast<float>(x0), static_cast<float>(y0)),
+                              responses[i], row * options_.grid_cols + col});
+    }
+  }
+  // Strongest first over the whole frame; ties in the order found, so the
+  // result does not depend on the sort implementation.
+  std::stable_sort(candidates.begin(), candidates.end(),
+                   [](const Candidate& a, const Candidate& b) { return a.response > b.response; });
+
+  // GFTT keeps min_distance_px within a cell; this occupancy grid (cells of
+  // that size) keeps it across cell borders as well.
+  const double min_distance_sq = options_.min_distance_px * options_.min_distance_px;
+  const int bin = std::max(1, static_cast<int>(std::ceil(options_.min_distance_px)));
+  const int bins_x = gray.cols / bin + 1, bins_y = gray.rows / bin + 1;
+  std::vector<std::vector<cv::Point2f>> occupied(static_cast<std::size_t>(bins_x * bins_y));
+  const auto farFromTaken = [&](const cv::Point2f& p) {
+    const int bx = static_cast<int>(p.x) / bin, by = static_cast<int>(p.y) / bin;
+    for (int y = std::max(0, by - 1); y <= std::min(bins_y - 1, by + 1); ++y)
+      for (int x = std::max(0, bx - 1); x <= std::min(bins_x - 1, bx + 1); ++x)
+        for (const cv::Point2f& q : occupied[static_cast<std::size_t>(y * bins_x + x)])
+          if ((p.x - q.x) * (p.x - q.x) + (p.y - q.y) * (p.y - q.y) < min_distance_sq) return false;
+    return true;
+  };
+  std::vector<bool> taken(candidates.size(), false);
+  int total = 0;
+  const auto take = [&](std::size_t i) {
+    const cv::Point2f& p = candidates[i].pt;
+    occupied[static_cast<std::size_t>(static_cast<int>(p.y) / bin * bins_x + static_cast<int>(p.x) / bin)].push_back(p);
+    taken[i] = true;
+    ++total;
+  };
+
+  // First up to an equal share per cell, then the budget weak cells left goes
+  // to the strongest corners not yet taken.
+  const int per_cell = options_.max_features / (options_.grid_cols * options_.grid_rows);
+  std::vector<int> taken_in_cell(static_cast<std::size_t>(options_.grid_cols * options_.grid_rows), 0);
+  for (std::size_t i = 0; i < candidates.size() && total < options_.max_features; ++i) {
+    int& in_cell = taken_in_cell[static_cast<std::size_t>(candidates[i].cell)];
+    if (in_cell < per_cell && farFromTaken(candidates[i].pt)) {
+      ++in_cell;
+      take(i);
+    }
+  }
+  for (std::size_t i = 0; i < candidates.size() && total < options_.max_features; ++i)
+    if (!taken[i] && farFromTaken(candidates[i].pt)) take(i);
+
+  std::vector<cv::KeyPoint> keypoints;
+  keypoints.reserve(static_cast<std::size_t>(total));
+  for (std::size_t i = 0; i < candidates.size(); ++i)
+    if (taken[i]) keypoints.emplace_back(candidates[i].pt, static_cast<float>(kOrbPatchSize), -1.0f, candidates[i].response);
+  return keypoints;
+}
+
+ExtractedFeatures FeatureExtractor::extract(const cv::Mat& gray) const {
+  if (gray.empty()) throw std::invalid_argument("FeatureExtractor::extract: empty image");
+  if (gray.type() != CV_8UC1)
+    throw std::invalid_argument("FeatureExtractor::extract: needs an 8-bit single-channel image, got type " +
+                                cv::typeToString(gray.type()));
+  ExtractedFeatures features;
+  cv::Mat image = gray;
+  features.keypoints = detectBucketed(image);
+  if (static_cast<int>(features.keypoints.size()) < options_.min_features_before_clahe) {
+    image = equalizeClahe(gray, options_.clahe);
+    features.keypoints = detectBucketed(image);
+    features.used_clahe = true;
+  }
+  assignOrientation(image, features.keypoints);
+  // Feature2D::compute removes the keypoints it cannot describe, so the rows
+  // stay aligned with the keypoints that remain.
+  orb_->compute(image, features.keypoints, features.descriptors);
+  if (features.descriptors.empty()) features.descriptors.create(0, orb_->descriptorSize(), CV_8U);
+  return features;
+}
+
+}  // namespace weighted_icp::frontend
