@@ -1,0 +1,127 @@
+#pragma once
+// The tracking front end: per frame, features -> matches against the local
+// map -> pose (PnP + Huber LM, or 2D-2D when depth is missing) -> dynamic
+// points out -> keyframe and landmark creation. The backend refines what it
+// creates in its own thread.
+
+#include <cstddef>
+#include <limits>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "weighted_icp/frontend/backend.h"
+#include "weighted_icp/frontend/depth_noise_model.h"
+#include "weighted_icp/frontend/descriptor_matcher.h"
+#include "weighted_icp/frontend/dynamic_point_filter.h"
+#include "weighted_icp/frontend/feature_extractor.h"
+#include "weighted_icp/frontend/frame.h"
+#include "weighted_icp/frontend/image_quality_gate.h"
+#include "weighted_icp/frontend/map.h"
+#include "weighted_icp/frontend/motion_model.h"
+#include "weighted_icp/frontend/pose_estimation.h"
+#include "weighted_icp/io/camera.h"
+
+namespace weighted_icp::frontend {
+
+struct FrontendOptions {
+  FeatureExtractorOptions features;
+  DescriptorMatcherOptions matcher;
+  PnpOptions pnp;
+  DynamicPointFilterOptions dynamic_filter;
+  DepthNoiseModel depth_noise;
+  /// BRISQUE quality gate. It costs ~25 ms, so it judges only the frames that
+  /// matter: a keyframe candidate it refuses is tracked but not mapped, and a
+  /// frame that fails to track is skipped (not a tracking loss) if refused.
+  bool quality_gate = true;
+  ImageQualityGateOptions quality;
+  double min_depth_m = 0.2;
+  double max_depth_m = 5.0;
+  std::size_t local_map_keyframes = 7;
+  /// A match is kept only if the point, projected with the predicted pose,
+  /// lands this close to the feature; wider before the motion is known.
+  double match_gate_px = 40.0;
+  double match_gate_without_motion_px = 120.0;
+  std::size_t min_initial_points = 50;
+  double keyframe_translation_m = 0.08;
+  double keyframe_rotation_deg = 8.0;
+  /// A keyframe when fewer than this fraction of the last keyframe's tracked points are tracked.
+  double keyframe_min_tracked_ratio = 0.5;
+  /// New landmarks are not created this close to a feature flagged as moving.
+  double dynamic_mask_radius_px = 25.0;
+};
+
+enum class TrackingStatus {
+  Initialized,        // a new segment (mini-map) started here
+  Tracked,            // 3D-2D pose
+  TrackedRelative,    // 2D-2D pose, scale from the motion model
+  SkippedLowQuality,  // failed to track and refused by the image quality gate
+  Lost                // no pose; the next frame starts a new segment
+};
+std::string toString(TrackingStatus status);
+
+struct TrackingResult {
+  TrackingStatus status = TrackingStatus::Lost;
+  std::string reason;  // why, when Lost or Skipped
+  Eigen::Isometry3d pose_wc = Eigen::Isometry3d::Identity();
+  bool keyframe = false;
+  /// The quality gate refused this frame: skipped, or tracked but kept out of the map.
+  bool refused_by_quality_gate = false;
+  std::size_t features = 0;
+  std::size_t matches = 0;
+  std::size_t inliers = 0;
+  std::size_t dynamic = 0;
+  bool used_clahe = false;
+  double quality_score = std::numeric_limits<double>::quiet_NaN();
+
+  bool hasPose() const {
+    return status == TrackingStatus::Initialized || status == TrackingStatus::Tracked ||
+           status == TrackingStatus::TrackedRelative;
+  }
+};
+
+class Frontend {
+ public:
+  /// Throws if the quality gate's model files are missing (when enabled).
+  Frontend(Map& map, Backend& backend, io::PinholeCamera camera, FrontendOptions options = {});
+
+  /// Throws std::invalid_argument for an empty image, mismatched colour and
+  /// depth sizes or a depth image that is not CV_32F.
+  TrackingResult track(const RgbdImage& image);
+
+  std::size_t segment() const { return segment_; }
+
+ private:
+  Frame makeFrame(const RgbdImage& image, bool& used_clahe);
+  TrackingResult trackFrame(Frame& frame, TrackingResult result);
+  TrackingResult initialize(Frame& frame, TrackingResult result);
+  TrackingResult trackRelative(Frame& frame, TrackingResult result, const std::string& why_not_3d);
+  TrackingResult lose(TrackingResult result, const std::string& reason);
+  /// Scores `color` with the gate; true when it is refused.
+  bool refusedByQualityGate(TrackingResult& result);
+  bool needsKeyframe(const Eigen::Isometry3d& pose_wc, std::size_t tracked) const;
+  void insertKeyframe(const Frame& frame, const std::vector<std::pair<std::size_t, MapPointId>>& tracked,
+                      const std::vector<Eigen::Vector2d>& dynamic_pixels);
+  void createMapPoint(KeyframeId keyframe, const Frame& frame, std::size_t feature);
+
+  Map& map_;
+  Backend& backend_;
+  io::PinholeCamera camera_;
+  FrontendOptions options_;
+  FeatureExtractor extractor_;
+  DescriptorMatcher matcher_;
+  std::optional<ImageQualityGate> quality_gate_;
+  ConstantVelocityModel motion_;
+
+  std::size_t next_frame_id_ = 0;
+  std::size_t segment_ = 0;
+  bool initialized_ = false;
+  std::optional<Eigen::Isometry3d> last_pose_wc_;
+  Frame last_keyframe_;
+  std::size_t tracked_at_last_keyframe_ = 0;
+  std::set<MapPointId> dynamic_points_;
+  cv::Mat current_color_;  // the image being tracked, for the quality gate
+};
+
+}  // namespace weighted_icp::frontend

@@ -1,0 +1,99 @@
+#include "weighted_icp/frontend/backend.h"
+
+#include <unordered_map>
+
+namespace weighted_icp::frontend {
+
+Backend::Backend(Map& map, io::PinholeCamera camera, BackendOptions options)
+    : map_(map), camera_(camera), options_(options) {
+  if (options_.background_thread) thread_ = std::thread([this] { run(); });
+}
+
+Backend::~Backend() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    stopping_ = true;
+  }
+  wake_.notify_all();
+  if (thread_.joinable()) thread_.join();
+}
+
+void Backend::keyframeInserted() {
+  if (!options_.background_thread) {
+    optimizeWindow();
+    std::lock_guard<std::mutex> lock(mutex_);
+    ++optimizations_;
+    return;
+  }
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    pending_ = true;
+  }
+  wake_.notify_one();
+}
+
+void Backend::flush() {
+  std::unique_lock<std::mutex> lock(mutex_);
+  idle_.wait(lock, [this] { return !pending_ && !running_; });
+}
+
+std::size_t Backend::optimizationsRun() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return optimizations_;
+}
+
+void Backend::run() {
+  std::unique_lock<std::mutex> lock(mutex_);
+  while (true) {
+    wake_.wait(lock, [this] { return pending_ || stopping_; });
+    // Pending work is finished before stopping: no keyframe is left unoptimised.
+    if (!pending_ && stopping_) break;
+    pending_ = false;
+    running_ = true;
+    lock.unlock();
+    optimizeWindow();
+    lock.lock();
+    running_ = false;
+    ++optimizations_;
+    idle_.notify_all();
+  }
+  idle_.notify_all();
+}
+
+void Backend::optimizeWindow() {
+  MapWindow window = map_.window(options_.window_keyframes);
+  if (window.keyframes.size() < 2) return;
+
+  BundleAdjustmentProblem problem;
+  std::unordered_map<KeyframeId, int> pose_index;
+  for (const Keyframe& keyframe : window.keyframes) {
+    pose_index.emplace(keyframe.id, static_cast<int>(problem.poses_wc.size()));
+    problem.poses_wc.push_back(keyframe.pose_wc);
+    problem.pose_fixed.push_back(problem.pose_fixed.empty());  // the oldest fixes the gauge
+  }
+  std::vector<std::pair<MapPointId, KeyframeId>> observation_ids;
+  for (std::size_t j = 0; j < window.points.size(); ++j) {
+    const MapPoint& point = window.points[j];
+    problem.points_world.push_back(point.position);
+    for (const auto& observation : point.observations) {
+      const auto pose = pose_index.find(observation.keyframe);
+      if (pose == pose_index.end()) continue;
+      problem.observations.push_back({pose->second, static_cast<int>(j), observation.pixel, observation.depth});
+      observation_ids.emplace_back(point.id, observation.keyframe);
+    }
+  }
+
+  const BundleAdjustmentSummary summary = solveLocalBundleAdjustment(problem, camera_, options_.bundle_adjustment);
+  if (!summary.ok) return;
+  for (std::size_t i = 0; i < window.keyframes.size(); ++i) window.keyframes[i].pose_wc = problem.poses_wc[i];
+  for (std::size_t j = 0; j < window.points.size(); ++j) {
+    window.points[j].position = problem.points_world[j];
+    window.points[j].covariance = summary.point_covariances[j];
+  }
+  std::vector<std::pair<MapPointId, KeyframeId>> rejected;
+  for (std::size_t k = 0; k < summary.outlier_observations.size(); ++k)
+    if (summary.outlier_observations[k]) rejected.push_back(observation_ids[k]);
+  map_.applyOptimization(window, rejected);
+}
+
+}  // namespace weighted_icp::frontend

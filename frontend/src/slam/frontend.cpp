@@ -1,0 +1,308 @@
+#include "weighted_icp/frontend/frontend.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgproc.hpp>
+
+namespace weighted_icp::frontend {
+
+std::string toString(TrackingStatus status) {
+  switch (status) {
+    case TrackingStatus::Initialized: return "initialized";
+    case TrackingStatus::Tracked: return "tracked";
+    case TrackingStatus::TrackedRelative: return "tracked-2d2d";
+    case TrackingStatus::SkippedLowQuality: return "skipped-low-quality";
+    case TrackingStatus::Lost: return "lost";
+  }
+  return "unknown";
+}
+
+namespace {
+
+double rotationAngleDeg(const Eigen::Isometry3d& motion) {
+  return Eigen::AngleAxisd(motion.linear()).angle() * 180.0 / M_PI;
+}
+
+/// World position and covariance of a feature measured with depth from `pose_wc`.
+FusedPoint measuredPoint(const io::PinholeCamera& camera, const DepthNoiseModel& noise, const Eigen::Isometry3d& pose_wc,
+                         const Eigen::Vector2d& pixel, double depth) {
+  const Eigen::Matrix3d rotation = pose_wc.linear();
+  return {pose_wc * camera.backProject(pixel.x(), pixel.y(), depth),
+          rotation * pointCovarianceCamera(camera, pixel.x(), pixel.y(), depth, noise) * rotation.transpose()};
+}
+
+}  // namespace
+
+Frontend::Frontend(Map& map, Backend& backend, io::PinholeCamera camera, FrontendOptions options)
+    : map_(map),
+      backend_(backend),
+      camera_(camera),
+      options_(options),
+      extractor_(options.features),
+      matcher_(options.matcher) {
+  if (options_.quality_gate) quality_gate_.emplace(options_.quality);
+}
+
+Frame Frontend::makeFrame(const RgbdImage& image, bool& used_clahe) {
+  if (image.color.empty()) throw std::invalid_argument("frame at " + std::to_string(image.timestamp) + ": empty image");
+  if (image.depth.type() != CV_32F || image.depth.size() != image.color.size())
+    throw std::invalid_argument("frame at " + std::to_string(image.timestamp) +
+                                ": depth must be CV_32F metres of the colour image's size");
+  cv::Mat gray;
+  if (image.color.channels() == 3) cv::cvtColor(image.color, gray, cv::COLOR_BGR2GRAY);
+  else gray = image.color;
+
+  Frame frame;
+  frame.id = next_frame_id_++;
+  frame.timestamp = image.timestamp;
+  ExtractedFeatures features = extractor_.extract(gray);
+  used_clahe = features.used_clahe;
+  frame.keypoints = std::move(features.keypoints);
+  frame.descriptors = features.descriptors;
+
+  std::vector<cv::Point2f> detected, undistorted;
+  for (const auto& keypoint : frame.keypoints) detected.push_back(keypoint.pt);
+  if (camera_.hasDistortion() && !detected.empty())
+    cv::undistortPoints(detected, undistorted, camera_.cameraMatrix(), camera_.distortionCoefficients(), cv::noArray(),
+                        camera_.cameraMatrix());
+  else
+    undistorted = detected;
+  frame.pixels.reserve(detected.size());
+  frame.depths.reserve(detected.size());
+  for (std::size_t i = 0; i < detected.size(); ++i) {
+    frame.pixels.emplace_back(undistorted[i].x, undistorted[i].y);
+    // Depth is registered to the raw (distorted) colour image.
+    const int u = std::clamp(static_cast<int>(std::lround(detected[i].x)), 0, image.depth.cols - 1);
+    const int v = std::clamp(static_cast<int>(std::lround(detected[i].y)), 0, image.depth.rows - 1);
+    const double z = image.depth.at<float>(v, u);
+    frame.depths.push_back(std::isfinite(z) && z >= options_.min_depth_m && z <= options_.max_depth_m ? z : 0.0);
+  }
+  return frame;
+}
+
+TrackingResult Frontend::track(const RgbdImage& image) {
+  TrackingResult result;
+  Frame frame = makeFrame(image, result.used_clahe);
+  result.features = frame.size();
+  current_color_ = image.color;
+  if (!initialized_) return initialize(frame, result);
+  return trackFrame(frame, result);
+}
+
+bool Frontend::refusedByQualityGate(TrackingResult& result) {
+  if (!quality_gate_) return false;
+  result.quality_score = quality_gate_->score(current_color_);
+  result.refused_by_quality_gate = result.quality_score > options_.quality.max_brisque_score;
+  return result.refused_by_quality_gate;
+}
+
+TrackingResult Frontend::trackFrame(Frame& frame, TrackingResult result) {
+  const auto predicted = motion_.predict();
+  const Eigen::Isometry3d guess_wc = predicted ? *predicted : *last_pose_wc_;
+  const double gate_px = predicted ? options_.match_gate_px : options_.match_gate_without_motion_px;
+
+  LocalMap local = map_.localMap(options_.local_map_keyframes);
+  if (local.ids.empty()) return lose(result, "the local map is empty");
+  matcher_.setReference(local.descriptors);
+  const Eigen::Isometry3d guess_cw = guess_wc.inverse();
+  std::vector<Eigen::Vector3d> points_world;
+  std::vector<Eigen::Vector2d> pixels;
+  std::vector<std::pair<std::size_t, MapPointId>> matched;  // (feature, point)
+  for (const cv::DMatch& match : matcher_.match(frame.descriptors)) {
+    const MapPointId id = local.ids[match.trainIdx];
+    if (dynamic_points_.count(id)) continue;
+    const Eigen::Vector3d point_camera = guess_cw * local.positions[match.trainIdx];
+    if (point_camera.z() <= 0.0) continue;
+    if ((camera_.project(point_camera) - frame.pixels[match.queryIdx]).norm() > gate_px) continue;
+    points_world.push_back(local.positions[match.trainIdx]);
+    pixels.push_back(frame.pixels[match.queryIdx]);
+    matched.emplace_back(static_cast<std::size_t>(match.queryIdx), id);
+  }
+  result.matches = matched.size();
+  if (matched.size() < static_cast<std::size_t>(options_.pnp.min_inliers))
+    return trackRelative(frame, result, std::to_string(matched.size()) + " 3D-2D matches");
+
+  PoseEstimate estimate = estimatePosePnp(points_world, pixels, camera_, guess_wc, options_.pnp);
+  if (!estimate.ok) return trackRelative(frame, result, "PnP failed: " + estimate.failure);
+
+  // Moving points: each match with depth is checked against the motion of the
+  // static majority; flagged ones leave the pose and never become landmarks.
+  std::vector<Eigen::Vector3d> with_depth_world, with_depth_measured;
+  std::vector<std::size_t> with_depth_match;
+  for (std::size_t m = 0; m < matched.size(); ++m) {
+    const std::size_t feature = matched[m].first;
+    if (!frame.hasDepth(feature)) continue;
+    with_depth_world.push_back(points_world[m]);
+    with_depth_measured.push_back(camera_.backProject(frame.pixels[feature].x(), frame.pixels[feature].y(),
+                                                      frame.depths[feature]));
+    with_depth_match.push_back(m);
+  }
+  const std::vector<bool> moving = flagDynamicByDisplacement(with_depth_world, with_depth_measured, estimate.pose_wc,
+                                                             options_.depth_noise, options_.dynamic_filter);
+  std::vector<bool> is_dynamic(matched.size(), false);
+  std::vector<Eigen::Vector2d> dynamic_pixels;
+  for (std::size_t k = 0; k < moving.size(); ++k) {
+    if (!moving[k]) continue;
+    const std::size_t m = with_depth_match[k];
+    is_dynamic[m] = true;
+    dynamic_points_.insert(matched[m].second);
+    dynamic_pixels.push_back(pixels[m]);
+  }
+  std::vector<int> static_inliers;
+  for (const int m : estimate.inliers)
+    if (!is_dynamic[m]) static_inliers.push_back(m);
+  result.dynamic = dynamic_pixels.size();
+  if (static_inliers.size() < static_cast<std::size_t>(options_.pnp.min_inliers))
+    return trackRelative(frame, result, std::to_string(static_inliers.size()) + " static inliers");
+  if (static_inliers.size() < estimate.inliers.size())
+    estimate.pose_wc = refinePoseHuber(points_world, pixels, static_inliers, camera_, estimate.pose_wc,
+                                       options_.pnp.huber_px, options_.pnp.refine_max_iterations);
+
+  frame.pose_wc = estimate.pose_wc;
+  result.status = TrackingStatus::Tracked;
+  result.pose_wc = frame.pose_wc;
+  result.inliers = static_inliers.size();
+  motion_.update(frame.pose_wc);
+  last_pose_wc_ = frame.pose_wc;
+
+  if (needsKeyframe(frame.pose_wc, static_inliers.size()) && !refusedByQualityGate(result)) {
+    std::vector<std::pair<std::size_t, MapPointId>> tracked;
+    for (const int m : static_inliers) tracked.push_back(matched[m]);
+    insertKeyframe(frame, tracked, dynamic_pixels);
+    result.keyframe = true;
+  }
+  return result;
+}
+
+TrackingResult Frontend::initialize(Frame& frame, TrackingResult result) {
+  std::size_t with_depth = 0;
+  for (std::size_t i = 0; i < frame.size(); ++i) with_depth += frame.hasDepth(i);
+  if (with_depth < options_.min_initial_points) {
+    result.status = TrackingStatus::Lost;
+    result.reason = "only " + std::to_string(with_depth) + " features with depth to start a map";
+    return result;
+  }
+  // A new segment continues from the last known pose: mini-maps stay in one frame.
+  frame.pose_wc = last_pose_wc_.value_or(Eigen::Isometry3d::Identity());
+  motion_.reset();
+  motion_.update(frame.pose_wc);
+  last_pose_wc_ = frame.pose_wc;
+  initialized_ = true;
+  insertKeyframe(frame, {}, {});
+  result.status = TrackingStatus::Initialized;
+  result.pose_wc = frame.pose_wc;
+  result.keyframe = true;
+  result.inliers = tracked_at_last_keyframe_;
+  return result;
+}
+
+TrackingResult Frontend::trackRelative(Frame& frame, TrackingResult result, const std::string& why_not_3d) {
+  const auto predicted = motion_.predict();
+  if (!predicted) return lose(result, why_not_3d + ", and no motion yet to scale a 2D-2D estimate");
+  DescriptorMatcher keyframe_matcher(options_.matcher);
+  keyframe_matcher.setReference(last_keyframe_.descriptors);
+  std::vector<Eigen::Vector2d> keyframe_pixels, frame_pixels;
+  for (const cv::DMatch& match : keyframe_matcher.match(frame.descriptors)) {
+    keyframe_pixels.push_back(last_keyframe_.pixels[match.trainIdx]);
+    frame_pixels.push_back(frame.pixels[match.queryIdx]);
+  }
+  const RelativeMotion relative = estimateRelativeMotion2d2d(keyframe_pixels, frame_pixels, camera_);
+  if (!relative.ok) return lose(result, why_not_3d + "; 2D-2D: " + relative.failure);
+
+  // The essential matrix gives the direction of travel; its length comes
+  // from the constant-velocity prediction.
+  const Eigen::Isometry3d predicted_in_keyframe = last_keyframe_.pose_wc.inverse() * *predicted;
+  Eigen::Isometry3d motion = relative.pose_2_in_1;
+  motion.translation() *= predicted_in_keyframe.translation().norm();
+  const std::vector<bool> moving =
+      flagDynamicByEpipolarDistance(keyframe_pixels, frame_pixels, motion, camera_, options_.dynamic_filter);
+  result.dynamic = static_cast<std::size_t>(std::count(moving.begin(), moving.end(), true));
+  frame.pose_wc = last_keyframe_.pose_wc * motion;
+  result.status = TrackingStatus::TrackedRelative;
+  result.reason = why_not_3d;
+  result.pose_wc = frame.pose_wc;
+  result.matches = keyframe_pixels.size();
+  result.inliers = relative.inliers.size() - result.dynamic;
+  motion_.update(frame.pose_wc);
+  last_pose_wc_ = frame.pose_wc;
+  return result;
+}
+
+TrackingResult Frontend::lose(TrackingResult result, const std::string& reason) {
+  if (refusedByQualityGate(result)) {
+    // A bad image (blur, noise) is not a lost track: skip it, keep the motion.
+    result.status = TrackingStatus::SkippedLowQuality;
+    result.reason = reason + "; BRISQUE " + std::to_string(result.quality_score);
+    return result;
+  }
+  // Everything mapped so far stays; the next frame starts a new segment.
+  if (initialized_) ++segment_;
+  initialized_ = false;
+  motion_.reset();
+  result.status = TrackingStatus::Lost;
+  result.reason = reason;
+  return result;
+}
+
+bool Frontend::needsKeyframe(const Eigen::Isometry3d& pose_wc, std::size_t tracked) const {
+  const Eigen::Isometry3d since_keyframe = last_keyframe_.pose_wc.inverse() * pose_wc;
+  return since_keyframe.translation().norm() > options_.keyframe_translation_m ||
+         rotationAngleDeg(since_keyframe) > options_.keyframe_rotation_deg ||
+         static_cast<double>(tracked) < options_.keyframe_min_tracked_ratio * tracked_at_last_keyframe_;
+}
+
+void Frontend::insertKeyframe(const Frame& frame, const std::vector<std::pair<std::size_t, MapPointId>>& tracked,
+                              const std::vector<Eigen::Vector2d>& dynamic_pixels) {
+  Keyframe keyframe;
+  keyframe.frame_id = frame.id;
+  keyframe.timestamp = frame.timestamp;
+  keyframe.pose_wc = frame.pose_wc;
+  keyframe.segment = segment_;
+  const KeyframeId keyframe_id = map_.addKeyframe(keyframe);
+
+  std::vector<bool> used(frame.size(), false);
+  for (const auto& [feature, point_id] : tracked) {
+    used[feature] = true;
+    const auto point = map_.mapPoint(point_id);
+    if (!point) continue;
+    const MapPointObservation observation{keyframe_id, frame.pixels[feature], frame.depths[feature]};
+    FusedPoint fused{point->position, point->covariance};
+    if (frame.hasDepth(feature)) {
+      const FusedPoint measured =
+          measuredPoint(camera_, options_.depth_noise, frame.pose_wc, frame.pixels[feature], frame.depths[feature]);
+      fused = fusePointEstimates({point->position, measured.position}, {point->covariance, measured.covariance});
+    }
+    map_.addObservation(point_id, observation, fused.position, fused.covariance, frame.descriptors.row(feature).clone());
+  }
+
+  const double mask_sq = options_.dynamic_mask_radius_px * options_.dynamic_mask_radius_px;
+  std::size_t created = 0;
+  for (std::size_t i = 0; i < frame.size(); ++i) {
+    if (used[i] || !frame.hasDepth(i)) continue;
+    const bool near_moving = std::any_of(dynamic_pixels.begin(), dynamic_pixels.end(), [&](const Eigen::Vector2d& p) {
+      return (p - frame.pixels[i]).squaredNorm() < mask_sq;
+    });
+    if (near_moving) continue;
+    createMapPoint(keyframe_id, frame, i);
+    ++created;
+  }
+  last_keyframe_ = frame;
+  tracked_at_last_keyframe_ = tracked.size() + created;
+  backend_.keyframeInserted();
+}
+
+void Frontend::createMapPoint(KeyframeId keyframe, const Frame& frame, std::size_t feature) {
+  const FusedPoint measured =
+      measuredPoint(camera_, options_.depth_noise, frame.pose_wc, frame.pixels[feature], frame.depths[feature]);
+  MapPoint point;
+  point.position = measured.position;
+  point.covariance = measured.covariance;
+  point.descriptor = frame.descriptors.row(feature).clone();
+  point.observations.push_back({keyframe, frame.pixels[feature], frame.depths[feature]});
+  map_.addMapPoint(std::move(point));
+}
+
+}  // namespace weighted_icp::frontend

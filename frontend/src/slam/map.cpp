@@ -1,0 +1,154 @@
+#include "weighted_icp/frontend/map.h"
+
+#include <algorithm>
+#include <set>
+#include <stdexcept>
+#include <string>
+
+namespace weighted_icp::frontend {
+
+KeyframeId Map::addKeyframe(Keyframe keyframe) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  keyframe.id = next_keyframe_id_++;
+  keyframe.observed_points.clear();
+  const KeyframeId id = keyframe.id;
+  keyframes_.emplace(id, std::move(keyframe));
+  return id;
+}
+
+MapPointId Map::addMapPoint(MapPoint point) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  point.id = next_point_id_++;
+  for (const auto& observation : point.observations) {
+    const auto keyframe = keyframes_.find(observation.keyframe);
+    if (keyframe == keyframes_.end())
+      throw std::invalid_argument("map point observed by unknown keyframe " + std::to_string(observation.keyframe));
+    keyframe->second.observed_points.push_back(point.id);
+  }
+  const MapPointId id = point.id;
+  points_.emplace(id, std::move(point));
+  return id;
+}
+
+void Map::addObservation(MapPointId id, const MapPointObservation& observation, const Eigen::Vector3d& position,
+                         const Eigen::Matrix3d& covariance, const cv::Mat& descriptor) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const auto point = points_.find(id);
+  const auto keyframe = keyframes_.find(observation.keyframe);
+  if (point == points_.end() || keyframe == keyframes_.end()) return;  // removed by the backend meanwhile
+  point->second.observations.push_back(observation);
+  point->second.position = position;
+  point->second.covariance = covariance;
+  point->second.descriptor = descriptor;
+  keyframe->second.observed_points.push_back(id);
+}
+
+std::optional<Keyframe> Map::lastKeyframe() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (keyframes_.empty()) return std::nullopt;
+  return keyframes_.rbegin()->second;
+}
+
+std::optional<MapPoint> Map::mapPoint(MapPointId id) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const auto point = points_.find(id);
+  if (point == points_.end()) return std::nullopt;
+  return point->second;
+}
+
+std::vector<MapPointId> Map::currentSegmentPoints(std::size_t keyframes) const {
+  std::set<MapPointId> ids;
+  if (keyframes_.empty()) return {};
+  const std::size_t segment = keyframes_.rbegin()->second.segment;
+  std::size_t taken = 0;
+  for (auto it = keyframes_.rbegin(); it != keyframes_.rend() && taken < keyframes; ++it, ++taken) {
+    if (it->second.segment != segment) break;
+    for (const MapPointId id : it->second.observed_points)
+      if (points_.count(id)) ids.insert(id);
+  }
+  return {ids.begin(), ids.end()};
+}
+
+LocalMap Map::localMap(std::size_t keyframes) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  LocalMap local;
+  local.ids = currentSegmentPoints(keyframes);
+  local.positions.reserve(local.ids.size());
+  for (const MapPointId id : local.ids) {
+    const MapPoint& point = points_.at(id);
+    local.positions.push_back(point.position);
+    local.descriptors.push_back(point.descriptor);
+  }
+  return local;
+}
+
+MapWindow Map::window(std::size_t keyframes) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  MapWindow window;
+  if (keyframes_.empty()) return window;
+  const std::size_t segment = keyframes_.rbegin()->second.segment;
+  for (auto it = keyframes_.rbegin(); it != keyframes_.rend() && window.keyframes.size() < keyframes; ++it) {
+    if (it->second.segment != segment) break;
+    window.keyframes.push_back(it->second);
+  }
+  std::reverse(window.keyframes.begin(), window.keyframes.end());
+  for (const MapPointId id : currentSegmentPoints(keyframes)) window.points.push_back(points_.at(id));
+  return window;
+}
+
+void Map::applyOptimization(const MapWindow& optimised,
+                            const std::vector<std::pair<MapPointId, KeyframeId>>& rejected_observations) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  for (const auto& keyframe : optimised.keyframes) {
+    const auto it = keyframes_.find(keyframe.id);
+    if (it != keyframes_.end()) it->second.pose_wc = keyframe.pose_wc;
+  }
+  for (const auto& point : optimised.points) {
+    const auto it = points_.find(point.id);
+    if (it == points_.end()) continue;
+    it->second.position = point.position;
+    it->second.covariance = point.covariance;
+  }
+  for (const auto& [point_id, keyframe_id] : rejected_observations) {
+    const auto point = points_.find(point_id);
+    if (point == points_.end()) continue;
+    auto& observations = point->second.observations;
+    observations.erase(std::remove_if(observations.begin(), observations.end(),
+                                      [&](const MapPointObservation& o) { return o.keyframe == keyframe_id; }),
+                       observations.end());
+    const auto keyframe = keyframes_.find(keyframe_id);
+    if (keyframe != keyframes_.end()) {
+      auto& ids = keyframe->second.observed_points;
+      ids.erase(std::remove(ids.begin(), ids.end(), point_id), ids.end());
+    }
+    if (observations.empty()) points_.erase(point);
+  }
+}
+
+std::vector<Keyframe> Map::keyframes() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  std::vector<Keyframe> out;
+  out.reserve(keyframes_.size());
+  for (const auto& [id, keyframe] : keyframes_) out.push_back(keyframe);
+  return out;
+}
+
+std::vector<MapPoint> Map::mapPoints() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  std::vector<MapPoint> out;
+  out.reserve(points_.size());
+  for (const auto& [id, point] : points_) out.push_back(point);
+  return out;
+}
+
+std::size_t Map::keyframeCount() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return keyframes_.size();
+}
+
+std::size_t Map::mapPointCount() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return points_.size();
+}
+
+}  // namespace weighted_icp::frontend
