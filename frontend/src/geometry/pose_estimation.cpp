@@ -98,12 +98,10 @@ std::pair<Eigen::Isometry3d, std::vector<int>> ransacPnp(const std::vector<Eigen
   return {pose_cw.inverse(), inliers};
 }
 
-}  // namespace
-
-Eigen::Isometry3d refinePoseHuber(const std::vector<Eigen::Vector3d>& points_world,
-                                  const std::vector<Eigen::Vector2d>& pixels, const std::vector<int>& use,
-                                  const io::PinholeCamera& camera, const Eigen::Isometry3d& initial_wc, double huber_px,
-                                  int max_iterations) {
+Eigen::Isometry3d refinePose(const std::vector<Eigen::Vector3d>& points_world, const std::vector<Eigen::Vector2d>& pixels,
+                             const std::vector<int>& use, const io::PinholeCamera& camera,
+                             const Eigen::Isometry3d& initial_wc, double huber_px, int max_iterations,
+                             const DepthMeasurements* depth) {
   if (points_world.size() != pixels.size())
     throw std::invalid_argument("refinePoseHuber: " + std::to_string(points_world.size()) + " points but " +
                                 std::to_string(pixels.size()) + " pixels");
@@ -128,9 +126,19 @@ Eigen::Isometry3d refinePoseHuber(const std::vector<Eigen::Vector3d>& points_wor
   // Infinity means plain least squares (no loss function).
   ceres::LossFunction* loss = std::isfinite(huber_px) ? new ceres::HuberLoss(huber_px) : nullptr;
   problem.AddParameterBlock(pose.data(), 7, new PoseManifold);
-  for (const int i : in_front)
-    problem.AddResidualBlock(new PoseOnlyReprojectionResidual(camera, points_world[i], pixels[i], 1.0), loss,
-                             pose.data());
+  // Points held constant: copies, since Ceres takes mutable parameter blocks.
+  std::vector<Eigen::Vector3d> points(points_world);
+  for (const int i : in_front) {
+    const double z = depth ? depth->depths[i] : 0.0;
+    if (z > 0.0) {
+      problem.AddResidualBlock(new RgbdResidual(camera, pixels[i], 1.0, z, depth->noise.sigmaDepth(z)), loss,
+                               pose.data(), points[i].data());
+      problem.SetParameterBlockConstant(points[i].data());
+    } else {
+      problem.AddResidualBlock(new PoseOnlyReprojectionResidual(camera, points_world[i], pixels[i], 1.0), loss,
+                               pose.data());
+    }
+  }
 
   ceres::Solver::Options solver_options;
   solver_options.minimizer_type = ceres::TRUST_REGION;
@@ -143,6 +151,25 @@ Eigen::Isometry3d refinePoseHuber(const std::vector<Eigen::Vector3d>& points_wor
   ceres::Solve(solver_options, &problem, &summary);
   if (!summary.IsSolutionUsable()) return initial_wc;
   return pose.poseWc();
+}
+
+}  // namespace
+
+Eigen::Isometry3d refinePoseHuber(const std::vector<Eigen::Vector3d>& points_world,
+                                  const std::vector<Eigen::Vector2d>& pixels, const std::vector<int>& use,
+                                  const io::PinholeCamera& camera, const Eigen::Isometry3d& initial_wc, double huber_px,
+                                  int max_iterations) {
+  return refinePose(points_world, pixels, use, camera, initial_wc, huber_px, max_iterations, nullptr);
+}
+
+Eigen::Isometry3d refinePoseHuber(const std::vector<Eigen::Vector3d>& points_world,
+                                  const std::vector<Eigen::Vector2d>& pixels, const std::vector<int>& use,
+                                  const io::PinholeCamera& camera, const Eigen::Isometry3d& initial_wc, double huber_px,
+                                  int max_iterations, const DepthMeasurements& depth) {
+  if (depth.depths.size() != points_world.size())
+    throw std::invalid_argument("refinePoseHuber: " + std::to_string(depth.depths.size()) + " depths for " +
+                                std::to_string(points_world.size()) + " points");
+  return refinePose(points_world, pixels, use, camera, initial_wc, huber_px, max_iterations, &depth);
 }
 
 PoseEstimate estimatePosePnp(const std::vector<Eigen::Vector3d>& points_world,

@@ -131,10 +131,20 @@ std::vector<cv::KeyPoint> FeatureExtractor::detectBucketed(const cv::Mat& gray) 
   for (std::size_t i = 0; i < candidates.size() && total < options_.max_features; ++i)
     if (!taken[i] && farFromTaken(candidates[i].pt)) take(i);
 
-  std::vector<cv::KeyPoint> keypoints;
-  keypoints.reserve(static_cast<std::size_t>(total));
+  std::vector<cv::Point2f> points;
+  std::vector<float> responses_taken;
   for (std::size_t i = 0; i < candidates.size(); ++i)
-    if (taken[i]) keypoints.emplace_back(candidates[i].pt, static_cast<float>(kOrbPatchSize), -1.0f, candidates[i].response);
+    if (taken[i]) {
+      points.push_back(candidates[i].pt);
+      responses_taken.push_back(candidates[i].response);
+    }
+  if (options_.subpixel && !points.empty())
+    cv::cornerSubPix(gray, points, cv::Size(3, 3), cv::Size(-1, -1),
+                     cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 10, 0.01));
+  std::vector<cv::KeyPoint> keypoints;
+  keypoints.reserve(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i)
+    keypoints.emplace_back(points[i], static_cast<float>(kOrbPatchSize), -1.0f, responses_taken[i]);
   return keypoints;
 }
 

@@ -46,6 +46,24 @@ Frontend::Frontend(Map& map, Backend& backend, io::PinholeCamera camera, Fronten
   if (options_.quality_gate) quality_gate_.emplace(options_.quality);
 }
 
+double Frontend::depthAt(const cv::Mat& depth, const cv::Point2f& pixel) const {
+  // Depth is registered to the raw (distorted) colour image. Corners often lie
+  // on depth edges, where the sensor mixes foreground and background: a depth
+  // is trusted only if its 3x3 neighbourhood agrees with it.
+  const int u = static_cast<int>(std::lround(pixel.x));
+  const int v = static_cast<int>(std::lround(pixel.y));
+  if (u < 1 || v < 1 || u >= depth.cols - 1 || v >= depth.rows - 1) return 0.0;
+  const double z = depth.at<float>(v, u);
+  if (!std::isfinite(z) || z < options_.min_depth_m || z > options_.max_depth_m) return 0.0;
+  const double tolerance = options_.depth_edge_tolerance * z;
+  for (int dv = -1; dv <= 1; ++dv)
+    for (int du = -1; du <= 1; ++du) {
+      const double neighbour = depth.at<float>(v + dv, u + du);
+      if (!std::isfinite(neighbour) || std::abs(neighbour - z) > tolerance) return 0.0;
+    }
+  return z;
+}
+
 Frame Frontend::makeFrame(const RgbdImage& image, bool& used_clahe) {
   if (image.color.empty()) throw std::invalid_argument("frame at " + std::to_string(image.timestamp) + ": empty image");
   if (image.depth.type() != CV_32F || image.depth.size() != image.color.size())
@@ -74,11 +92,7 @@ Frame Frontend::makeFrame(const RgbdImage& image, bool& used_clahe) {
   frame.depths.reserve(detected.size());
   for (std::size_t i = 0; i < detected.size(); ++i) {
     frame.pixels.emplace_back(undistorted[i].x, undistorted[i].y);
-    // Depth is registered to the raw (distorted) colour image.
-    const int u = std::clamp(static_cast<int>(std::lround(detected[i].x)), 0, image.depth.cols - 1);
-    const int v = std::clamp(static_cast<int>(std::lround(detected[i].y)), 0, image.depth.rows - 1);
-    const double z = image.depth.at<float>(v, u);
-    frame.depths.push_back(std::isfinite(z) && z >= options_.min_depth_m && z <= options_.max_depth_m ? z : 0.0);
+    frame.depths.push_back(depthAt(image.depth, detected[i]));
   }
   return frame;
 }
@@ -113,7 +127,8 @@ TrackingResult Frontend::trackFrame(Frame& frame, TrackingResult result) {
   std::vector<std::pair<std::size_t, MapPointId>> matched;  // (feature, point)
   for (const cv::DMatch& match : matcher_.match(frame.descriptors)) {
     const MapPointId id = local.ids[match.trainIdx];
-    if (dynamic_points_.count(id)) continue;
+    const auto votes = dynamic_votes_.find(id);
+    if (votes != dynamic_votes_.end() && votes->second >= options_.dynamic_votes_to_exclude) continue;
     const Eigen::Vector3d point_camera = guess_cw * local.positions[match.trainIdx];
     if (point_camera.z() <= 0.0) continue;
     if ((camera_.project(point_camera) - frame.pixels[match.queryIdx]).norm() > gate_px) continue;
@@ -148,7 +163,7 @@ TrackingResult Frontend::trackFrame(Frame& frame, TrackingResult result) {
     if (!moving[k]) continue;
     const std::size_t m = with_depth_match[k];
     is_dynamic[m] = true;
-    dynamic_points_.insert(matched[m].second);
+    ++dynamic_votes_[matched[m].second];
     dynamic_pixels.push_back(pixels[m]);
   }
   std::vector<int> static_inliers;
@@ -157,13 +172,16 @@ TrackingResult Frontend::trackFrame(Frame& frame, TrackingResult result) {
   result.dynamic = dynamic_pixels.size();
   if (static_inliers.size() < static_cast<std::size_t>(options_.pnp.min_inliers))
     return trackRelative(frame, result, std::to_string(static_inliers.size()) + " static inliers");
-  if (static_inliers.size() < estimate.inliers.size())
-    estimate.pose_wc = refinePoseHuber(points_world, pixels, static_inliers, camera_, estimate.pose_wc,
-                                       options_.pnp.huber_px, options_.pnp.refine_max_iterations);
+  // Final pose from the static inliers, with their depths as well as pixels.
+  std::vector<double> match_depths(matched.size());
+  for (std::size_t m = 0; m < matched.size(); ++m) match_depths[m] = frame.depths[matched[m].first];
+  estimate.pose_wc = refinePoseHuber(points_world, pixels, static_inliers, camera_, estimate.pose_wc,
+                                     options_.pnp.huber_px, options_.pnp.refine_max_iterations,
+                                     DepthMeasurements{match_depths, options_.depth_noise});
 
   frame.pose_wc = estimate.pose_wc;
   result.status = TrackingStatus::Tracked;
-  result.pose_wc = frame.pose_wc;
+  setPose(result, frame.pose_wc);
   result.inliers = static_inliers.size();
   motion_.update(frame.pose_wc);
   last_pose_wc_ = frame.pose_wc;
@@ -172,6 +190,7 @@ TrackingResult Frontend::trackFrame(Frame& frame, TrackingResult result) {
     std::vector<std::pair<std::size_t, MapPointId>> tracked;
     for (const int m : static_inliers) tracked.push_back(matched[m]);
     insertKeyframe(frame, tracked, dynamic_pixels);
+    setPose(result, frame.pose_wc);
     result.keyframe = true;
   }
   return result;
@@ -193,7 +212,7 @@ TrackingResult Frontend::initialize(Frame& frame, TrackingResult result) {
   initialized_ = true;
   insertKeyframe(frame, {}, {});
   result.status = TrackingStatus::Initialized;
-  result.pose_wc = frame.pose_wc;
+  setPose(result, frame.pose_wc);
   result.keyframe = true;
   result.inliers = tracked_at_last_keyframe_;
   return result;
@@ -223,7 +242,7 @@ TrackingResult Frontend::trackRelative(Frame& frame, TrackingResult result, cons
   frame.pose_wc = last_keyframe_.pose_wc * motion;
   result.status = TrackingStatus::TrackedRelative;
   result.reason = why_not_3d;
-  result.pose_wc = frame.pose_wc;
+  setPose(result, frame.pose_wc);
   result.matches = keyframe_pixels.size();
   result.inliers = relative.inliers.size() - result.dynamic;
   motion_.update(frame.pose_wc);
@@ -247,6 +266,15 @@ TrackingResult Frontend::lose(TrackingResult result, const std::string& reason) 
   return result;
 }
 
+void Frontend::setPose(TrackingResult& result, const Eigen::Isometry3d& pose_wc) const {
+  result.pose_wc = pose_wc;
+  result.reference_keyframe = last_keyframe_id_;
+  // Relative to the keyframe as the backend has it now, which is what the
+  // map points this pose was tracked against are expressed with.
+  const Eigen::Isometry3d reference = map_.keyframePose(last_keyframe_id_).value_or(last_keyframe_.pose_wc);
+  result.pose_in_reference = reference.inverse() * pose_wc;
+}
+
 bool Frontend::needsKeyframe(const Eigen::Isometry3d& pose_wc, std::size_t tracked) const {
   const Eigen::Isometry3d since_keyframe = last_keyframe_.pose_wc.inverse() * pose_wc;
   return since_keyframe.translation().norm() > options_.keyframe_translation_m ||
@@ -262,6 +290,7 @@ void Frontend::insertKeyframe(const Frame& frame, const std::vector<std::pair<st
   keyframe.pose_wc = frame.pose_wc;
   keyframe.segment = segment_;
   const KeyframeId keyframe_id = map_.addKeyframe(keyframe);
+  last_keyframe_id_ = keyframe_id;
 
   std::vector<bool> used(frame.size(), false);
   for (const auto& [feature, point_id] : tracked) {
@@ -290,7 +319,7 @@ void Frontend::insertKeyframe(const Frame& frame, const std::vector<std::pair<st
     ++created;
   }
   last_keyframe_ = frame;
-  tracked_at_last_keyframe_ = tracked.size() + created;
+  tracked_at_last_keyframe_ = tracked.size();  // 0 at a segment's first keyframe: motion decides the next
   backend_.keyframeInserted();
 }
 

@@ -49,6 +49,13 @@ std::optional<Keyframe> Map::lastKeyframe() const {
   return keyframes_.rbegin()->second;
 }
 
+std::optional<Eigen::Isometry3d> Map::keyframePose(KeyframeId id) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const auto keyframe = keyframes_.find(id);
+  if (keyframe == keyframes_.end()) return std::nullopt;
+  return keyframe->second.pose_wc;
+}
+
 std::optional<MapPoint> Map::mapPoint(MapPointId id) const {
   std::lock_guard<std::mutex> lock(mutex_);
   const auto point = points_.find(id);

@@ -4,8 +4,16 @@
 
 namespace weighted_icp::frontend {
 
+namespace {
+/// The backend weighs depth with the front end's noise model: one sensor, one model.
+BackendOptions withFrontendNoise(BackendOptions backend, const FrontendOptions& frontend) {
+  backend.bundle_adjustment.noise = frontend.depth_noise;
+  return backend;
+}
+}  // namespace
+
 RgbdSlam::RgbdSlam(const io::PinholeCamera& camera, const RgbdSlamOptions& options)
-    : backend_(map_, camera, options.backend),
+    : backend_(map_, camera, withFrontendNoise(options.backend, options.frontend)),
       frontend_(map_, backend_, camera, options.frontend),
       minimap_builder_(options.minimap_keyframes) {}
 
@@ -23,8 +31,12 @@ void RgbdSlam::finish() { backend_.flush(); }
 
 io::Trajectory RgbdSlam::trajectory() const {
   io::Trajectory trajectory;
-  for (const auto& frame : frames_)
-    if (frame.result.hasPose()) trajectory.push_back({frame.timestamp, frame.result.pose_wc});
+  for (const auto& frame : frames_) {
+    if (!frame.result.hasPose()) continue;
+    // Each frame rides on its reference keyframe, as refined by the backend.
+    const auto reference = map_.keyframePose(frame.result.reference_keyframe);
+    trajectory.push_back({frame.timestamp, reference ? *reference * frame.result.pose_in_reference : frame.result.pose_wc});
+  }
   return trajectory;
 }
 

@@ -7,7 +7,7 @@
 #include <cstddef>
 #include <limits>
 #include <optional>
-#include <set>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -30,7 +30,10 @@ struct FrontendOptions {
   DescriptorMatcherOptions matcher;
   PnpOptions pnp;
   DynamicPointFilterOptions dynamic_filter;
-  DepthNoiseModel depth_noise;
+  /// Used by the backend too. sigma_z = c z^2 with c = 0.005, not the sensor's
+  /// 0.0015: at a keypoint, depth also suffers from the colour/depth time
+  /// offset (up to 20 ms on TUM) and registration, so it is trusted less.
+  DepthNoiseModel depth_noise{0.005, 1.0};
   /// BRISQUE quality gate. It costs ~25 ms, so it judges only the frames that
   /// matter: a keyframe candidate it refuses is tracked but not mapped, and a
   /// frame that fails to track is skipped (not a tracking loss) if refused.
@@ -38,6 +41,9 @@ struct FrontendOptions {
   ImageQualityGateOptions quality;
   double min_depth_m = 0.2;
   double max_depth_m = 5.0;
+  /// A keypoint's depth counts only if its 3x3 neighbours are within this
+  /// fraction of it (depth edges mix foreground and background).
+  double depth_edge_tolerance = 0.03;
   std::size_t local_map_keyframes = 7;
   /// A match is kept only if the point, projected with the predicted pose,
   /// lands this close to the feature; wider before the motion is known.
@@ -50,6 +56,9 @@ struct FrontendOptions {
   double keyframe_min_tracked_ratio = 0.5;
   /// New landmarks are not created this close to a feature flagged as moving.
   double dynamic_mask_radius_px = 25.0;
+  /// A map point flagged as moving this many times is no longer matched
+  /// (once may be depth noise; it is left out of that frame's pose either way).
+  int dynamic_votes_to_exclude = 2;
 };
 
 enum class TrackingStatus {
@@ -65,6 +74,10 @@ struct TrackingResult {
   TrackingStatus status = TrackingStatus::Lost;
   std::string reason;  // why, when Lost or Skipped
   Eigen::Isometry3d pose_wc = Eigen::Isometry3d::Identity();
+  /// The keyframe the pose was tracked from, and the pose relative to it: once
+  /// the backend has refined that keyframe, this frame follows it.
+  KeyframeId reference_keyframe = 0;
+  Eigen::Isometry3d pose_in_reference = Eigen::Isometry3d::Identity();
   bool keyframe = false;
   /// The quality gate refused this frame: skipped, or tracked but kept out of the map.
   bool refused_by_quality_gate = false;
@@ -94,10 +107,13 @@ class Frontend {
 
  private:
   Frame makeFrame(const RgbdImage& image, bool& used_clahe);
+  double depthAt(const cv::Mat& depth, const cv::Point2f& pixel) const;
   TrackingResult trackFrame(Frame& frame, TrackingResult result);
   TrackingResult initialize(Frame& frame, TrackingResult result);
   TrackingResult trackRelative(Frame& frame, TrackingResult result, const std::string& why_not_3d);
   TrackingResult lose(TrackingResult result, const std::string& reason);
+  /// Sets the pose and its expression relative to the latest keyframe.
+  void setPose(TrackingResult& result, const Eigen::Isometry3d& pose_wc) const;
   /// Scores `color` with the gate; true when it is refused.
   bool refusedByQualityGate(TrackingResult& result);
   bool needsKeyframe(const Eigen::Isometry3d& pose_wc, std::size_t tracked) const;
@@ -119,8 +135,9 @@ class Frontend {
   bool initialized_ = false;
   std::optional<Eigen::Isometry3d> last_pose_wc_;
   Frame last_keyframe_;
+  KeyframeId last_keyframe_id_ = 0;
   std::size_t tracked_at_last_keyframe_ = 0;
-  std::set<MapPointId> dynamic_points_;
+  std::map<MapPointId, int> dynamic_votes_;
   cv::Mat current_color_;  // the image being tracked, for the quality gate
 };
 

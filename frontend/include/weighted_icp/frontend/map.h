@@ -39,6 +39,7 @@ class Map {
                       const Eigen::Matrix3d& covariance, const cv::Mat& descriptor);
 
   std::optional<Keyframe> lastKeyframe() const;
+  std::optional<Eigen::Isometry3d> keyframePose(KeyframeId id) const;
   std::optional<MapPoint> mapPoint(MapPointId id) const;
   /// Points observed by the last `keyframes` keyframes of the current segment.
   LocalMap localMap(std::size_t keyframes) const;

@@ -9,6 +9,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include "weighted_icp/frontend/depth_noise_model.h"
 #include "weighted_icp/io/camera.h"
 
 namespace weighted_icp::frontend {
@@ -57,6 +58,19 @@ Eigen::Isometry3d refinePoseHuber(const std::vector<Eigen::Vector3d>& points_wor
                                   const std::vector<Eigen::Vector2d>& pixels, const std::vector<int>& use,
                                   const io::PinholeCamera& camera, const Eigen::Isometry3d& initial_wc, double huber_px,
                                   int max_iterations);
+
+/// Depth measured at each match (metres, 0 = none) and its noise model: with
+/// them, refinement also fits each point's depth, whitened by the sensor's
+/// sigma, as RGB-D bundle adjustment does (reprojection alone constrains
+/// motion along the optical axis poorly).
+struct DepthMeasurements {
+  const std::vector<double>& depths;
+  DepthNoiseModel noise;
+};
+Eigen::Isometry3d refinePoseHuber(const std::vector<Eigen::Vector3d>& points_world,
+                                  const std::vector<Eigen::Vector2d>& pixels, const std::vector<int>& use,
+                                  const io::PinholeCamera& camera, const Eigen::Isometry3d& initial_wc, double huber_px,
+                                  int max_iterations, const DepthMeasurements& depth);
 
 struct RelativeMotion {
   bool ok = false;

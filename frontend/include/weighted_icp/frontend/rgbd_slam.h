@@ -39,7 +39,8 @@ class RgbdSlam {
   const std::vector<FrameRecord>& frames() const { return frames_; }
   const Map& map() const { return map_; }
   std::size_t optimizationsRun() const { return backend_.optimizationsRun(); }
-  /// One pose per frame that got one (camera-to-world), as tracked.
+  /// One pose per frame that got one (camera-to-world), expressed through its
+  /// reference keyframe as the backend left it.
   io::Trajectory trajectory() const;
   LandmarkMap sessionMap() const { return MiniMapBuilder::sessionMap(map_); }
   std::vector<LandmarkMap> miniMaps() const { return minimap_builder_.build(map_); }

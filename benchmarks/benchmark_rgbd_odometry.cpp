@@ -1,0 +1,158 @@
+// Accuracy and speed of the front end next to OpenCV's own RGB-D odometry
+// (cv::rgbd::RgbdOdometry, frame to frame, default parameters) on the same
+// frames: ATE RMSE (rigid alignment, as the TUM benchmark) and ms per frame.
+//
+//   wicp_benchmark_rgbd_odometry [--data DIR] [--synthetic-frames N]
+//
+// Runs tum_fr1_xyz_head and tum_fr3_teddy_head from DIR (default: the shared
+// data set) and the project's synthetic sequence, static and with a moving
+// object. Prints a Markdown table.
+
+#include <algorithm>
+#include <chrono>
+#include <filesystem>
+#include <functional>
+#include <iomanip>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include <boost/program_options.hpp>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/rgbd.hpp>
+
+#include "weighted_icp/frontend/rgbd_slam.h"
+#include "weighted_icp/io/synthetic_rgbd.h"
+#include "weighted_icp/io/trajectory.h"
+#include "weighted_icp/io/tum_sequence.h"
+
+namespace po = boost::program_options;
+using namespace weighted_icp;
+
+namespace {
+
+struct Sequence {
+  std::string name;
+  io::PinholeCamera camera;
+  std::vector<frontend::RgbdImage> frames;
+  io::Trajectory truth;
+};
+
+struct Run {
+  double ate_rmse_m = 0.0;
+  double median_ms = 0.0;
+  std::size_t tracked = 0;
+};
+
+double median(std::vector<double> values) {
+  std::sort(values.begin(), values.end());
+  return values.empty() ? 0.0 : values[values.size() / 2];
+}
+
+Sequence loadTum(const std::string& dir, const std::string& name, int freiburg) {
+  const io::TumSequence tum = io::TumSequence::open(dir);
+  Sequence sequence{name, io::tumCamera(freiburg), {}, tum.groundTruth()};
+  for (std::size_t i = 0; i < tum.size(); ++i) {
+    io::RgbdImages images = tum.loadFrame(i, sequence.camera);
+    sequence.frames.push_back({tum.frame(i).rgb_timestamp, images.color, images.depth});
+  }
+  return sequence;
+}
+
+Sequence makeSynthetic(std::size_t frames, bool moving_object) {
+  io::SyntheticRgbdOptions options;
+  options.frames = frames;
+  options.moving_object = moving_object;
+  const io::SyntheticRgbdSequence synthetic(options);
+  Sequence sequence{moving_object ? "synthetic, moving object" : "synthetic", options.camera, {}, {}};
+  for (std::size_t i = 0; i < synthetic.size(); ++i) {
+    io::SyntheticRgbdFrame frame = synthetic.frame(i);
+    cv::Mat depth;
+    frame.depth.convertTo(depth, CV_32F, 1.0 / options.camera.depth_factor);
+    sequence.frames.push_back({frame.timestamp, frame.color, depth});
+    sequence.truth.push_back({frame.timestamp, frame.camera_to_world});
+  }
+  return sequence;
+}
+
+Run runFrontend(const Sequence& sequence) {
+  frontend::RgbdSlam slam(sequence.camera);
+  std::vector<double> ms;
+  for (const auto& frame : sequence.frames) ms.push_back(slam.process(frame).tracking_ms);
+  slam.finish();
+  const io::Trajectory estimate = slam.trajectory();
+  return {io::computeAte(sequence.truth, estimate).translation.rmse, median(ms), estimate.size()};
+}
+
+Run runOpenCvOdometry(const Sequence& sequence) {
+  const cv::Mat camera_matrix(sequence.camera.cameraMatrix());
+  cv::Ptr<cv::rgbd::RgbdOdometry> odometry = cv::rgbd::RgbdOdometry::create(camera_matrix);
+  cv::Ptr<cv::rgbd::OdometryFrame> previous, current;
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  io::Trajectory estimate;
+  std::vector<double> ms;
+  for (const auto& frame : sequence.frames) {
+    const auto start = std::chrono::steady_clock::now();
+    cv::Mat gray;
+    cv::cvtColor(frame.color, gray, cv::COLOR_BGR2GRAY);
+    current = cv::rgbd::OdometryFrame::create(gray, frame.depth);
+    if (previous) {
+      cv::Mat rt;  // maps points of the previous camera into the current one
+      if (odometry->compute(current, previous, rt)) {
+        Eigen::Matrix4d motion;
+        for (int r = 0; r < 4; ++r)
+          for (int c = 0; c < 4; ++c) motion(r, c) = rt.at<double>(r, c);
+        pose = pose * Eigen::Isometry3d(motion);
+      }
+    }
+    ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
+    estimate.push_back({frame.timestamp, pose});
+    previous = current;
+  }
+  return {io::computeAte(sequence.truth, estimate).translation.rmse, median(ms), estimate.size()};
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    std::string data = WEIGHTED_ICP_DATA_DIR;
+    std::size_t synthetic_frames = 150;
+    po::options_description options("wicp_benchmark_rgbd_odometry options");
+    options.add_options()("help,h", "print this help")("data", po::value(&data)->default_value(data),
+                                                           "folder with tum_fr1_xyz_head and tum_fr3_teddy_head")(
+        "synthetic-frames", po::value(&synthetic_frames)->default_value(synthetic_frames), "synthetic sequence length");
+    po::variables_map vm;
+    po::store(po::parse_command_line(argc, argv, options), vm);
+    if (vm.count("help")) {
+      std::cout << options << '\n';
+      return 0;
+    }
+    po::notify(vm);
+
+    std::vector<std::function<Sequence()>> sequences;
+    for (const auto& [folder, freiburg] : {std::pair<const char*, int>{"tum_fr1_xyz_head", 1}, {"tum_fr3_teddy_head", 3}}) {
+      const std::string dir = data + "/" + folder;
+      if (std::filesystem::exists(dir)) sequences.push_back([=] { return loadTum(dir, folder, freiburg); });
+      else std::cerr << "skipping " << dir << ": not found\n";
+    }
+    sequences.push_back([=] { return makeSynthetic(synthetic_frames, false); });
+    sequences.push_back([=] { return makeSynthetic(synthetic_frames, true); });
+
+    std::cout << "| sequence | frames | ATE RMSE, ours (cm) | ATE RMSE, cv::rgbd::RgbdOdometry (cm) | median ms/frame, ours | "
+                 "median ms/frame, RgbdOdometry |\n|---|---|---|---|---|---|\n"
+              << std::fixed;
+    for (const auto& make : sequences) {
+      const Sequence sequence = make();
+      const Run ours = runFrontend(sequence);
+      const Run opencv = runOpenCvOdometry(sequence);
+      std::cout << "| " << sequence.name << " | " << sequence.frames.size() << " | " << std::setprecision(2)
+                << ours.ate_rmse_m * 100 << " | " << opencv.ate_rmse_m * 100 << " | " << std::setprecision(1)
+                << ours.median_ms << " | " << opencv.median_ms << " |" << std::endl;
+    }
+    return 0;
+  } catch (const std::exception& e) {
+    std::cerr << "wicp_benchmark_rgbd_odometry: error: " << e.what() << '\n';
+    return 1;
+  }
+}
