@@ -1,0 +1,454 @@
+#include "sweep.h"
+
+#include <array>
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <iostream>
+#include <map>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+#include <tuple>
+#include <utility>
+
+#include <spawn.h>
+#include <sys/wait.h>
+
+#include <boost/program_options.hpp>
+
+#include "tool_support.h"
+#include "weighted_icp/io/map_format.h"
+#include "weighted_icp/registration/landmark_point.h"
+
+extern char** environ;
+
+namespace weighted_icp::sweep {
+
+namespace po = boost::program_options;
+namespace fs = std::filesystem;
+
+// ---------------------------------------------------------------------------
+// The sweeps
+
+namespace {
+Displacement yawOnly(double yaw_deg) {
+  Displacement d;
+  d.yaw_deg = yaw_deg;
+  return d;
+}
+
+std::vector<Displacement> quadrants(double a, double b, double yaw_deg) {
+  std::vector<Displacement> out;
+  for (const double sx : {1.0, -1.0})
+    for (const double sy : {1.0, -1.0}) {
+      Displacement d;
+      d.x = sx * a;
+      d.y = sy * b;
+      d.yaw_deg = yaw_deg;
+      out.push_back(d);
+    }
+  return out;
+}
+
+std::vector<SweepCase> withK(unsigned int k, const std::vector<Displacement>& displacements) {
+  std::vector<SweepCase> cases;
+  for (const Displacement& d : displacements) cases.push_back({k, d});
+  return cases;
+}
+}  // namespace
+
+std::vector<Displacement> kSweepDisplacements() {
+  Displacement paper;  // config.yaml of the paper's experiment code
+  paper.y = 1.0;
+  paper.z = 0.4;
+  paper.roll_deg = 10.0;
+  paper.yaw_deg = 22.5;
+  return {paper, yawOnly(10), yawOnly(-10), yawOnly(30), yawOnly(-30)};
+}
+
+SweepDefinition kSweep() {
+  return {"k", "Sweeps the neighbourhood size k over {1,3,5,7,10,15,20} at five displacements.", true,
+          [](unsigned int) {
+            std::vector<SweepCase> cases;
+            for (const unsigned int k : kSweepValues)
+              for (const SweepCase& c : withK(k, kSweepDisplacements())) cases.push_back(c);
+            return cases;
+          }};
+}
+
+SweepDefinition yawSweep() {
+  return {"yaw", "Sweeps the yaw (about z) from 0 to 70 deg in steps of 10, in both directions.", false,
+          [](unsigned int k) {
+            std::vector<Displacement> displacements;
+            for (const double yaw : yawSweepYaws) {
+              displacements.push_back(yawOnly(yaw));
+              if (yaw != 0.0) displacements.push_back(yawOnly(-yaw));
+            }
+            return withK(k, displacements);
+          }};
+}
+
+SweepDefinition xySweep() {
+  return {"xy", "Sweeps XY offsets: the four quadrants (+-a, +-a) for a in {0.25,0.5,1,1.5,2} m.", false,
+          [](unsigned int k) {
+            std::vector<SweepCase> cases;
+            for (const double a : xySweepMagnitudes)
+              for (const SweepCase& c : withK(k, quadrants(a, a, 0.0))) cases.push_back(c);
+            return cases;
+          }};
+}
+
+SweepDefinition xyYawSweep() {
+  return {"xy_yaw", "Sweeps XY plus yaw: the quadrants (+-0.5 m, +-0.5 m) at yaw -30, -10, 10, 30 deg.", false,
+          [](unsigned int k) {
+            std::vector<SweepCase> cases;
+            for (const double yaw : xyYawSweepYaws)
+              for (const SweepCase& c : withK(k, quadrants(xyYawSweepOffset, xyYawSweepOffset, yaw)))
+                cases.push_back(c);
+            return cases;
+          }};
+}
+
+// ---------------------------------------------------------------------------
+// The maps
+
+FrameRange FrameRange::parse(const std::string& text, const std::string& option) {
+  const auto fail = [&] {
+    return std::invalid_argument(option + " \"" + text + "\": expected FIRST-LAST frame ids, e.g. 0-119");
+  };
+  const auto dash = text.find('-');
+  if (dash == std::string::npos || dash == 0 || dash + 1 == text.size()) throw fail();
+  const auto frame_id = [&](const std::string& part) {
+    if (part.find_first_not_of("0123456789") != std::string::npos) throw fail();
+    try {
+      return static_cast<FrameId>(std::stoull(part));
+    } catch (const std::out_of_range&) {
+      throw fail();
+    }
+  };
+  const FrameRange range{frame_id(text.substr(0, dash)), frame_id(text.substr(dash + 1))};
+  if (range.first > range.last)
+    throw std::invalid_argument(option + " \"" + text + "\": the first frame is after the last");
+  return range;
+}
+
+std::string FrameRange::toString() const { return std::to_string(first) + "-" + std::to_string(last); }
+
+namespace {
+LandmarkMap filtered(const LandmarkMap& map, std::size_t min_observations, const std::string& what) {
+  LandmarkMap kept = map.withMinObservations(min_observations);
+  if (kept.landmarks.empty())
+    throw std::runtime_error(what + ": no landmark with at least " + std::to_string(min_observations) +
+                             " observations");
+  return kept;
+}
+
+LandmarkMap cut(const LandmarkMap& session, const FrameRange& range, const std::string& what) {
+  LandmarkMap mini = session.miniMap(range.first, range.last);
+  if (mini.frames.empty()) throw std::runtime_error(what + ": the map has no frame in this range");
+  return mini;
+}
+}  // namespace
+
+MapPair loadMapPair(const MapSelection& selection) {
+  MapPair pair;
+  const std::size_t min_observations = selection.min_observations;
+  if (!selection.source_path.empty() || !selection.target_path.empty()) {
+    if (selection.source_path.empty() || selection.target_path.empty())
+      throw std::invalid_argument("give both a source (--source) and a target (--target) map");
+    pair.source = filtered(io::readLandmarkMap(selection.source_path), min_observations, selection.source_path);
+    pair.target = filtered(io::readLandmarkMap(selection.target_path), min_observations, selection.target_path);
+    pair.description = fs::path(selection.source_path).filename().string() + " onto " +
+                       fs::path(selection.target_path).filename().string();
+    pair.truth_known = fs::equivalent(selection.source_path, selection.target_path);
+    return pair;
+  }
+  if (selection.session_path.empty()) throw std::invalid_argument("no map given");
+  const LandmarkMap session = io::readLandmarkMap(selection.session_path);
+  const std::string session_name = fs::path(selection.session_path).filename().string();
+  pair.truth_known = true;
+  if (!selection.frame_ranges) {
+    std::tie(pair.target, pair.source) =
+        filtered(session, min_observations, selection.session_path).alternateHalves();
+    pair.description = session_name + " odd landmarks onto even landmarks";
+    return pair;
+  }
+  const auto cutFiltered = [&](const FrameRange& range) {
+    const std::string what = selection.session_path + " frames " + range.toString();
+    return filtered(cut(session, range, what), min_observations, what);
+  };
+  const auto& [source_frames, target_frames] = *selection.frame_ranges;
+  pair.source = cutFiltered(source_frames);
+  pair.target = cutFiltered(target_frames);
+  pair.description =
+      session_name + " frames " + source_frames.toString() + " onto frames " + target_frames.toString();
+  return pair;
+}
+
+// ---------------------------------------------------------------------------
+// Running
+
+namespace {
+struct PlannedRun {
+  WeightStrategy strategy;
+  unsigned int k;
+  Displacement displacement;
+};
+
+/// Strategy by strategy (each builds its weighted target once), cases in
+/// order, without repeats.
+std::vector<PlannedRun> planRuns(const std::vector<SweepCase>& cases) {
+  using Key = std::tuple<WeightStrategy, unsigned int, std::array<double, 6>>;
+  std::set<Key> planned;
+  std::vector<PlannedRun> plan;
+  for (const WeightStrategy strategy : allWeightStrategies())
+    for (const SweepCase& c : cases) {
+      const unsigned int k = strategy == WeightStrategy::Base ? 1 : c.k;
+      const Displacement& d = c.displacement;
+      if (planned.insert({strategy, k, {d.x, d.y, d.z, d.roll_deg, d.pitch_deg, d.yaw_deg}}).second)
+        plan.push_back({strategy, k, d});
+    }
+  return plan;
+}
+}  // namespace
+
+std::size_t countRuns(const std::vector<SweepCase>& cases) { return planRuns(cases).size(); }
+
+std::vector<SweepRun> runSweep(const std::vector<SweepCase>& cases, const MapPair& maps,
+                               const AlignmentSettings& settings,
+                               const std::function<void(const SweepRun&)>& on_run) {
+  if (cases.empty()) throw std::invalid_argument("the sweep has no case");
+  std::vector<SweepRun> runs;
+  // Per strategy: its weighted target, and one aligner per k so each builds
+  // the target's search structures once.
+  WeightStrategy strategy = allWeightStrategies().front();
+  WeightFunction weight;
+  LandmarkCloud::ConstPtr target;
+  std::map<unsigned int, LandmarkAligner> aligners;
+  for (const PlannedRun& planned : planRuns(cases)) {
+    if (!target || planned.strategy != strategy) {
+      strategy = planned.strategy;
+      weight = weightFunction(strategy);
+      target = toLandmarkCloud(maps.target, weight);
+      aligners.clear();
+    }
+    auto aligner = aligners.find(planned.k);
+    if (aligner == aligners.end()) {
+      AlignmentSettings with_k = settings;
+      with_k.k = planned.k;
+      aligner = aligners.emplace(planned.k, LandmarkAligner(with_k)).first;
+      aligner->second.setTarget(target);
+    }
+    const Eigen::Isometry3d motion = planned.displacement.toIsometry();
+    LandmarkMap moved = maps.source;
+    moved.transform(motion);
+
+    SweepRun run;
+    run.strategy = planned.strategy;
+    run.k = planned.k;
+    run.displacement = planned.displacement;
+    run.result = aligner->second.align(toLandmarkCloud(moved, weight));
+    if (maps.truth_known) {
+      const Eigen::Isometry3d estimate(run.result.transformation);
+      const Eigen::Isometry3d truth = motion.inverse();
+      run.rotation_error_deg = rotationErrorDeg(estimate, truth);
+      run.translation_error_m = translationError(estimate, truth);
+    }
+    runs.push_back(run);
+    if (on_run) on_run(runs.back());
+  }
+  return runs;
+}
+
+// ---------------------------------------------------------------------------
+// Output
+
+const std::vector<std::string>& csvColumns() {
+  static const std::vector<std::string> columns{
+      "sweep",   "strategy", "k",        "x",       "y",        "z",
+      "roll",    "pitch",    "yaw",      "fitness_score", "iterations", "refine_iterations",
+      "converged", "time_ms", "rotation_error_deg", "translation_error_m"};
+  return columns;
+}
+
+namespace {
+std::string number(double value) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof(buffer), "%.10g", value);
+  return buffer;
+}
+
+std::string optionalNumber(const std::optional<double>& value) { return value ? number(*value) : ""; }
+}  // namespace
+
+std::string formatResultsCsv(const std::string& sweep_name, const std::vector<SweepRun>& runs) {
+  std::ostringstream csv;
+  for (std::size_t i = 0; i < csvColumns().size(); ++i) csv << (i ? "," : "") << csvColumns()[i];
+  csv << '\n';
+  for (const SweepRun& run : runs) {
+    const Displacement& d = run.displacement;
+    const AlignmentResult& r = run.result;
+    char time_ms[32];
+    std::snprintf(time_ms, sizeof(time_ms), "%.3f", r.time_ms);
+    csv << sweep_name << ',' << toString(run.strategy) << ',' << run.k << ',' << number(d.x) << ','
+        << number(d.y) << ',' << number(d.z) << ',' << number(d.roll_deg) << ',' << number(d.pitch_deg) << ','
+        << number(d.yaw_deg) << ',' << number(r.fitness_score) << ',' << r.iterations << ','
+        << r.refine_iterations << ',' << (r.converged ? 1 : 0) << ',' << time_ms << ','
+        << optionalNumber(run.rotation_error_deg) << ',' << optionalNumber(run.translation_error_m) << '\n';
+  }
+  return csv.str();
+}
+
+// ---------------------------------------------------------------------------
+// The tool
+
+namespace {
+constexpr const char* kDefaultSessionMap = "../shared/data/map_fr1_desk.txt";
+
+/// Runs `argv` (no shell, so paths need no quoting) and waits; throws
+/// saying why when it cannot start or does not exit with 0.
+void runProcess(const std::vector<std::string>& argv) {
+  std::vector<char*> args;
+  for (const std::string& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+  args.push_back(nullptr);
+  pid_t pid = 0;
+  if (const int error = posix_spawn(&pid, args[0], nullptr, nullptr, args.data(), environ))
+    throw std::runtime_error("cannot start " + argv[0] + ": " + std::strerror(error));
+  int status = 0;
+  if (waitpid(pid, &status, 0) < 0) throw std::runtime_error("lost " + argv[0] + ": " + std::strerror(errno));
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
+    throw std::runtime_error(argv[1] + " failed (" +
+                             (WIFEXITED(status) ? "exit status " + std::to_string(WEXITSTATUS(status))
+                                                : std::string("killed by a signal")) +
+                             ")");
+}
+
+int atLeast(const po::variables_map& vm, const std::string& option, int minimum) {
+  const int value = vm[option].as<int>();
+  if (value < minimum)
+    throw std::invalid_argument("--" + option + " must be >= " + std::to_string(minimum) + ", got " +
+                                std::to_string(value));
+  return value;
+}
+}  // namespace
+
+int runSweepTool(const std::string& tool, const SweepDefinition& sweep, int argc, const char* const argv[]) {
+  return tools::runTool(tool, [&] {
+    std::string out_dir = "out/sweep_" + sweep.name;
+    MapSelection selection;
+    std::string source_frames, target_frames;
+    po::options_description options(
+        tool + " [--map SESSION.txt | --source A.txt --target B.txt] [options]\n" + sweep.description +
+        "\nAligns the source onto the target with base (plain ICP, k = 1), covariance, observations\n"
+        "and mean-distance at each case; writes DIR/results.csv, DIR/run.json and DIR/violin.png.\n"
+        "Exit status: 0 ok, 1 error, 2 bad command line, 4 results written but plotting failed.\nOptions");
+    // Integers as int and checked: boost would wrap "-1" into a huge unsigned.
+    options.add_options()
+        ("help,h", "print this help")
+        ("map", po::value(&selection.session_path),
+         "session map to cut the two mini-maps from (default, when no map is given: "
+         "../shared/data/map_fr1_desk.txt relative to the current folder)")
+        ("source-frames", po::value(&source_frames),
+         "cut the source mini-map from these frames of --map, e.g. 0-119 (with --target-frames); default: "
+         "the session's odd landmarks onto its even ones, the same scene with disjoint points")
+        ("target-frames", po::value(&target_frames), "cut the target mini-map from these frames, e.g. 120-239")
+        ("source", po::value(&selection.source_path), "source map file (with --target, instead of --map)")
+        ("target", po::value(&selection.target_path), "target map file")
+        ("min-observations", po::value<int>()->default_value(2), "drop landmarks observed fewer times");
+    if (!sweep.sweeps_k)
+      options.add_options()("k", po::value<int>()->default_value(5),
+                            "neighbours among which the heaviest is chosen (weighted strategies)");
+    options.add_options()
+        ("max-iterations", po::value<int>()->default_value(150), "ICP iteration limit (per stage)")
+        ("refine", "finish each run with nearest-neighbour ICP (k = 1)")
+        ("threads", po::value<int>()->default_value(0), "search threads, 0 = all; results do not depend on it")
+        ("out", po::value(&out_dir)->default_value(out_dir), "output folder")
+        ("no-plot", "write the CSV only");
+    po::variables_map vm;
+    po::store(po::parse_command_line(argc, argv, options), vm);
+    if (vm.count("help")) {
+      std::cout << options << '\n';
+      return 0;
+    }
+    po::notify(vm);
+
+    const bool files = vm.count("source") || vm.count("target");
+    if (files && vm.count("map")) throw std::invalid_argument("give either --map or --source/--target, not both");
+    if (vm.count("source-frames") != vm.count("target-frames"))
+      throw std::invalid_argument("give both --source-frames and --target-frames, or neither");
+    if (files && vm.count("source-frames"))
+      throw std::invalid_argument(
+          "--source-frames/--target-frames cut a --map; they do not apply to --source/--target");
+    if (!files && !vm.count("map")) {
+      if (!fs::exists(kDefaultSessionMap))
+        throw std::runtime_error(std::string("no map given and the default --map ") + kDefaultSessionMap +
+                                 " does not exist in " + fs::current_path().string() +
+                                 "; pass --map SESSION.txt or --source A.txt --target B.txt");
+      selection.session_path = kDefaultSessionMap;
+    }
+    if (vm.count("source-frames"))
+      selection.frame_ranges.emplace(FrameRange::parse(source_frames, "--source-frames"),
+                                     FrameRange::parse(target_frames, "--target-frames"));
+    selection.min_observations = static_cast<std::size_t>(atLeast(vm, "min-observations", 0));
+    AlignmentSettings settings;
+    const unsigned int k = sweep.sweeps_k ? 0 : static_cast<unsigned int>(atLeast(vm, "k", 1));
+    settings.max_iterations = settings.refine_max_iterations = atLeast(vm, "max-iterations", 1);
+    settings.refine = vm.count("refine") > 0;
+    settings.threads = static_cast<unsigned int>(atLeast(vm, "threads", 0));
+    const bool plot = vm.count("no-plot") == 0;
+
+    const MapPair maps = loadMapPair(selection);
+    const std::vector<SweepCase> cases = sweep.cases(k);
+    std::cout << tool << ": " << maps.description << " (" << maps.source.landmarks.size() << " onto "
+              << maps.target.landmarks.size() << " landmarks), " << cases.size() << " cases, "
+              << countRuns(cases) << " runs" << (settings.refine ? ", with refinement" : "") << std::endl;
+    fs::create_directories(out_dir);
+
+    const auto start = std::chrono::steady_clock::now();
+    tools::Progress progress(tool, countRuns(cases));
+    const std::vector<SweepRun> runs = runSweep(cases, maps, settings, [&](const SweepRun& run) {
+      progress.step(toString(run.strategy) + " k " + std::to_string(run.k) + " (" + run.displacement.toString() +
+                    ")");
+    });
+    progress.finish();
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+    const std::string csv_path = (fs::path(out_dir) / "results.csv").string();
+    tools::writeTextFile(csv_path, formatResultsCsv(sweep.name, runs));
+    tools::JsonObject run_info;
+    run_info.add("tool", tool)
+        .add("sweep", sweep.name)
+        .add("maps", maps.description)
+        .add("source_landmarks", maps.source.landmarks.size())
+        .add("target_landmarks", maps.target.landmarks.size())
+        .add("truth_known", maps.truth_known)
+        .add("min_observations", selection.min_observations)
+        .add("max_iterations", settings.max_iterations)
+        .add("refine", settings.refine)
+        .add("runs", runs.size())
+        .add("sweep_time_s", seconds);
+    if (!sweep.sweeps_k) run_info.add("k", static_cast<std::size_t>(k));
+    tools::writeTextFile((fs::path(out_dir) / "run.json").string(), run_info.str() + "\n");
+    std::cout << tool << ": " << runs.size() << " runs in " << std::lround(seconds) << " s; wrote " << csv_path
+              << std::endl;
+    if (!plot) return 0;
+
+    const std::vector<std::string> plot_command{WEIGHTED_ICP_PYTHON, WEIGHTED_ICP_PLOT_SCRIPT, csv_path};
+    try {
+      runProcess(plot_command);
+    } catch (const std::exception& e) {
+      std::cerr << tool << ": plotting failed: " << e.what() << "\n  the results are complete in " << csv_path
+                << "; plot them later with: " << plot_command[0] << ' ' << plot_command[1] << ' ' << csv_path
+                << '\n';
+      return 4;
+    }
+    std::cout << tool << ": wrote " << (fs::path(out_dir) / "violin.png").string() << std::endl;
+    return 0;
+  });
+}
+
+}  // namespace weighted_icp::sweep
