@@ -10,6 +10,7 @@
 #include <string_view>
 #include <vector>
 
+#include "text_fields.h"
 #include "weighted_icp/io/atomic_file.h"
 
 namespace weighted_icp::io {
@@ -21,17 +22,6 @@ MapFormatError::MapFormatError(const std::string& source, std::size_t line, cons
 
 namespace {
 
-std::vector<std::string_view> splitFields(std::string_view line) {
-  std::vector<std::string_view> fields;
-  std::size_t i = 0;
-  while (i < line.size()) {
-    while (i < line.size() && std::isspace(static_cast<unsigned char>(line[i]))) ++i;
-    const std::size_t start = i;
-    while (i < line.size() && !std::isspace(static_cast<unsigned char>(line[i]))) ++i;
-    if (i > start) fields.push_back(line.substr(start, i - start));
-  }
-  return fields;
-}
 
 /// Parses one record's fields, throwing MapFormatError with the field's name.
 class FieldReader {
@@ -115,7 +105,7 @@ LandmarkMap parseLandmarkMap(std::istream& in, const std::string& source) {
   std::size_t line_number = 0;
   while (std::getline(in, line)) {
     ++line_number;
-    const auto fields = splitFields(line);
+    const auto fields = detail::splitFields(line);
     if (fields.empty() || fields[0].front() == '#') continue;
     const FieldReader f(fields, source, line_number);
     if (fields[0] == "FRAME") {

@@ -10,23 +10,13 @@
 #include <string_view>
 #include <unordered_map>
 
+#include "text_fields.h"
 #include "weighted_icp/io/atomic_file.h"
 
 namespace weighted_icp::io {
 
 namespace {
 
-std::vector<std::string> splitFields(const std::string& line) {
-  std::vector<std::string> fields;
-  std::size_t i = 0;
-  while (i < line.size()) {
-    while (i < line.size() && std::isspace(static_cast<unsigned char>(line[i]))) ++i;
-    const std::size_t start = i;
-    while (i < line.size() && !std::isspace(static_cast<unsigned char>(line[i]))) ++i;
-    if (i > start) fields.push_back(line.substr(start, i - start));
-  }
-  return fields;
-}
 
 [[noreturn]] void failAt(const std::string& path, std::size_t line, const std::string& what) {
   throw std::runtime_error(path + ":" + std::to_string(line) + ": " + what);
@@ -101,7 +91,8 @@ std::vector<TimestampedLine> readTimestampedLines(const std::string& path, std::
   std::size_t line_number = 0;
   while (std::getline(in, text)) {
     ++line_number;
-    std::vector<std::string> fields = splitFields(text);
+    std::vector<std::string> fields;
+    for (const std::string_view field : detail::splitFields(text)) fields.emplace_back(field);
     if (fields.empty() || fields[0].front() == '#') continue;
     if (fields.size() != fields_after_timestamp + 1)
       failAt(path, line_number,
