@@ -15,6 +15,7 @@ constexpr int kOrbHalfPatch = kOrbPatchSize / 2;
 // ORB describes keypoints at least its edgeThreshold from the border; corners
 // are only sought inside that margin so that none is detected in vain.
 constexpr int kOrbBorder = kOrbPatchSize;
+constexpr double kMaxSubpixelShift = 0.5;  // pixels
 
 void requireOption(bool valid, const std::string& what) {
   if (!valid) throw std::invalid_argument("FeatureExtractor: " + what);
@@ -138,9 +139,16 @@ std::vector<cv::KeyPoint> FeatureExtractor::detectBucketed(const cv::Mat& gray) 
       points.push_back(candidates[i].pt);
       responses_taken.push_back(candidates[i].response);
     }
-  if (options_.subpixel && !points.empty())
-    cv::cornerSubPix(gray, points, cv::Size(3, 3), cv::Size(-1, -1),
+  if (options_.subpixel && !points.empty()) {
+    std::vector<cv::Point2f> refined = points;
+    cv::cornerSubPix(gray, refined, cv::Size(3, 3), cv::Size(-1, -1),
                      cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 10, 0.01));
+    // Refinement is for the fraction of a pixel; a corner it would move
+    // further is not a clean corner, and keeps its detected position (so the
+    // minimum distance holds to within 2 x kMaxSubpixelShift).
+    for (std::size_t i = 0; i < points.size(); ++i)
+      if (cv::norm(refined[i] - points[i]) <= kMaxSubpixelShift) points[i] = refined[i];
+  }
   std::vector<cv::KeyPoint> keypoints;
   keypoints.reserve(points.size());
   for (std::size_t i = 0; i < points.size(); ++i)

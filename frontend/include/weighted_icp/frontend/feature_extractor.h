@@ -27,8 +27,9 @@ struct FeatureExtractorOptions {
   // frames apart, corners below 1e-4 led to a ground-truth-verified match for
   // under 5 % of them (from 1e-4 to 2e-4: 8 %, above 8e-4: 24 to 45 %).
   double min_corner_response = 1e-4;
-  /// Refine corners to sub-pixel accuracy (cv::cornerSubPix): GFTT returns
-  /// whole pixels, whose rounding alone is 0.3 px of noise on every pose.
+  /// Refine corners to sub-pixel accuracy (cv::cornerSubPix, shifts up to
+  /// 0.5 px): GFTT returns whole pixels, whose rounding alone is 0.3 px of
+  /// noise on every pose. min_distance_px then holds to within 1 px.
   bool subpixel = true;
 };
 
