@@ -1,0 +1,145 @@
+// The command-line contracts other tools rely on: wicp_align's JSON line and
+// exit codes, wicp_rgbd_slam's output folder.
+
+#include <array>
+#include <cstdio>
+#include <fstream>
+#include <regex>
+#include <sstream>
+
+#include <gtest/gtest.h>
+
+#include "test_support.h"
+#include "weighted_icp/io/map_format.h"
+#include "weighted_icp/io/trajectory.h"
+#include "weighted_icp/registration/rigid_motion.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using weighted_icp::testing::binaryDir;
+
+struct ToolRun {
+  int status = 0;
+  std::string out;  // stdout; stderr goes to err
+  std::string err;
+};
+
+ToolRun run(const std::string& tool, const std::string& args, const fs::path& scratch) {
+  const fs::path err_file = scratch / "stderr.txt";
+  const std::string command =
+      (binaryDir() / "examples" / tool).string() + " " + args + " 2>" + err_file.string();
+  ToolRun result;
+  FILE* pipe = popen(command.c_str(), "r");
+  std::array<char, 4096> buffer{};
+  while (std::fgets(buffer.data(), buffer.size(), pipe)) result.out += buffer.data();
+  result.status = WEXITSTATUS(pclose(pipe));
+  std::ifstream err(err_file);
+  result.err.assign(std::istreambuf_iterator<char>(err), {});
+  return result;
+}
+
+std::string lastLine(const std::string& text) {
+  std::istringstream in(text);
+  std::string line, last;
+  while (std::getline(in, line))
+    if (!line.empty()) last = line;
+  return last;
+}
+
+double numberAfter(const std::string& json, const std::string& key) {
+  const std::regex pattern("\"" + key + "\":(-?[0-9.eE+-]+)");
+  std::smatch match;
+  if (!std::regex_search(json, match, pattern)) throw std::runtime_error("no number for " + key + " in " + json);
+  return std::stod(match[1]);
+}
+
+TEST(WicpAlign, JsonLineRecoversTheDisplacementOnTheRealMap) {
+  WEIGHTED_ICP_REQUIRE_FILE(weighted_icp::testing::realMapPath());
+  const fs::path scratch = weighted_icp::testing::scratchDir("wicp_align_json");
+  const std::string map = weighted_icp::testing::realMapPath().string();
+  const ToolRun r = run("wicp_align", "--source " + map + " --target " + map +
+                                      " --strategy observations --displace \"0.1 0.05 0 0 0 8\" --refine --json",
+                    scratch);
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::string json = lastLine(r.out);
+  ASSERT_EQ(json.front(), '{');
+  for (const char* key : {"\"transformation\":[[", "\"fitness_score\":", "\"iterations\":", "\"converged\":true",
+                          "\"correspondences\":", "\"time_ms\":"})
+    EXPECT_NE(json.find(key), std::string::npos) << key << " missing from " << json;
+  // The transformation, row-major as 4 rows, must undo the displacement.
+  const std::regex number("-?[0-9.]+(e[-+]?[0-9]+)?");
+  const std::string rows = json.substr(json.find("[["), json.find("]]") - json.find("[[") + 2);
+  Eigen::Matrix4d t;
+  auto it = std::sregex_iterator(rows.begin(), rows.end(), number);
+  for (int i = 0; i < 16; ++i, ++it) t(i / 4, i % 4) = std::stod(it->str());
+  const Eigen::Isometry3d truth = weighted_icp::Displacement{0.1, 0.05, 0, 0, 0, 8}.toIsometry().inverse();
+  EXPECT_LT(weighted_icp::rotationErrorDeg(Eigen::Isometry3d(t), truth), 0.01);
+  EXPECT_LT(weighted_icp::translationError(Eigen::Isometry3d(t), truth), 0.001);
+  EXPECT_EQ(numberAfter(json, "correspondences"), 6081);
+  EXPECT_GT(numberAfter(json, "time_ms"), 0.0);
+}
+
+TEST(WicpAlign, BadInputGivesAClearErrorAndANonZeroExit) {
+  const fs::path scratch = weighted_icp::testing::scratchDir("wicp_align_errors");
+  const fs::path bad = scratch / "bad.txt";
+  std::ofstream(bad) << "FRAME 0 0 0 0 1 0 0 0\nLANDMARK 1 0 0 nan\n";
+  ToolRun r = run("wicp_align", "--source " + bad.string() + " --target " + bad.string(), scratch);
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find(bad.string() + ":2"), std::string::npos) << r.err;
+  r = run("wicp_align", "--source " + bad.string(), scratch);  // no --target
+  EXPECT_EQ(r.status, 2) << r.err;
+  r = run("wicp_align", "--source a --target b --strategy bogus", scratch);
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("bogus"), std::string::npos) << r.err;
+  r = run("wicp_align", "--source a --target b --displace \"1 2 3\"", scratch);
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.err.find("expected 6"), std::string::npos) << r.err;
+}
+
+TEST(WicpRgbdSlam, WritesEveryOutputOnTheSyntheticSequence) {
+  const fs::path out = weighted_icp::testing::scratchDir("wicp_rgbd_slam") / "out";
+  const ToolRun r = run("wicp_rgbd_slam", "--synthetic-frames 45 --deterministic --minimap-keyframes 3 --out " + out.string(),
+                    out.parent_path());
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto trajectory = weighted_icp::io::readTrajectory((out / "trajectory.txt").string());
+  EXPECT_EQ(trajectory.size(), 45u);
+  std::ifstream report_file(out / "report.json");
+  const std::string report((std::istreambuf_iterator<char>(report_file)), {});
+  for (const char* key : {"frames", "tracked_frames", "keyframes", "landmarks", "median_ms_per_frame",
+                          "p90_ms_per_frame", "skipped_frames", "ate_rmse_m"})
+    EXPECT_NE(report.find(std::string("\"") + key + "\":"), std::string::npos) << key << " missing: " << report;
+  EXPECT_LT(numberAfter(report, "ate_rmse_m"), 0.01);
+  EXPECT_EQ(numberAfter(report, "tracked_frames"), 45);
+  std::size_t minimaps = 0;
+  for (const auto& entry : fs::directory_iterator(out / "minimaps")) {
+    const auto map = weighted_icp::io::readLandmarkMap(entry.path().string());
+    EXPECT_FALSE(map.landmarks.empty()) << entry.path();
+    EXPECT_LE(map.frames.size(), 3u);
+    ++minimaps;
+  }
+  EXPECT_EQ(static_cast<double>(minimaps), numberAfter(report, "minimaps"));
+  EXPECT_GE(minimaps, 2u);
+  EXPECT_TRUE(fs::exists(out / "map.ply"));
+  EXPECT_FALSE(weighted_icp::io::readLandmarkMap((out / "session.txt").string()).landmarks.empty());
+}
+
+TEST(WicpRgbdSlam, AMissingDatasetOrCameraFileFailsClearly) {
+  const fs::path scratch = weighted_icp::testing::scratchDir("wicp_rgbd_slam_errors");
+  ToolRun r = run("wicp_rgbd_slam", "--dataset " + (scratch / "nothing").string() + " --camera fr1 --out " +
+                                    (scratch / "out").string(),
+              scratch);
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("nothing"), std::string::npos) << r.err;
+  const fs::path camera = scratch / "camera.yaml";
+  std::ofstream(camera) << "%YAML:1.0\n---\nfx: 500\nfy: 500\n";
+  r = run("wicp_rgbd_slam", "--camera " + camera.string() + " --dataset " + scratch.string() + " --out " +
+                                (scratch / "out").string(),
+          scratch);
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("cx"), std::string::npos) << r.err;  // names a missing key
+  r = run("wicp_rgbd_slam", "", scratch);  // --out is required
+  EXPECT_EQ(r.status, 2);
+}
+
+}  // namespace
