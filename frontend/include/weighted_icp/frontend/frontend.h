@@ -27,7 +27,14 @@ namespace weighted_icp::frontend {
 
 struct FrontendOptions {
   FeatureExtractorOptions features;
-  DescriptorMatcherOptions matcher;
+  /// Ratio test at 0.9, looser than the matcher's default: the projection
+  /// gate and RANSAC already remove wrong matches, and on repetitive texture a
+  /// strict ratio throws away good ones (measured on both TUM sequences).
+  DescriptorMatcherOptions matcher = [] {
+    DescriptorMatcherOptions options;
+    options.ratio = 0.9f;
+    return options;
+  }();
   PnpOptions pnp;
   DynamicPointFilterOptions dynamic_filter;
   /// Used by the backend too. sigma_z = c z^2 with c = 0.005, not the sensor's
