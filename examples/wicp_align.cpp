@@ -45,12 +45,7 @@ int main(int argc, char** argv) {
         ("threads", po::value(&settings.threads)->default_value(settings.threads), "search threads, 0 = all")
         ("json", "print the result as one JSON object on the last line of stdout");
     po::variables_map vm;
-    po::store(po::parse_command_line(argc, argv, options), vm);
-    if (vm.count("help")) {
-      std::cout << options << '\n';
-      return 0;
-    }
-    po::notify(vm);
+    if (!tools::parseCommandLine(argc, argv, options, vm)) return 0;
 
     const WeightStrategy strategy = parseWeightStrategy(strategy_name);
     if (strategy == WeightStrategy::Base) settings.k = 1;

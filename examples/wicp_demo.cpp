@@ -159,12 +159,7 @@ int main(int argc, char** argv) {
         ("threads", po::value(&threads)->default_value(threads), "search threads, 0 = all")
         ("out", po::value(&out_dir)->default_value(out_dir), "output folder");
     po::variables_map vm;
-    po::store(po::parse_command_line(argc, argv, options), vm);
-    if (vm.count("help")) {
-      std::cout << options << '\n';
-      return 0;
-    }
-    po::notify(vm);
+    if (!tools::parseCommandLine(argc, argv, options, vm)) return 0;
 
     session_options.seed = requireInRange(seed, "seed", 0, std::numeric_limits<long long>::max());
     session_options.num_frames = requireInRange(frames, "frames", 2, 100000);

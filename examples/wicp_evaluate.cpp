@@ -59,12 +59,7 @@ int main(int argc, char** argv) {
     po::positional_options_description positional;
     positional.add("groundtruth", 1).add("estimate", 1);
     po::variables_map vm;
-    po::store(po::command_line_parser(argc, argv).options(options).positional(positional).run(), vm);
-    if (vm.count("help")) {
-      std::cout << options << '\n';
-      return 0;
-    }
-    po::notify(vm);
+    if (!tools::parseCommandLine(argc, argv, options, vm, &positional)) return 0;
     if (rpe_unit_name != "s" && rpe_unit_name != "f")
       throw po::validation_error(po::validation_error::invalid_option_value, "rpe-unit", rpe_unit_name);
     const io::DeltaUnit rpe_unit = rpe_unit_name == "s" ? io::DeltaUnit::Seconds : io::DeltaUnit::Frames;

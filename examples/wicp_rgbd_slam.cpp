@@ -132,12 +132,7 @@ int main(int argc, char** argv) {
         ("moving-object", po::bool_switch(&synthetic.moving_object), "synthetic: a box moves through the view")
         ("dim", po::bool_switch(&synthetic.dim_lighting), "synthetic: dim, low-contrast, noisy images");
     po::variables_map vm;
-    po::store(po::parse_command_line(argc, argv, description), vm);
-    if (vm.count("help")) {
-      std::cout << description << '\n';
-      return 0;
-    }
-    po::notify(vm);
+    if (!tools::parseCommandLine(argc, argv, description, vm)) return 0;
     options.frontend.matcher.kind = frontend::parseMatcherKind(matcher_name);
     options.frontend.quality_gate = !vm.count("no-quality-gate");
     options.backend.background_thread = !vm.count("deterministic");

@@ -39,12 +39,7 @@ int main(int argc, char** argv) {
          "depth noise sigma = coefficient * z^2 (metres)")
         ("overwrite", po::bool_switch(&overwrite), "replace DIR if it exists and is not empty");
     po::variables_map vm;
-    po::store(po::parse_command_line(argc, argv, description), vm);
-    if (vm.count("help")) {
-      std::cout << description << '\n';
-      return 0;
-    }
-    po::notify(vm);
+    if (!tools::parseCommandLine(argc, argv, description, vm)) return 0;
     if (frames < 1) throw std::invalid_argument("--frames must be at least 1");
     options.frames = static_cast<std::size_t>(frames);
     options.depth_noise = !no_depth_noise;

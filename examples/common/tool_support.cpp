@@ -28,6 +28,22 @@ int runTool(const std::string& tool, const std::function<int()>& body) {
   }
 }
 
+bool parseCommandLine(int argc, const char* const argv[], const boost::program_options::options_description& options,
+                      boost::program_options::variables_map& vm,
+                      const boost::program_options::positional_options_description* positional) {
+  namespace po = boost::program_options;
+  po::command_line_parser parser(argc, argv);
+  parser.options(options);
+  if (positional) parser.positional(*positional);
+  po::store(parser.run(), vm);
+  if (vm.count("help")) {
+    std::cout << options << '\n';
+    return false;
+  }
+  po::notify(vm);
+  return true;
+}
+
 Progress::Progress(std::string label, std::size_t total)
     : label_(std::move(label)),
       total_(total),

@@ -11,12 +11,20 @@
 #include <vector>
 
 #include <Eigen/Core>
+#include <boost/program_options.hpp>
 
 namespace weighted_icp::tools {
 
 /// Runs a tool's body: prints "<tool>: error: <what>" to stderr and returns 1
 /// on any exception, 2 on a command-line error (boost::program_options).
 int runTool(const std::string& tool, const std::function<int()>& body);
+
+/// Parses argv against `options` (which declare "help,h"), with optional
+/// positional arguments. Returns false, having printed the options, when
+/// --help is given; throws boost::program_options::error on a bad command line.
+bool parseCommandLine(int argc, const char* const argv[], const boost::program_options::options_description& options,
+                      boost::program_options::variables_map& vm,
+                      const boost::program_options::positional_options_description* positional = nullptr);
 
 /// One line on stderr, rewritten in place: "label  12/40  (30%)  eta 5 s".
 /// Prints plain lines instead when stderr is not a terminal (CI logs).

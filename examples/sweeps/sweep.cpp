@@ -369,12 +369,7 @@ int runSweepTool(const std::string& tool, const SweepDefinition& sweep, int argc
         ("out", po::value(&out_dir)->default_value(out_dir), "output folder")
         ("no-plot", "write the CSV only");
     po::variables_map vm;
-    po::store(po::parse_command_line(argc, argv, options), vm);
-    if (vm.count("help")) {
-      std::cout << options << '\n';
-      return 0;
-    }
-    po::notify(vm);
+    if (!tools::parseCommandLine(argc, argv, options, vm)) return 0;
 
     const bool files = vm.count("source") || vm.count("target");
     if (files && vm.count("map")) throw std::invalid_argument("give either --map or --source/--target, not both");
