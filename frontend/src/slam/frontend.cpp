@@ -180,6 +180,7 @@ TrackingResult Frontend::trackFrame(Frame& frame, TrackingResult result) {
                                      DepthMeasurements{match_depths, options_.depth_noise});
 
   frame.pose_wc = estimate.pose_wc;
+  metric_velocity_ = last_pose_wc_->inverse() * frame.pose_wc;
   result.status = TrackingStatus::Tracked;
   setPose(result, frame.pose_wc);
   result.inliers = static_inliers.size();
@@ -208,6 +209,7 @@ TrackingResult Frontend::initialize(Frame& frame, TrackingResult result) {
   frame.pose_wc = last_pose_wc_.value_or(Eigen::Isometry3d::Identity());
   motion_.reset();
   motion_.update(frame.pose_wc);
+  metric_velocity_.reset();
   last_pose_wc_ = frame.pose_wc;
   initialized_ = true;
   insertKeyframe(frame, {}, {});
@@ -219,8 +221,11 @@ TrackingResult Frontend::initialize(Frame& frame, TrackingResult result) {
 }
 
 TrackingResult Frontend::trackRelative(Frame& frame, TrackingResult result, const std::string& why_not_3d) {
-  const auto predicted = motion_.predict();
-  if (!predicted) return lose(result, why_not_3d + ", and no motion yet to scale a 2D-2D estimate");
+  if (!metric_velocity_) return lose(result, why_not_3d + ", and no metric motion yet to scale a 2D-2D estimate");
+  // The last motion measured with depth, not the motion model's (which 2D-2D
+  // frames feed): a scale error would otherwise compound frame after frame.
+  const Eigen::Isometry3d predicted_in_keyframe =
+      last_keyframe_.pose_wc.inverse() * *last_pose_wc_ * *metric_velocity_;
   DescriptorMatcher keyframe_matcher(options_.matcher);
   keyframe_matcher.setReference(last_keyframe_.descriptors);
   std::vector<Eigen::Vector2d> keyframe_pixels, frame_pixels;
@@ -228,23 +233,42 @@ TrackingResult Frontend::trackRelative(Frame& frame, TrackingResult result, cons
     keyframe_pixels.push_back(last_keyframe_.pixels[match.trainIdx]);
     frame_pixels.push_back(frame.pixels[match.queryIdx]);
   }
-  const RelativeMotion relative = estimateRelativeMotion2d2d(keyframe_pixels, frame_pixels, camera_);
+  RelativeMotion relative = estimateRelativeMotion2d2d(keyframe_pixels, frame_pixels, camera_);
   if (!relative.ok) return lose(result, why_not_3d + "; 2D-2D: " + relative.failure);
 
   // The essential matrix gives the direction of travel; its length comes
   // from the constant-velocity prediction.
-  const Eigen::Isometry3d predicted_in_keyframe = last_keyframe_.pose_wc.inverse() * *predicted;
-  Eigen::Isometry3d motion = relative.pose_2_in_1;
-  motion.translation() *= predicted_in_keyframe.translation().norm();
-  const std::vector<bool> moving =
-      flagDynamicByEpipolarDistance(keyframe_pixels, frame_pixels, motion, camera_, options_.dynamic_filter);
+  const auto scaled = [&predicted_in_keyframe](Eigen::Isometry3d motion) {
+    motion.translation() *= predicted_in_keyframe.translation().norm();
+    return motion;
+  };
+  // Moving points by their epipolar distance under that motion; if any, the
+  // motion is estimated again without them.
+  const std::vector<bool> moving = flagDynamicByEpipolarDistance(keyframe_pixels, frame_pixels,
+                                                                 scaled(relative.pose_2_in_1), camera_,
+                                                                 options_.dynamic_filter);
   result.dynamic = static_cast<std::size_t>(std::count(moving.begin(), moving.end(), true));
+  if (result.dynamic > 0) {
+    std::vector<Eigen::Vector2d> static_keyframe, static_frame;
+    for (std::size_t m = 0; m < moving.size(); ++m)
+      if (!moving[m]) {
+        static_keyframe.push_back(keyframe_pixels[m]);
+        static_frame.push_back(frame_pixels[m]);
+      }
+    relative = estimateRelativeMotion2d2d(static_keyframe, static_frame, camera_);
+    if (!relative.ok) return lose(result, why_not_3d + "; 2D-2D without moving points: " + relative.failure);
+  }
+  Eigen::Isometry3d motion = scaled(relative.pose_2_in_1);
+  // Below about a degree of parallax the direction of travel is noise: keep
+  // the measured rotation and the predicted translation.
+  if (relative.median_parallax_deg < options_.min_parallax_deg)
+    motion.translation() = predicted_in_keyframe.translation();
   frame.pose_wc = last_keyframe_.pose_wc * motion;
   result.status = TrackingStatus::TrackedRelative;
   result.reason = why_not_3d;
   setPose(result, frame.pose_wc);
   result.matches = keyframe_pixels.size();
-  result.inliers = relative.inliers.size() - result.dynamic;
+  result.inliers = relative.inliers.size();
   motion_.update(frame.pose_wc);
   last_pose_wc_ = frame.pose_wc;
   return result;

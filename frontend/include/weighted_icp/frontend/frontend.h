@@ -57,6 +57,8 @@ struct FrontendOptions {
   double match_gate_px = 40.0;
   double match_gate_without_motion_px = 120.0;
   std::size_t min_initial_points = 50;
+  /// 2D-2D below this median parallax keeps the predicted translation.
+  double min_parallax_deg = 1.0;
   double keyframe_translation_m = 0.08;
   double keyframe_rotation_deg = 8.0;
   /// A keyframe when fewer than this fraction of the last keyframe's tracked points are tracked.
@@ -141,6 +143,8 @@ class Frontend {
   std::size_t segment_ = 0;
   bool initialized_ = false;
   std::optional<Eigen::Isometry3d> last_pose_wc_;
+  /// Motion between the last two frames tracked with 3D points: what scales 2D-2D.
+  std::optional<Eigen::Isometry3d> metric_velocity_;
   Frame last_keyframe_;
   KeyframeId last_keyframe_id_ = 0;
   std::size_t tracked_at_last_keyframe_ = 0;
