@@ -11,6 +11,9 @@
 // maximum correspondence distance and choose the one with the largest target
 // weight; equal weights go to the nearer point. With k = 1 (or uniform
 // weights) it is exactly PCL's nearest-neighbour rule, with the same results.
+// Weights rank candidates, they do not gate them: a source point whose
+// candidates all weigh 0 still gets the nearest (the paper's code drops it);
+// gate with the maximum distance or a correspondence rejector.
 //
 // Unlike PCL's class it builds its target index once per target (re-setting
 // an unchanged target, as IterativeClosestPoint does on every align(), costs a
