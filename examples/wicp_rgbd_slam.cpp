@@ -47,6 +47,9 @@ class TumSource : public FrameSource {
   std::size_t size() const override { return sequence_.size(); }
   frontend::RgbdImage load(std::size_t i) const override {
     io::RgbdImages images = sequence_.loadFrame(i, camera_);
+    if (images.valid_depth_pixels == 0)
+      std::cerr << "wicp_rgbd_slam: warning: " << sequence_.frame(i).depth_path
+                << " has no valid depth; frame " << i << " is tracked without it\n";
     return {sequence_.frame(i).rgb_timestamp, images.color, images.depth};
   }
   io::Trajectory groundTruth() const override { return sequence_.groundTruth(); }
