@@ -9,7 +9,6 @@
 // iterations ICP ran (both stop on PCL's default convergence criteria).
 
 #include <cstdlib>
-#include <cstring>
 #include <iostream>
 #include <string>
 
@@ -19,6 +18,7 @@
 #include <pcl/registration/correspondence_estimation.h>
 #include <pcl/registration/icp.h>
 
+#include "benchmark_arguments.h"
 #include "weighted_icp/io/map_format.h"
 #include "weighted_icp/registration/landmark_alignment.h"
 #include "weighted_icp/registration/rigid_motion.h"
@@ -73,11 +73,14 @@ struct CountingIcp : Icp {
 
 using PclIcp = CountingIcp<pcl::IterativeClosestPoint<pcl::PointXYZ, pcl::PointXYZ, double>>;
 
-void BM_StockPclIcp(benchmark::State& state) {
+/// Aligns the clouds as a user runs PCL's ICP: a fresh ICP each time, its
+/// kd-trees built inside align(); `correspondences` null keeps PCL's own.
+void runPclIcp(benchmark::State& state, const PclIcp::CorrespondenceEstimationPtr& correspondences) {
   const Clouds& c = clouds();
   double iterations = 0;
   for (auto _ : state) {
-    PclIcp icp;  // as a user runs it: a fresh ICP, kd-trees built inside align()
+    PclIcp icp;
+    if (correspondences) icp.setCorrespondenceEstimation(correspondences);
     icp.setMaximumIterations(kMaxIterations);
     icp.setInputSource(c.source_xyz);
     icp.setInputTarget(c.target_xyz);
@@ -88,23 +91,13 @@ void BM_StockPclIcp(benchmark::State& state) {
   reportIterations(state, iterations, c.source_xyz->size());
 }
 
+void BM_StockPclIcp(benchmark::State& state) { runPclIcp(state, nullptr); }
+
 void BM_WeightedDropInPclIcp(benchmark::State& state) {
-  const Clouds& c = clouds();
   auto ce = std::make_shared<WeightedCorrespondenceEstimation<pcl::PointXYZ, pcl::PointXYZ, double>>(5);
   ce->setNumberOfThreads(static_cast<unsigned>(state.range(0)));
-  ce->setTargetWeights(c.target_weights);
-  double iterations = 0;
-  for (auto _ : state) {
-    PclIcp icp;  // only setCorrespondenceEstimation() differs from the stock run
-    icp.setCorrespondenceEstimation(ce);
-    icp.setMaximumIterations(kMaxIterations);
-    icp.setInputSource(c.source_xyz);
-    icp.setInputTarget(c.target_xyz);
-    Cloud aligned;
-    icp.align(aligned);
-    iterations += icp.iterations();
-  }
-  reportIterations(state, iterations, c.source_xyz->size());
+  ce->setTargetWeights(clouds().target_weights);
+  runPclIcp(state, ce);
 }
 
 void BM_LandmarkAligner(benchmark::State& state) {
@@ -160,14 +153,7 @@ BENCHMARK(BM_WeightedCorrespondences)->ArgNames({"k", "threads"})->Args({1, 1})-
 }  // namespace
 
 int main(int argc, char** argv) {
-  for (int i = 1; i + 1 < argc; ++i) {
-    if (std::strcmp(argv[i], "--map") == 0) {
-      map_path = argv[i + 1];
-      for (int j = i; j + 2 <= argc; ++j) argv[j] = argv[j + 2];
-      argc -= 2;
-      break;
-    }
-  }
+  weighted_icp::benchmarks::takeOption(argc, argv, "--map", map_path);
   try {
     std::cerr << "map " << map_path << ": " << clouds().source->size() << " landmarks with >= 2 observations\n";
   } catch (const std::exception& e) {

@@ -11,7 +11,6 @@
 // brute-force matching in parallel); on a shared machine it is the fairer
 // cost figure than wall time.
 
-#include <cstring>
 #include <iostream>
 #include <map>
 #include <string>
@@ -20,6 +19,7 @@
 #include <benchmark/benchmark.h>
 
 #include "test_perception_support.h"
+#include "benchmark_arguments.h"
 #include "weighted_icp/frontend/descriptor_matcher.h"
 #include "weighted_icp/frontend/feature_extractor.h"
 
@@ -153,14 +153,7 @@ void registerBenchmarks() {
 }  // namespace
 
 int main(int argc, char** argv) {
-  for (int i = 1; i + 1 < argc; ++i) {
-    if (std::strcmp(argv[i], "--data") == 0) {
-      data_dir = argv[i + 1];
-      for (int j = i; j + 2 <= argc; ++j) argv[j] = argv[j + 2];
-      argc -= 2;
-      break;
-    }
-  }
+  weighted_icp::benchmarks::takeOption(argc, argv, "--data", data_dir);
   try {
     registerBenchmarks();
   } catch (const std::exception& e) {
