@@ -118,9 +118,13 @@ TrackingResult Frontend::trackFrame(Frame& frame, TrackingResult result) {
   const Eigen::Isometry3d guess_wc = predicted ? *predicted : *last_pose_wc_;
   const double gate_px = predicted ? options_.match_gate_px : options_.match_gate_without_motion_px;
 
-  LocalMap local = map_.localMap(options_.local_map_keyframes);
+  // Taken and indexed again only when the map changed (a keyframe, a BA).
+  if (map_.revision() != local_map_.revision || local_map_.ids.empty()) {
+    local_map_ = map_.localMap(options_.local_map_keyframes);
+    if (!local_map_.ids.empty()) matcher_.setReference(local_map_.descriptors);
+  }
+  const LocalMap& local = local_map_;
   if (local.ids.empty()) return lose(result, "the local map is empty");
-  matcher_.setReference(local.descriptors);
   const Eigen::Isometry3d guess_cw = guess_wc.inverse();
   std::vector<Eigen::Vector3d> points_world;
   std::vector<Eigen::Vector2d> pixels;

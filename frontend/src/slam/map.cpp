@@ -9,6 +9,7 @@ namespace weighted_icp::frontend {
 
 KeyframeId Map::addKeyframe(Keyframe keyframe) {
   std::lock_guard<std::mutex> lock(mutex_);
+  ++revision_;
   keyframe.id = next_keyframe_id_++;
   keyframe.observed_points.clear();
   const KeyframeId id = keyframe.id;
@@ -18,6 +19,7 @@ KeyframeId Map::addKeyframe(Keyframe keyframe) {
 
 MapPointId Map::addMapPoint(MapPoint point) {
   std::lock_guard<std::mutex> lock(mutex_);
+  ++revision_;
   point.id = next_point_id_++;
   for (const auto& observation : point.observations) {
     const auto keyframe = keyframes_.find(observation.keyframe);
@@ -36,11 +38,17 @@ void Map::addObservation(MapPointId id, const MapPointObservation& observation, 
   const auto point = points_.find(id);
   const auto keyframe = keyframes_.find(observation.keyframe);
   if (point == points_.end() || keyframe == keyframes_.end()) return;  // removed by the backend meanwhile
+  ++revision_;
   point->second.observations.push_back(observation);
   point->second.position = position;
   point->second.covariance = covariance;
   point->second.descriptor = descriptor;
   keyframe->second.observed_points.push_back(id);
+}
+
+std::uint64_t Map::revision() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return revision_;
 }
 
 std::optional<Keyframe> Map::lastKeyframe() const {
@@ -79,6 +87,7 @@ std::vector<MapPointId> Map::currentSegmentPoints(std::size_t keyframes) const {
 LocalMap Map::localMap(std::size_t keyframes) const {
   std::lock_guard<std::mutex> lock(mutex_);
   LocalMap local;
+  local.revision = revision_;
   local.ids = currentSegmentPoints(keyframes);
   local.positions.reserve(local.ids.size());
   for (const MapPointId id : local.ids) {
@@ -106,6 +115,7 @@ MapWindow Map::window(std::size_t keyframes) const {
 void Map::applyOptimization(const MapWindow& optimised,
                             const std::vector<std::pair<MapPointId, KeyframeId>>& rejected_observations) {
   std::lock_guard<std::mutex> lock(mutex_);
+  ++revision_;
   for (const auto& keyframe : optimised.keyframes) {
     const auto it = keyframes_.find(keyframe.id);
     if (it != keyframes_.end()) it->second.pose_wc = keyframe.pose_wc;

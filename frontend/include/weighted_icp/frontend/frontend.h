@@ -149,6 +149,7 @@ class Frontend {
   KeyframeId last_keyframe_id_ = 0;
   std::size_t tracked_at_last_keyframe_ = 0;
   std::map<MapPointId, int> dynamic_votes_;
+  LocalMap local_map_;  // what matcher_ is indexed on
   cv::Mat current_color_;  // the image being tracked, for the quality gate
 };
 

@@ -4,6 +4,7 @@
 // ever sees a half-updated landmark.
 
 #include <cstddef>
+#include <cstdint>
 #include <map>
 #include <mutex>
 #include <optional>
@@ -16,6 +17,7 @@ namespace weighted_icp::frontend {
 
 /// What the tracker matches against: the points seen by the latest keyframes.
 struct LocalMap {
+  std::uint64_t revision = 0;  // of the Map it was taken from
   std::vector<MapPointId> ids;
   std::vector<Eigen::Vector3d> positions;
   cv::Mat descriptors;  // row i belongs to ids[i]
@@ -38,6 +40,9 @@ class Map {
   void addObservation(MapPointId id, const MapPointObservation& observation, const Eigen::Vector3d& position,
                       const Eigen::Matrix3d& covariance, const cv::Mat& descriptor);
 
+  /// Changes whenever anything in the map does: a tracker holding a LocalMap
+  /// of the same revision need not take (or index) it again.
+  std::uint64_t revision() const;
   std::optional<Keyframe> lastKeyframe() const;
   std::optional<Eigen::Isometry3d> keyframePose(KeyframeId id) const;
   std::optional<MapPoint> mapPoint(MapPointId id) const;
@@ -62,6 +67,7 @@ class Map {
   mutable std::mutex mutex_;
   std::map<KeyframeId, Keyframe> keyframes_;
   std::map<MapPointId, MapPoint> points_;
+  std::uint64_t revision_ = 0;
   KeyframeId next_keyframe_id_ = 0;
   MapPointId next_point_id_ = 0;
 };
