@@ -91,7 +91,8 @@ class SyntheticSource : public FrameSource {
 
 /// TUM folders are named after their sensor (rgbd_dataset_freiburg3_teddy, tum_fr1_xyz_head).
 std::string cameraFromFolderName(const std::string& dir) {
-  const std::string name = fs::path(dir).lexically_normal().filename().string() + fs::absolute(dir).string();
+  // The folder's own name only ("data/", "data/." and "data" alike), not its parents'.
+  const std::string name = fs::weakly_canonical(fs::absolute(dir)).filename().string();
   for (const char* sensor : {"1", "2", "3"})
     if (name.find(std::string("freiburg") + sensor) != std::string::npos ||
         name.find(std::string("fr") + sensor) != std::string::npos)

@@ -11,6 +11,7 @@
 
 using namespace weighted_icp;
 namespace fs = std::filesystem;
+using weighted_icp::testing::writeFile;
 
 namespace {
 
@@ -23,10 +24,6 @@ std::string errorOf(const std::string& preset_or_path) {
   return {};
 }
 
-void writeText(const fs::path& path, const std::string& text) {
-  std::ofstream out(path);
-  out << text;
-}
 
 const char* const kCompleteYaml =
     "%YAML:1.0\n"
@@ -159,7 +156,7 @@ TEST(Camera, YamlRoundTripKeepsEveryValue) {
 
 TEST(Camera, HandWrittenYamlLoads) {
   const auto dir = weighted_icp::testing::scratchDir("camera_hand_written");
-  writeText(dir / "camera.yaml", kCompleteYaml);
+  writeFile(dir / "camera.yaml", kCompleteYaml);
   const io::PinholeCamera camera = io::loadCamera((dir / "camera.yaml").string());
   EXPECT_EQ(camera.fx, 500.5);
   EXPECT_EQ(camera.fy, 501.25);
@@ -171,7 +168,7 @@ TEST(Camera, HandWrittenYamlLoads) {
 TEST(Camera, EveryMissingKeyIsNamedAtOnce) {
   const auto dir = weighted_icp::testing::scratchDir("camera_missing_keys");
   const fs::path path = dir / "partial.yaml";
-  writeText(path, "%YAML:1.0\nfx: 500.0\ncx: 320.0\ncy: 240.0\nk1: 0\nk2: 0\np1: 0\np2: 0\nwidth: 640\nheight: 480\n");
+  writeFile(path, "%YAML:1.0\nfx: 500.0\ncx: 320.0\ncy: 240.0\nk1: 0\nk2: 0\np1: 0\np2: 0\nwidth: 640\nheight: 480\n");
   const std::string error = errorOf(path.string());
   EXPECT_NE(error.find(path.string()), std::string::npos) << error;
   for (const char* key : {"fy", "k3", "depth_factor"})
@@ -182,7 +179,7 @@ TEST(Camera, EveryMissingKeyIsNamedAtOnce) {
 TEST(Camera, InvalidValuesAreRefusedWithTheirKeys) {
   const auto dir = weighted_icp::testing::scratchDir("camera_invalid");
   const fs::path path = dir / "invalid.yaml";
-  writeText(path,
+  writeFile(path,
             "%YAML:1.0\nfx: -500.0\nfy: 0\ncx: .nan\ncy: 240.0\nk1: 0\nk2: 0\np1: 0\np2: 0\nk3: 0\n"
             "width: 640.5\nheight: -480\ndepth_factor: \"many\"\n");
   const std::string error = errorOf(path.string());
@@ -198,13 +195,13 @@ TEST(Camera, UnreadableFilesAreNamed) {
   EXPECT_NE(errorOf(missing).find(missing), std::string::npos);
   EXPECT_NE(errorOf("fr4").find("fr4"), std::string::npos);
   const fs::path garbage = dir / "garbage.yaml";
-  writeText(garbage, "%YAML:1.0\nfx: [1, 2\n  : : }\n");
+  writeFile(garbage, "%YAML:1.0\nfx: [1, 2\n  : : }\n");
   EXPECT_NE(errorOf(garbage.string()).find(garbage.string()), std::string::npos);
   const fs::path list = dir / "list.yaml";  // valid YAML, but no keys
-  writeText(list, "%YAML:1.0\n- 1\n- 2\n");
+  writeFile(list, "%YAML:1.0\n- 1\n- 2\n");
   EXPECT_NE(errorOf(list.string()).find(list.string()), std::string::npos);
   const fs::path empty = dir / "empty.yaml";
-  writeText(empty, "");
+  writeFile(empty, "");
   EXPECT_NE(errorOf(empty.string()).find(empty.string()), std::string::npos);
 }
 

@@ -15,19 +15,11 @@ namespace {
 
 using namespace weighted_icp;
 namespace fs = std::filesystem;
+using weighted_icp::testing::readFile;
+using weighted_icp::testing::writeFile;
 using weighted_icp::testing::scratchDir;
 
-void writeFile(const fs::path& path, const std::string& text) {
-  std::ofstream out(path, std::ios::binary);
-  out << text;
-}
 
-std::string readFile(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
 
 /// Three landmarks that differ in every field the cloud carries.
 LandmarkMap threeLandmarks() {

@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include "landmark_map_expectations.h"
 #include "test_support.h"
 #include "weighted_icp/io/map_format.h"
 
@@ -16,20 +17,12 @@ namespace {
 
 using namespace weighted_icp;
 namespace fs = std::filesystem;
+using weighted_icp::testing::readFile;
+using weighted_icp::testing::writeFile;
 using weighted_icp::testing::realMapPath;
 using weighted_icp::testing::scratchDir;
 
-void writeFile(const fs::path& path, const std::string& text) {
-  std::ofstream out(path, std::ios::binary);
-  out << text;
-}
 
-std::string readFile(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
 
 std::size_t filesIn(const fs::path& folder) {
   return static_cast<std::size_t>(std::distance(fs::directory_iterator(folder), fs::directory_iterator()));
@@ -74,20 +67,7 @@ TEST(MapFormat, WriteThenReadGivesTheSameMap) {
     EXPECT_EQ(read.frames.at(id).translation(), pose.translation()) << "frame " << id;
     EXPECT_LT((read.frames.at(id).linear() - pose.linear()).cwiseAbs().maxCoeff(), 1e-12) << "frame " << id;
   }
-  ASSERT_EQ(read.landmarks.size(), map.landmarks.size());
-  for (std::size_t i = 0; i < map.landmarks.size(); ++i) {
-    const Landmark& expected = map.landmarks[i];
-    const Landmark& actual = read.landmarks[i];
-    EXPECT_EQ(actual.id, expected.id);
-    EXPECT_EQ(actual.position, expected.position) << "landmark " << expected.id;
-    EXPECT_EQ(actual.covariance, expected.covariance) << "landmark " << expected.id;
-    ASSERT_EQ(actual.observations.size(), expected.observations.size()) << "landmark " << expected.id;
-    for (std::size_t k = 0; k < expected.observations.size(); ++k) {
-      EXPECT_EQ(actual.observations[k].frame_id, expected.observations[k].frame_id);
-      EXPECT_EQ(actual.observations[k].u, expected.observations[k].u);
-      EXPECT_EQ(actual.observations[k].v, expected.observations[k].v);
-    }
-  }
+  weighted_icp::testing::expectSameLandmarks(map, read);
 }
 
 TEST(MapFormat, AcceptsCrlfCommentsAndBlankLines) {

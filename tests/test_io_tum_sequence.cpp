@@ -16,6 +16,7 @@
 
 using namespace weighted_icp;
 namespace fs = std::filesystem;
+using weighted_icp::testing::writeFile;
 
 namespace {
 
@@ -44,10 +45,6 @@ std::string errorOf(const std::function<void()>& action) {
   return {};
 }
 
-void writeText(const fs::path& path, const std::string& text) {
-  std::ofstream out(path);
-  out << text;
-}
 
 /// A small camera for the synthetic sequences.
 io::PinholeCamera smallCamera() {
@@ -213,7 +210,7 @@ TEST(TumSequence, MissingFolderAndListsAreNamed) {
 
 TEST(TumSequence, ListLineNamingNoFileIsNamedWithItsLine) {
   const fs::path dir = writeSequence("tum_line_without_file", 2);
-  writeText(dir / "rgb.txt", "# color images\n100.000000 rgb/100.000000.png\n\n101.000000\n");
+  writeFile(dir / "rgb.txt", "# color images\n100.000000 rgb/100.000000.png\n\n101.000000\n");
   const std::string error = errorOf([&] { io::TumSequence::open(dir.string()); });
   EXPECT_NE(error.find((dir / "rgb.txt").string() + ":4:"), std::string::npos) << error;
 }
@@ -231,7 +228,7 @@ TEST(TumSequence, ImageProblemsAreNamedWhenLoading) {
   // Frame 0: depth of another size. Frame 1: colour that is not an image.
   // Frame 2: 8-bit depth. Frame 3: images fine, but not the camera's size.
   cv::imwrite((dir / "depth" / "100.005000.png").string(), cv::Mat(24, 32, CV_16UC1, cv::Scalar(5000)));
-  writeText(dir / "rgb" / "101.000000.png", "not a png");
+  writeFile(dir / "rgb" / "101.000000.png", "not a png");
   cv::imwrite((dir / "depth" / "102.005000.png").string(), cv::Mat(48, 64, CV_8UC1, cv::Scalar(50)));
   const io::TumSequence sequence = io::TumSequence::open(dir.string());
   const io::PinholeCamera camera = smallCamera();
@@ -260,14 +257,14 @@ TEST(TumSequence, ImageProblemsAreNamedWhenLoading) {
 
 TEST(TumSequence, ListsThatNeverMatchAreRefused) {
   const fs::path dir = writeSequence("tum_no_pairs", 2);
-  writeText(dir / "depth.txt", "500.0 depth/100.005000.png\n");
+  writeFile(dir / "depth.txt", "500.0 depth/100.005000.png\n");
   const std::string error = errorOf([&] { io::TumSequence::open(dir.string()); });
   EXPECT_NE(error.find(dir.string()), std::string::npos) << error;
 }
 
 TEST(TumSequence, MalformedGroundTruthIsNamedWithItsLine) {
   const fs::path dir = writeSequence("tum_bad_groundtruth", 2);
-  writeText(dir / "groundtruth.txt", "# ground truth\n100.0 0 0 0 0 0 0 1\n100.01 0 0 0 0 0 0\n");
+  writeFile(dir / "groundtruth.txt", "# ground truth\n100.0 0 0 0 0 0 0 1\n100.01 0 0 0 0 0 0\n");
   const std::string error = errorOf([&] { io::TumSequence::open(dir.string()); });
   EXPECT_NE(error.find((dir / "groundtruth.txt").string() + ":3:"), std::string::npos) << error;
 }

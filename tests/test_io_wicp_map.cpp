@@ -20,6 +20,8 @@ namespace {
 
 using namespace weighted_icp;
 namespace fs = std::filesystem;
+using weighted_icp::testing::readFile;
+using weighted_icp::testing::writeFile;
 using weighted_icp::testing::binaryDir;
 using weighted_icp::testing::scratchDir;
 
@@ -29,17 +31,7 @@ struct ToolRun {
   std::string err;
 };
 
-std::string readFile(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
 
-void writeFile(const fs::path& path, const std::string& text) {
-  std::ofstream out(path, std::ios::binary);
-  out << text;
-}
 
 /// Runs wicp_map with `arguments` (shell syntax); stderr goes through a file in `scratch`.
 ToolRun wicpMap(const std::string& arguments, const fs::path& scratch) {

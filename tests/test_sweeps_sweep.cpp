@@ -21,6 +21,7 @@ namespace weighted_icp::sweep {
 namespace {
 
 namespace fs = std::filesystem;
+using weighted_icp::testing::readFile;
 
 /// Three perpendicular planes (floor and two walls) of jittered 7x7 grids,
 /// so ICP has a unique optimum. Landmark i is seen by 1 + i % 6 consecutive
@@ -73,12 +74,6 @@ std::vector<std::vector<std::string>> parseCsv(const std::string& text) {
   return rows;
 }
 
-std::string readFile(const fs::path& path) {
-  std::ifstream in(path);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
 
 /// Runs a sweep tool the way main() does; returns its exit status and stderr.
 std::pair<int, std::string> runTool(const SweepDefinition& sweep, std::vector<std::string> args) {

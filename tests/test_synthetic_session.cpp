@@ -14,6 +14,7 @@
 
 #include <gtest/gtest.h>
 
+#include "landmark_map_expectations.h"
 #include "test_support.h"
 #include "weighted_icp/io/map_format.h"
 #include "weighted_icp/io/synthetic_session.h"
@@ -233,20 +234,7 @@ TEST(SyntheticSession, WrittenMapReadsBackUnchanged) {
     // Stored as a quaternion, so the rotation matrix comes back rounded.
     EXPECT_TRUE(read.frames.at(id).isApprox(pose, 1e-12)) << "frame " << id;
   }
-  ASSERT_EQ(read.landmarks.size(), session.estimated.landmarks.size());
-  for (std::size_t i = 0; i < read.landmarks.size(); ++i) {
-    const Landmark& written = session.estimated.landmarks[i];
-    const Landmark& back = read.landmarks[i];
-    EXPECT_EQ(back.id, written.id);
-    EXPECT_EQ(back.position, written.position) << "landmark " << written.id;
-    EXPECT_EQ(back.covariance, written.covariance) << "landmark " << written.id;
-    ASSERT_EQ(back.observations.size(), written.observations.size()) << "landmark " << written.id;
-    for (std::size_t j = 0; j < written.observations.size(); ++j) {
-      EXPECT_EQ(back.observations[j].frame_id, written.observations[j].frame_id);
-      EXPECT_EQ(back.observations[j].u, written.observations[j].u);
-      EXPECT_EQ(back.observations[j].v, written.observations[j].v);
-    }
-  }
+  weighted_icp::testing::expectSameLandmarks(session.estimated, read);
 }
 
 TEST(SyntheticSession, RejectsOptionsOutOfRangeNamingThem) {

@@ -12,6 +12,7 @@
 #include <ceres/solver.h>
 
 #include "input_checks.h"
+#include "solver_options.h"
 #include "weighted_icp/frontend/reprojection_residual.h"
 
 namespace weighted_icp::frontend {
@@ -156,15 +157,11 @@ BundleAdjustmentSummary solveLocalBundleAdjustment(BundleAdjustmentProblem& prob
                                       pixel_loss.get(), pose.data(), point);
   }
 
-  ceres::Solver::Options solver_options;
-  solver_options.minimizer_type = ceres::TRUST_REGION;
-  solver_options.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+  ceres::Solver::Options solver_options = detail::levenbergMarquardt(options.max_iterations);
   solver_options.linear_solver_type = ceres::DENSE_SCHUR;  // a local window has few poses
   solver_options.linear_solver_ordering = ordering;
-  solver_options.max_num_iterations = options.max_iterations;
   solver_options.function_tolerance = options.function_tolerance;
   solver_options.num_threads = options.threads;
-  solver_options.logging_type = ceres::SILENT;
   ceres::Solver::Summary solver_summary;
   ceres::Solve(solver_options, &solver_problem, &solver_summary);
   if (!solver_summary.IsSolutionUsable()) {

@@ -11,6 +11,7 @@
 #include <opencv2/core/eigen.hpp>  // after Eigen (via pose_estimation.h), which it needs
 
 #include "input_checks.h"
+#include "solver_options.h"
 #include "weighted_icp/frontend/reprojection_residual.h"
 
 namespace weighted_icp::frontend {
@@ -140,15 +141,8 @@ Eigen::Isometry3d refinePose(const std::vector<Eigen::Vector3d>& points_world, c
     }
   }
 
-  ceres::Solver::Options solver_options;
-  solver_options.minimizer_type = ceres::TRUST_REGION;
-  solver_options.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
-  solver_options.linear_solver_type = ceres::DENSE_QR;
-  solver_options.max_num_iterations = max_iterations;
-  solver_options.num_threads = 1;
-  solver_options.logging_type = ceres::SILENT;
   ceres::Solver::Summary summary;
-  ceres::Solve(solver_options, &problem, &summary);
+  ceres::Solve(detail::levenbergMarquardt(max_iterations), &problem, &summary);
   if (!summary.IsSolutionUsable()) return initial_wc;
   return pose.poseWc();
 }

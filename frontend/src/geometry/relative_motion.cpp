@@ -15,6 +15,7 @@
 #include <opencv2/core/eigen.hpp>  // after Eigen, which it needs
 
 #include "input_checks.h"
+#include "solver_options.h"
 #include "weighted_icp/frontend/pose_estimation.h"
 
 namespace weighted_icp::frontend {
@@ -193,14 +194,8 @@ void refineEssentialMotion(const io::PinholeCamera& camera, const std::vector<cv
     problem.AddResidualBlock(new ceres::AutoDiffCostFunction<SampsonDistance, 1, 4, 3>(
                                  new SampsonDistance(sampsonDistance(camera, p1[i], p2[i]))),
                              loss, q.coeffs().data(), t.data());
-  ceres::Solver::Options options;
-  options.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
-  options.linear_solver_type = ceres::DENSE_QR;
-  options.max_num_iterations = kRefineMaxIterations;
-  options.num_threads = 1;
-  options.logging_type = ceres::SILENT;
   ceres::Solver::Summary summary;
-  ceres::Solve(options, &problem, &summary);
+  ceres::Solve(detail::levenbergMarquardt(kRefineMaxIterations), &problem, &summary);
   if (!summary.IsSolutionUsable() || !q.coeffs().allFinite() || !t.allFinite()) return;
   cv::eigen2cv(Eigen::Matrix3d(q.normalized().toRotationMatrix()), rotation);
   cv::eigen2cv(Eigen::Vector3d(t.normalized()), translation);
