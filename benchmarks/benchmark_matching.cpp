@@ -68,8 +68,8 @@ struct Pair {
 Pair loadPair(const Sequence& s, std::size_t reference_frame, std::size_t query_frame) {
   const RealSequence& data = openSequence(s);
   return {&s, reference_frame, query_frame,
-          FeatureExtractor(denseOptions(2000)).extract(data.frame(reference_frame).gray),
-          FeatureExtractor(denseOptions(1000)).extract(data.frame(query_frame).gray)};
+          FeatureExtractor(denseOptions(2000)).extract(data.frame(reference_frame).gray()),
+          FeatureExtractor(denseOptions(1000)).extract(data.frame(query_frame).gray())};
 }
 
 void reportMatches(benchmark::State& state, const Pair& p, const std::vector<cv::DMatch>& matches) {
@@ -138,7 +138,7 @@ void registerBenchmarks() {
     }
   }
   for (const Sequence& s : kSequences) {
-    const cv::Mat gray = openSequence(s).frame(s.freiburg == 1 ? 0 : 10).gray;
+    const cv::Mat gray = openSequence(s).frame(s.freiburg == 1 ? 0 : 10).gray();
     benchmark::RegisterBenchmark((std::string("BM_Extract/") + s.name).c_str(), BM_Extract, gray)
         ->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime();
     // A dark, low-contrast copy (gray * 0.2 + 20): too few corners, so the

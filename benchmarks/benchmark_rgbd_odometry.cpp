@@ -21,10 +21,12 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/rgbd.hpp>
 
+#include "weighted_icp/core/statistics.h"
 #include "weighted_icp/frontend/rgbd_slam.h"
 #include "weighted_icp/io/synthetic_rgbd.h"
 #include "weighted_icp/io/trajectory.h"
 #include "weighted_icp/io/tum_sequence.h"
+#include "weighted_icp/metrics/trajectory_error.h"
 
 namespace po = boost::program_options;
 using namespace weighted_icp;
@@ -44,17 +46,14 @@ struct Run {
   std::size_t tracked = 0;
 };
 
-double median(std::vector<double> values) {
-  std::sort(values.begin(), values.end());
-  return values.empty() ? 0.0 : values[values.size() / 2];
-}
+/// The median time; 0 when nothing was timed.
+double medianMs(const std::vector<double>& values) { return values.empty() ? 0.0 : median(values); }
 
 Sequence loadTum(const std::string& dir, const std::string& name, int freiburg) {
   const io::TumSequence tum = io::TumSequence::open(dir);
   Sequence sequence{name, io::tumCamera(freiburg), {}, tum.groundTruth()};
   for (std::size_t i = 0; i < tum.size(); ++i) {
-    io::RgbdImages images = tum.loadFrame(i, sequence.camera);
-    sequence.frames.push_back({tum.frame(i).rgb_timestamp, images.color, images.depth});
+    sequence.frames.push_back(tum.loadFrame(i, sequence.camera));
   }
   return sequence;
 }
@@ -81,7 +80,7 @@ Run runFrontend(const Sequence& sequence) {
   for (const auto& frame : sequence.frames) ms.push_back(slam.process(frame).tracking_ms);
   slam.finish();
   const io::Trajectory estimate = slam.trajectory();
-  return {io::computeAte(sequence.truth, estimate).translation.rmse, median(ms), estimate.size()};
+  return {metrics::computeAte(sequence.truth, estimate).translation.rmse, medianMs(ms), estimate.size()};
 }
 
 Run runOpenCvOdometry(const Sequence& sequence) {
@@ -109,7 +108,7 @@ Run runOpenCvOdometry(const Sequence& sequence) {
     estimate.push_back({frame.timestamp, pose});
     previous = current;
   }
-  return {io::computeAte(sequence.truth, estimate).translation.rmse, median(ms), estimate.size()};
+  return {metrics::computeAte(sequence.truth, estimate).translation.rmse, medianMs(ms), estimate.size()};
 }
 
 }  // namespace

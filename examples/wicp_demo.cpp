@@ -25,6 +25,7 @@
 #include <boost/program_options.hpp>
 
 #include "tool_support.h"
+#include "weighted_icp/core/statistics.h"
 #include "weighted_icp/io/map_format.h"
 #include "weighted_icp/io/synthetic_session.h"
 #include "weighted_icp/registration/landmark_alignment.h"
@@ -55,12 +56,6 @@ std::size_t requireInRange(long long value, const char* option, long long minimu
     throw std::invalid_argument(std::string("--") + option + " must be between " + std::to_string(minimum) +
                                 " and " + std::to_string(maximum) + " (got " + std::to_string(value) + ")");
   return static_cast<std::size_t>(value);
-}
-
-double median(std::vector<double> values) {
-  std::sort(values.begin(), values.end());
-  const std::size_t middle = values.size() / 2;
-  return values.size() % 2 == 1 ? values[middle] : 0.5 * (values[middle - 1] + values[middle]);
 }
 
 double maximum(const std::vector<double>& values) { return *std::max_element(values.begin(), values.end()); }

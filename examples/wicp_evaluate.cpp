@@ -16,6 +16,7 @@
 
 #include "tool_support.h"
 #include "weighted_icp/io/trajectory.h"
+#include "weighted_icp/metrics/trajectory_error.h"
 
 namespace po = boost::program_options;
 using namespace weighted_icp;
@@ -33,7 +34,7 @@ std::string degrees(double value) {
   return text.str();
 }
 
-void printStatistics(const char* label, const io::ErrorStatistics& s, std::string (*format)(double)) {
+void printStatistics(const char* label, const ErrorStatistics& s, std::string (*format)(double)) {
   std::cout << label << "  rmse " << format(s.rmse) << "  mean " << format(s.mean) << "  median " << format(s.median)
             << "  max " << format(s.max) << '\n';
 }
@@ -62,18 +63,19 @@ int main(int argc, char** argv) {
     if (!tools::parseCommandLine(argc, argv, options, vm, &positional)) return 0;
     if (rpe_unit_name != "s" && rpe_unit_name != "f")
       throw po::validation_error(po::validation_error::invalid_option_value, "rpe-unit", rpe_unit_name);
-    const io::DeltaUnit rpe_unit = rpe_unit_name == "s" ? io::DeltaUnit::Seconds : io::DeltaUnit::Frames;
+    const metrics::DeltaUnit rpe_unit =
+        rpe_unit_name == "s" ? metrics::DeltaUnit::Seconds : metrics::DeltaUnit::Frames;
 
     const io::Trajectory groundtruth = io::readTrajectory(groundtruth_path);
     const io::Trajectory estimate = io::readTrajectory(estimate_path);
-    const io::AbsoluteTrajectoryError ate = io::computeAte(groundtruth, estimate, max_difference);
-    const io::RelativePoseError rpe = io::computeRpe(groundtruth, estimate, rpe_delta, rpe_unit);
+    const metrics::AbsoluteTrajectoryError ate = metrics::computeAte(groundtruth, estimate, max_difference);
+    const metrics::RelativePoseError rpe = metrics::computeRpe(groundtruth, estimate, rpe_delta, rpe_unit);
 
     std::cout << "ground truth " << groundtruth.size() << " poses, estimate " << estimate.size() << " poses, "
               << ate.pairs << " pairs within " << max_difference << " s\n";
     printStatistics("ATE", ate.translation, metres);
     std::cout << "RPE over " << rpe.pairs << " pose pairs " << rpe_delta
-              << (rpe_unit == io::DeltaUnit::Seconds ? " s" : " frame(s)") << " apart\n";
+              << (rpe_unit == metrics::DeltaUnit::Seconds ? " s" : " frame(s)") << " apart\n";
     printStatistics("RPE translation", rpe.translation, metres);
     printStatistics("RPE rotation", rpe.rotation_deg, degrees);
     std::cout << "alignment (estimate -> ground truth):\n" << ate.alignment.matrix() << '\n';

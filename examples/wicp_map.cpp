@@ -20,6 +20,7 @@
 #include <boost/program_options.hpp>
 
 #include "tool_support.h"
+#include "weighted_icp/core/statistics.h"
 #include "weighted_icp/io/cloud_io.h"
 #include "weighted_icp/io/map_format.h"
 #include "weighted_icp/registration/landmark_point.h"
@@ -60,19 +61,10 @@ bool parseArguments(int argc, char** argv, po::options_description& visible,
   return true;
 }
 
-/// Linear interpolation between order statistics (numpy's default), so the
-/// median of an even count is the mean of the middle two.
-double quantile(const std::vector<double>& sorted, double p) {
-  const double position = p * static_cast<double>(sorted.size() - 1);
-  const auto below = static_cast<std::size_t>(position);
-  const std::size_t above = std::min(below + 1, sorted.size() - 1);
-  return sorted[below] + (position - static_cast<double>(below)) * (sorted[above] - sorted[below]);
-}
-
 void printDistribution(const std::string& label, std::vector<double> values) {
   std::sort(values.begin(), values.end());
   std::cout << "  " << std::left << std::setw(30) << label << std::right;
-  for (const double p : {0.0, 0.5, 0.9, 1.0}) std::cout << std::setw(13) << quantile(values, p);
+  for (const double p : {0.0, 0.5, 0.9, 1.0}) std::cout << std::setw(13) << quantileOfSorted(values, p);
   std::cout << '\n';
 }
 

@@ -16,12 +16,14 @@
 #include <boost/program_options.hpp>
 
 #include "tool_support.h"
+#include "weighted_icp/core/statistics.h"
 #include "weighted_icp/frontend/rgbd_slam.h"
 #include "weighted_icp/io/cloud_io.h"
 #include "weighted_icp/io/map_format.h"
 #include "weighted_icp/io/synthetic_rgbd.h"
 #include "weighted_icp/io/trajectory.h"
 #include "weighted_icp/io/tum_sequence.h"
+#include "weighted_icp/metrics/trajectory_error.h"
 #include "weighted_icp/registration/landmark_point.h"
 
 namespace po = boost::program_options;
@@ -46,11 +48,11 @@ class TumSource : public FrameSource {
   TumSource(const std::string& dir, io::PinholeCamera camera) : sequence_(io::TumSequence::open(dir)), camera_(camera) {}
   std::size_t size() const override { return sequence_.size(); }
   frontend::RgbdImage load(std::size_t i) const override {
-    io::RgbdImages images = sequence_.loadFrame(i, camera_);
-    if (images.valid_depth_pixels == 0)
+    RgbdFrame images = sequence_.loadFrame(i, camera_);
+    if (images.validDepthPixels() == 0)
       std::cerr << "wicp_rgbd_slam: warning: " << sequence_.frame(i).depth_path
                 << " has no valid depth; frame " << i << " is tracked without it\n";
-    return {sequence_.frame(i).rgb_timestamp, images.color, images.depth};
+    return images;
   }
   io::Trajectory groundTruth() const override { return sequence_.groundTruth(); }
   const io::PinholeCamera& camera() const override { return camera_; }
@@ -100,12 +102,8 @@ std::string cameraFromFolderName(const std::string& dir) {
   throw std::runtime_error("cannot tell the camera of " + dir + " from its name; pass --camera fr1|fr2|fr3|FILE.yaml");
 }
 
-double percentile(std::vector<double> values, double q) {
-  if (values.empty()) return 0.0;
-  std::sort(values.begin(), values.end());
-  const std::size_t at = std::min(values.size() - 1, static_cast<std::size_t>(q * (values.size() - 1) + 0.5));
-  return values[at];
-}
+/// A quantile of the per-frame times; 0 when no frame was timed.
+double percentile(const std::vector<double>& values, double q) { return values.empty() ? 0.0 : quantile(values, q); }
 
 }  // namespace
 
@@ -213,9 +211,9 @@ int main(int argc, char** argv) {
         .add("dynamic_matches", dynamic)
         .add("bundle_adjustments", slam.optimizationsRun());
     const io::Trajectory truth = source->groundTruth();
-    std::optional<io::AbsoluteTrajectoryError> ate;
+    std::optional<metrics::AbsoluteTrajectoryError> ate;
     if (!truth.empty() && trajectory.size() >= 3) {
-      ate = io::computeAte(truth, trajectory);
+      ate = metrics::computeAte(truth, trajectory);
       report.add("ate_rmse_m", ate->translation.rmse).add("ate_pairs", ate->pairs);
     }
     tools::writeTextFile((fs::path(out_dir) / "report.json").string(), report.str() + "\n");

@@ -14,6 +14,7 @@
 #include "weighted_icp/io/synthetic_rgbd.h"
 #include "weighted_icp/io/trajectory.h"
 #include "weighted_icp/io/tum_sequence.h"
+#include "weighted_icp/metrics/trajectory_error.h"
 
 namespace {
 
@@ -38,7 +39,7 @@ double syntheticAte(const io::SyntheticRgbdSequence& sequence, frontend::RgbdSla
     truth.push_back({sequence.timestamp(i), sequence.cameraToWorld(i)});
   }
   slam.finish();
-  return io::computeAte(truth, slam.trajectory()).translation.rmse;
+  return metrics::computeAte(truth, slam.trajectory()).translation.rmse;
 }
 
 io::SyntheticRgbdOptions syntheticOptions(bool moving_object) {
@@ -183,7 +184,7 @@ TEST(RgbdSlam, FramesWithoutDepthAreTrackedTwoDimensionally) {
   // Scale comes from the last motion measured with depth, so it drifts on this
   // curved path (measured: 12.5 cm ATE over 100 frames, the last 25 in 2D-2D),
   // but it must not run away, as it did when 2D-2D frames fed their own scale.
-  EXPECT_LT(io::computeAte(truth, slam.trajectory()).translation.rmse, 0.2);
+  EXPECT_LT(metrics::computeAte(truth, slam.trajectory()).translation.rmse, 0.2);
 }
 
 TEST(RgbdSlam, BadImagesAreRefusedClearly) {
@@ -205,11 +206,10 @@ TumRun runTum(const std::string& folder, int freiburg) {
   const io::PinholeCamera camera = io::tumCamera(freiburg);
   TumRun run{std::make_unique<frontend::RgbdSlam>(camera, deterministic())};
   for (std::size_t i = 0; i < tum.size(); ++i) {
-    io::RgbdImages images = tum.loadFrame(i, camera);
-    run.slam->process({tum.frame(i).rgb_timestamp, images.color, images.depth});
+    run.slam->process(tum.loadFrame(i, camera));
   }
   run.slam->finish();
-  run.ate_rmse_m = io::computeAte(tum.groundTruth(), run.slam->trajectory()).translation.rmse;
+  run.ate_rmse_m = metrics::computeAte(tum.groundTruth(), run.slam->trajectory()).translation.rmse;
   return run;
 }
 

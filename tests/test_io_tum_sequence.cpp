@@ -47,8 +47,8 @@ std::string errorOf(const std::function<void()>& action) {
 
 
 /// A small camera for the synthetic sequences.
-io::PinholeCamera smallCamera() {
-  io::PinholeCamera camera = io::tumCamera(3);
+PinholeCamera smallCamera() {
+  PinholeCamera camera = tumCamera(3);
   camera.width = 64;
   camera.height = 48;
   return camera;
@@ -118,14 +118,14 @@ TEST(TumSequence, RealImagesLoadWithMetricDepth) {
   const fs::path dir = weighted_icp::testing::dataDir() / "tum_fr1_xyz_head";
   WEIGHTED_ICP_REQUIRE_FILE(dir / "rgb.txt");
   const io::TumSequence sequence = io::TumSequence::open(dir.string());
-  const io::PinholeCamera camera = io::tumCamera(1);
+  const PinholeCamera camera = tumCamera(1);
   for (const std::size_t i : {std::size_t{0}, sequence.size() / 2, sequence.size() - 1}) {
     SCOPED_TRACE(sequence.frame(i).rgb_path);
-    const io::RgbdImages images = sequence.loadFrame(i, camera);
+    const RgbdFrame images = sequence.loadFrame(i, camera);
     EXPECT_EQ(images.color.type(), CV_8UC3);
-    EXPECT_EQ(images.gray.type(), CV_8UC1);
+    EXPECT_EQ(images.gray().type(), CV_8UC1);
     EXPECT_EQ(images.depth.type(), CV_32FC1);
-    for (const cv::Mat& image : {images.color, images.gray, images.depth}) {
+    for (const cv::Mat& image : {images.color, images.gray(), images.depth}) {
       EXPECT_EQ(image.cols, 640);
       EXPECT_EQ(image.rows, 480);
     }
@@ -134,8 +134,8 @@ TEST(TumSequence, RealImagesLoadWithMetricDepth) {
     cv::Mat expected;
     raw.convertTo(expected, CV_32F, 1.0 / 5000.0);
     EXPECT_LT(cv::norm(images.depth, expected, cv::NORM_INF), 1e-6);
-    EXPECT_EQ(images.valid_depth_pixels, static_cast<std::size_t>(cv::countNonZero(raw)));
-    EXPECT_GT(images.valid_depth_pixels, 640u * 480u / 2);
+    EXPECT_EQ(images.validDepthPixels(), static_cast<std::size_t>(cv::countNonZero(raw)));
+    EXPECT_GT(images.validDepthPixels(), 640u * 480u / 2);
 
     std::vector<float> valid;
     for (auto it = images.depth.begin<float>(); it != images.depth.end<float>(); ++it)
@@ -175,13 +175,13 @@ TEST(TumSequence, SyntheticFramesLoadExactly) {
   EXPECT_FALSE(sequence.hasGroundTruth());
   EXPECT_THROW(sequence.groundTruthAt(101.0), std::runtime_error);
 
-  io::PinholeCamera camera = smallCamera();
-  io::RgbdImages images = sequence.loadFrame(1, camera);
-  EXPECT_EQ(images.valid_depth_pixels, 64u * 48u);
+  PinholeCamera camera = smallCamera();
+  RgbdFrame images = sequence.loadFrame(1, camera);
+  EXPECT_EQ(images.validDepthPixels(), 64u * 48u);
   EXPECT_LT(cv::norm(images.depth - 1.5, cv::NORM_INF), 1e-6);  // 7500 / 5000
   EXPECT_EQ(images.color.at<cv::Vec3b>(10, 10), cv::Vec3b(30, 60, 90));
   // ITU-R BT.601 luma of (R, G, B) = (90, 60, 30) is 65.55.
-  EXPECT_NEAR(images.gray.at<std::uint8_t>(10, 10), 65.55, 1.0);
+  EXPECT_NEAR(images.gray().at<std::uint8_t>(10, 10), 65.55, 1.0);
 
   camera.depth_factor = 1000.0;
   images = sequence.loadFrame(1, camera);
@@ -193,8 +193,8 @@ TEST(TumSequence, SyntheticFramesLoadExactly) {
 
 TEST(TumSequence, EmptyDepthIsReportedNotThrown) {
   const fs::path dir = writeSequence("tum_empty_depth", 2, 0);
-  const io::RgbdImages images = io::TumSequence::open(dir.string()).loadFrame(0, smallCamera());
-  EXPECT_EQ(images.valid_depth_pixels, 0u);
+  const RgbdFrame images = io::TumSequence::open(dir.string()).loadFrame(0, smallCamera());
+  EXPECT_EQ(images.validDepthPixels(), 0u);
   EXPECT_EQ(cv::countNonZero(images.depth), 0);
 }
 
@@ -231,7 +231,7 @@ TEST(TumSequence, ImageProblemsAreNamedWhenLoading) {
   writeFile(dir / "rgb" / "101.000000.png", "not a png");
   cv::imwrite((dir / "depth" / "102.005000.png").string(), cv::Mat(48, 64, CV_8UC1, cv::Scalar(50)));
   const io::TumSequence sequence = io::TumSequence::open(dir.string());
-  const io::PinholeCamera camera = smallCamera();
+  const PinholeCamera camera = smallCamera();
 
   std::string error = errorOf([&] { sequence.loadFrame(0, camera); });
   EXPECT_NE(error.find(sequence.frame(0).depth_path), std::string::npos) << error;
@@ -245,7 +245,7 @@ TEST(TumSequence, ImageProblemsAreNamedWhenLoading) {
   EXPECT_NE(error.find(sequence.frame(2).depth_path), std::string::npos) << error;
   EXPECT_NE(error.find("16-bit"), std::string::npos) << error;
 
-  error = errorOf([&] { sequence.loadFrame(3, io::tumCamera(3)); });
+  error = errorOf([&] { sequence.loadFrame(3, tumCamera(3)); });
   EXPECT_NE(error.find(sequence.frame(3).rgb_path), std::string::npos) << error;
   EXPECT_NE(error.find("640x480"), std::string::npos) << error;
 

@@ -24,7 +24,7 @@ std::filesystem::path fr1Dir() { return weighted_icp::testing::dataDir() / "tum_
 std::filesystem::path fr3Dir() { return weighted_icp::testing::dataDir() / "tum_fr3_teddy_head"; }
 
 cv::Mat grayFrame(const std::filesystem::path& dir, int freiburg, std::size_t index) {
-  return weighted_icp::testing::RealSequence::open(dir, freiburg).frame(index).gray;
+  return weighted_icp::testing::RealSequence::open(dir, freiburg).frame(index).gray();
 }
 
 bool sameFeatures(const ExtractedFeatures& a, const ExtractedFeatures& b) {

@@ -48,7 +48,7 @@ const ExtractedFeatures& features(int freiburg, std::size_t frame) {
   auto it = cache.find({freiburg, frame});
   if (it == cache.end())
     it = cache.emplace(std::make_pair(freiburg, frame),
-                       frontend::FeatureExtractor().extract(sequence(freiburg).frame(frame).gray)).first;
+                       frontend::FeatureExtractor().extract(sequence(freiburg).frame(frame).gray())).first;
   return it->second;
 }
 

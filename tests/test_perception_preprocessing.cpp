@@ -21,7 +21,7 @@ double contrast(const cv::Mat& gray) {
 TEST(Clahe, RaisesTheContrastOfADarkRealFrame) {
   const auto dir = weighted_icp::testing::dataDir() / "tum_fr3_teddy_head";
   WEIGHTED_ICP_REQUIRE_FILE(dir / "rgb.txt");
-  const cv::Mat gray = weighted_icp::testing::RealSequence::open(dir, 3).frame(0).gray;
+  const cv::Mat gray = weighted_icp::testing::RealSequence::open(dir, 3).frame(0).gray();
   cv::Mat dark;
   gray.convertTo(dark, CV_8U, 0.2, 20.0);
   const cv::Mat equalized = equalizeClahe(dark);

@@ -41,13 +41,13 @@ TEST_P(RealFrameQuality, ScoresASharpFrameBetterThanItsBlurredNoisyCopy) {
   WEIGHTED_ICP_REQUIRE_FILE(kModelDir);
   WEIGHTED_ICP_REQUIRE_FILE(sequenceDir(GetParam()) / "rgb.txt");
   const ImageQualityGate gate;
-  const weighted_icp::io::RgbdImages frame = RealSequence::open(sequenceDir(GetParam()), GetParam()).frame(0);
-  const double sharp = gate.score(frame.gray);
-  const double degraded = gate.score(blurredAndNoisy(frame.gray));
+  const weighted_icp::RgbdFrame frame = RealSequence::open(sequenceDir(GetParam()), GetParam()).frame(0);
+  const double sharp = gate.score(frame.gray());
+  const double degraded = gate.score(blurredAndNoisy(frame.gray()));
   std::cout << "fr" << GetParam() << " frame 0: BRISQUE " << sharp << ", blurred and noisy " << degraded << "\n";
   EXPECT_LT(sharp + 20.0, degraded);
-  EXPECT_TRUE(gate.accept(frame.gray));
-  EXPECT_FALSE(gate.accept(blurredAndNoisy(frame.gray)));
+  EXPECT_TRUE(gate.accept(frame.gray()));
+  EXPECT_FALSE(gate.accept(blurredAndNoisy(frame.gray())));
   // The colour image is scored on its gray levels.
   EXPECT_NEAR(gate.score(frame.color), sharp, 0.5);
 }
@@ -60,7 +60,7 @@ TEST_P(RealFrameQuality, PassesEveryRealFrameWithTheDefaultThreshold) {
   const std::size_t step = GetParam() == 1 ? 1 : 4;  // fr3: every 4th of 200 frames, to keep the test short
   double worst = 0.0;
   for (std::size_t i = 0; i < data.sequence.size(); i += step) {
-    const double score = gate.score(data.frame(i).gray);
+    const double score = gate.score(data.frame(i).gray());
     worst = std::max(worst, score);
     EXPECT_LE(score, gate.options().max_brisque_score) << "frame " << i;
   }

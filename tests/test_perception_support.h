@@ -26,7 +26,7 @@ struct RealSequence {
   static RealSequence open(const std::filesystem::path& directory, int freiburg) {
     return {io::TumSequence::open(directory.string()), io::tumCamera(freiburg)};
   }
-  io::RgbdImages frame(std::size_t index) const { return sequence.loadFrame(index, camera); }
+  RgbdFrame frame(std::size_t index) const { return sequence.loadFrame(index, camera); }
   Eigen::Isometry3d groundTruth(std::size_t index) const {
     const double timestamp = sequence.frame(index).rgb_timestamp;
     const auto pose = sequence.groundTruthAt(timestamp);

@@ -1,3 +1,4 @@
+// Camera files: TUM presets by name, OpenCV FileStorage YAML read and written.
 #include "weighted_icp/io/camera.h"
 
 #include <cmath>
@@ -10,56 +11,6 @@
 #include "weighted_icp/io/atomic_file.h"
 
 namespace weighted_icp::io {
-
-cv::Matx33d PinholeCamera::cameraMatrix() const { return {fx, 0.0, cx, 0.0, fy, cy, 0.0, 0.0, 1.0}; }
-
-cv::Mat PinholeCamera::distortionCoefficients() const {
-  cv::Mat coefficients(1, 5, CV_64F);
-  for (int i = 0; i < 5; ++i) coefficients.at<double>(i) = distortion[static_cast<std::size_t>(i)];
-  return coefficients;
-}
-
-bool PinholeCamera::hasDistortion() const {
-  for (const double k : distortion)
-    if (k != 0.0) return true;
-  return false;
-}
-
-Eigen::Vector2d PinholeCamera::project(const Eigen::Vector3d& point_camera) const {
-  // A point on or behind the image plane has no pixel; NaN makes inImage() false.
-  if (!(point_camera.z() > 0.0)) return Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
-  return {fx * point_camera.x() / point_camera.z() + cx, fy * point_camera.y() / point_camera.z() + cy};
-}
-
-Eigen::Vector3d PinholeCamera::backProject(double u, double v, double depth) const {
-  return {(u - cx) / fx * depth, (v - cy) / fy * depth, depth};
-}
-
-bool PinholeCamera::inImage(const Eigen::Vector2d& pixel) const {
-  // Pixel centres are at integer coordinates: inside [0, size - 1] both the
-  // rounded pixel and the bilinear neighbours exist.
-  return pixel.x() >= 0.0 && pixel.y() >= 0.0 && pixel.x() <= width - 1 && pixel.y() <= height - 1;
-}
-
-PinholeCamera tumCamera(int freiburg) {
-  PinholeCamera camera;
-  switch (freiburg) {
-    case 1:
-      camera.fx = 517.306408, camera.fy = 516.469215, camera.cx = 318.643040, camera.cy = 255.313989;
-      camera.distortion = {0.262383, -0.953104, -0.005358, 0.002628, 1.163314};
-      break;
-    case 2:
-      camera.fx = 520.908620, camera.fy = 521.007327, camera.cx = 325.141442, camera.cy = 249.701764;
-      camera.distortion = {0.231222, -0.784899, -0.003257, -0.000105, 0.917205};
-      break;
-    case 3:
-      camera.fx = 535.4, camera.fy = 539.2, camera.cx = 320.1, camera.cy = 247.6;
-      break;
-    default:
-      throw std::invalid_argument("no TUM RGB-D camera freiburg " + std::to_string(freiburg) + " (expected 1, 2 or 3)");
-  }
-  return camera;
-}
 
 namespace {
 

@@ -144,12 +144,7 @@ LandmarkMap readLandmarkMap(const std::string& path) {
 }
 
 namespace {
-/// Shortest text that reads back to the same double.
-std::string exact(double value) {
-  char buffer[32];
-  const auto result = std::to_chars(buffer, buffer + sizeof(buffer), value);
-  return std::string(buffer, result.ptr);
-}
+using detail::exact;
 
 /// Refuses, before anything is written, a map the reader would refuse, so a
 /// written map always reads back.

@@ -1,7 +1,10 @@
 #pragma once
-// Whitespace-separated fields of one line of the text formats io/ reads.
+// The text formats io/ reads and writes: whitespace-separated fields of a
+// line, and doubles written so that they read back exactly.
 
 #include <cctype>
+#include <charconv>
+#include <string>
 #include <string_view>
 #include <vector>
 
@@ -17,6 +20,13 @@ inline std::vector<std::string_view> splitFields(std::string_view line) {
     if (i > start) fields.push_back(line.substr(start, i - start));
   }
   return fields;
+}
+
+/// Shortest text that reads back to the same double.
+inline std::string exact(double value) {
+  char buffer[32];
+  const auto result = std::to_chars(buffer, buffer + sizeof(buffer), value);
+  return std::string(buffer, result.ptr);
 }
 
 }  // namespace weighted_icp::io::detail

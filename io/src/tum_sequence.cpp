@@ -79,11 +79,12 @@ const TumFrame& TumSequence::frame(std::size_t index) const {
   return frames_[index];
 }
 
-RgbdImages TumSequence::loadFrame(std::size_t index, const PinholeCamera& camera) const {
+RgbdFrame TumSequence::loadFrame(std::size_t index, const PinholeCamera& camera) const {
   if (!(std::isfinite(camera.depth_factor) && camera.depth_factor > 0.0))
     throw std::invalid_argument("the camera's depth_factor must be a finite number > 0");
   const TumFrame& paths = frame(index);
-  RgbdImages images;
+  RgbdFrame images;
+  images.timestamp = paths.rgb_timestamp;
   images.color = readImage(paths.rgb_path, cv::IMREAD_COLOR);
   const cv::Mat raw_depth = readImage(paths.depth_path, cv::IMREAD_UNCHANGED);
   if (raw_depth.type() != CV_16UC1)
@@ -96,9 +97,7 @@ RgbdImages TumSequence::loadFrame(std::size_t index, const PinholeCamera& camera
   if (images.color.cols != camera.width || images.color.rows != camera.height)
     throw std::runtime_error(paths.rgb_path + ": image is " + sizeText(images.color) + " but the camera's is " +
                              std::to_string(camera.width) + "x" + std::to_string(camera.height));
-  cv::cvtColor(images.color, images.gray, cv::COLOR_BGR2GRAY);
-  raw_depth.convertTo(images.depth, CV_32F, 1.0 / camera.depth_factor);  // 0 (no reading) stays 0
-  images.valid_depth_pixels = static_cast<std::size_t>(cv::countNonZero(raw_depth));
+  images.depth = depthFromRaw(raw_depth, camera.depth_factor);
   return images;
 }
 

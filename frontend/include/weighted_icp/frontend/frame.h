@@ -9,14 +9,13 @@
 #include <Eigen/Geometry>
 #include <opencv2/core.hpp>
 
+#include "weighted_icp/core/rgbd_frame.h"
+
 namespace weighted_icp::frontend {
 
-/// The input of the front end: one registered colour + depth image pair.
-struct RgbdImage {
-  double timestamp = 0.0;
-  cv::Mat color;  // CV_8UC3 (BGR) or CV_8UC1
-  cv::Mat depth;  // CV_32F metres, 0 where invalid
-};
+/// The input of the front end is core's RgbdFrame; this name keeps
+/// frontend::RgbdImage working for one release.
+using RgbdImage = weighted_icp::RgbdFrame;
 
 struct Frame {
   using Ptr = std::shared_ptr<Frame>;

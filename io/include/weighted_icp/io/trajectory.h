@@ -1,7 +1,7 @@
 #pragma once
-// Trajectories in the TUM RGB-D benchmark's text format and their evaluation
-// as the benchmark's tools do it (associate.py, evaluate_ate.py,
-// evaluate_rpe.py with --fixed_delta).
+// Trajectories in the TUM RGB-D benchmark's text format, and timestamp
+// association as its associate.py does it. Their evaluation (ATE, RPE) is in
+// weighted_icp::metrics (weighted_icp/metrics/trajectory_error.h).
 //
 //   timestamp tx ty tz qx qy qz qw
 //     camera-to-world pose; the quaternion is scalar LAST (unlike the map
@@ -58,43 +58,9 @@ std::vector<std::pair<std::size_t, std::size_t>> associate(const Trajectory& fir
 /// nearest in time to `timestamp`; the earlier one on a tie.
 std::size_t nearestInTime(const Trajectory& sorted_trajectory, double timestamp);
 
-/// Statistics of a set of non-negative errors.
-struct ErrorStatistics {
-  double rmse = 0.0, mean = 0.0, median = 0.0, max = 0.0;
-};
-
-struct AbsoluteTrajectoryError {
-  std::size_t pairs = 0;  // associated (ground truth, estimate) poses
-  ErrorStatistics translation;  // metres, after alignment
-  /// The rigid motion (no scale) that best maps the estimated positions onto
-  /// the ground-truth ones: ground truth ≈ alignment * estimate.
-  Eigen::Isometry3d alignment = Eigen::Isometry3d::Identity();
-};
-
-/// evaluate_ate.py: associates by timestamp (as associate()), aligns the
-/// estimated positions onto ground truth (Horn/Umeyama, no scale) and
-/// measures the remaining position errors. Throws std::runtime_error when
-/// fewer than 3 pairs associate, std::invalid_argument for non-finite poses.
-AbsoluteTrajectoryError computeAte(const Trajectory& groundtruth, const Trajectory& estimate,
-                                   double max_difference = 0.02);
-
-enum class DeltaUnit { Seconds, Frames };
-
-struct RelativePoseError {
-  std::size_t pairs = 0;  // compared pose pairs (i, j)
-  ErrorStatistics translation;  // metres
-  ErrorStatistics rotation_deg;  // degrees
-};
-
-/// evaluate_rpe.py --fixed_delta: for each estimated pose i (by time), j is
-/// the pose nearest to i + delta (seconds, or frames); as that script, pairs
-/// whose j is the last pose are skipped (it cannot tell "last" from "past
-/// the end"). Each estimated pose is compared with the ground-truth pose
-/// nearest in time, if within twice the median ground-truth interval. The
-/// error of a pair is (E_j^-1 E_i)^-1 (G_j^-1 G_i). Throws std::runtime_error
-/// when fewer than 2 pairs remain, std::invalid_argument for a delta that is
-/// not > 0 (or not a whole number of frames) and for non-finite poses.
-RelativePoseError computeRpe(const Trajectory& groundtruth, const Trajectory& estimate, double delta = 1.0,
-                             DeltaUnit unit = DeltaUnit::Seconds);
+/// Throws std::invalid_argument "<name> pose at timestamp T is not a finite
+/// rigid motion" for the first pose with a non-finite timestamp or a matrix
+/// that is not a finite rotation and translation.
+void requireFiniteTrajectory(const Trajectory& trajectory, const std::string& name);
 
 }  // namespace weighted_icp::io

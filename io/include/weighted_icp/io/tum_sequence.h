@@ -12,6 +12,7 @@
 #include <Eigen/Geometry>
 #include <opencv2/core.hpp>
 
+#include "weighted_icp/core/rgbd_frame.h"
 #include "weighted_icp/io/camera.h"
 #include "weighted_icp/io/trajectory.h"
 
@@ -24,16 +25,6 @@ struct TumFrame {
   double depth_timestamp = 0.0;
   std::string rgb_path;  // folder / file name from rgb.txt
   std::string depth_path;
-};
-
-/// The images of a frame as stored (not undistorted).
-struct RgbdImages {
-  cv::Mat color;  // CV_8UC3, BGR as cv::imread gives it
-  cv::Mat gray;   // CV_8U
-  cv::Mat depth;  // CV_32F, metres; 0 where the sensor gave no reading
-  /// Pixels with a depth reading. 0 is not an error: the sensor does drop
-  /// whole frames, and a front end should skip such a frame, not stop.
-  std::size_t valid_depth_pixels = 0;
 };
 
 class TumSequence {
@@ -49,12 +40,13 @@ class TumSequence {
   /// Frames in colour-timestamp order; throws std::out_of_range.
   const TumFrame& frame(std::size_t index) const;
 
-  /// Reads frame `index`'s images, depth scaled by camera.depth_factor.
+  /// Reads frame `index`'s images (not undistorted), depth scaled by
+  /// camera.depth_factor; the timestamp is the colour image's.
   /// Throws std::runtime_error naming the file: unreadable image, depth not
   /// 16-bit single-channel, colour and depth of different sizes, or a size
   /// other than the camera's; std::invalid_argument for a camera whose
   /// depth_factor is not > 0.
-  RgbdImages loadFrame(std::size_t index, const PinholeCamera& camera) const;
+  RgbdFrame loadFrame(std::size_t index, const PinholeCamera& camera) const;
 
   bool hasGroundTruth() const { return !groundtruth_.empty(); }
   /// Ground truth sorted by time; empty without groundtruth.txt.

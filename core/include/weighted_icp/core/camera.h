@@ -1,0 +1,46 @@
+#pragma once
+// The RGB-D pinhole camera model every layer shares: intrinsics, lens
+// distortion (OpenCV's k1 k2 p1 p2 k3) and the depth image scale, with the
+// published TUM RGB-D calibrations. Reading and writing camera files is io's
+// job (weighted_icp/io/camera.h).
+
+#include <array>
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+
+namespace weighted_icp {
+
+/// @brief A pinhole RGB-D camera: intrinsics, distortion and depth scale.
+struct PinholeCamera {
+  double fx = 0.0, fy = 0.0, cx = 0.0, cy = 0.0;
+  std::array<double, 5> distortion{};  // k1 k2 p1 p2 k3
+  int width = 640, height = 480;
+  double depth_factor = 5000.0;  // depth image value per metre
+
+  /// @brief The 3x3 intrinsic matrix as OpenCV takes it.
+  cv::Matx33d cameraMatrix() const;
+  /// @brief The distortion coefficients as a 1x5 CV_64F row (k1 k2 p1 p2 k3).
+  cv::Mat distortionCoefficients() const;
+  /// @brief True when any distortion coefficient is non-zero.
+  bool hasDistortion() const;
+
+  /// @brief Pixel of a point in camera coordinates (z forward), without
+  /// distortion; NaN for a point on or behind the image plane.
+  /// @param point_camera the point in the camera frame, metres
+  Eigen::Vector2d project(const Eigen::Vector3d& point_camera) const;
+  /// @brief Camera coordinates of an undistorted pixel at metric depth.
+  /// @param u column, pixels
+  /// @param v row, pixels
+  /// @param depth along the optical axis, metres
+  Eigen::Vector3d backProject(double u, double v, double depth) const;
+  /// @brief True when the pixel lies within [0, width - 1] x [0, height - 1].
+  /// @param pixel column and row
+  bool inImage(const Eigen::Vector2d& pixel) const;
+};
+
+/// @brief The published calibration of TUM RGB-D freiburg 1, 2 or 3.
+/// @param freiburg 1, 2 or 3; anything else throws std::invalid_argument
+PinholeCamera tumCamera(int freiburg);
+
+}  // namespace weighted_icp
