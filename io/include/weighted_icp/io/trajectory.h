@@ -14,13 +14,14 @@
 
 #include <Eigen/Geometry>
 
+#include "weighted_icp/core/trajectory.h"
+
 namespace weighted_icp::io {
 
-struct StampedPose {
-  double timestamp = 0.0;  // seconds
-  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();  // camera to world
-};
-using Trajectory = std::vector<StampedPose>;
+// The types moved to core; these names keep io::StampedPose and
+// io::Trajectory working for one release.
+using weighted_icp::StampedPose;
+using weighted_icp::Trajectory;
 
 /// One data line of a TUM text file (rgb.txt, depth.txt, groundtruth.txt):
 /// its timestamp, the fields after it, and its line number for errors.
