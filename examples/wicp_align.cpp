@@ -48,7 +48,7 @@ int main(int argc, char** argv) {
     if (!tools::parseCommandLine(argc, argv, options, vm)) return 0;
 
     const WeightStrategy strategy = parseWeightStrategy(strategy_name);
-    if (strategy == WeightStrategy::Base) settings.k = 1;
+    settings.k = neighboursFor(strategy, settings.k);
     const Displacement displacement =
         displacement_text.empty() ? Displacement{} : Displacement::parse(displacement_text);
 

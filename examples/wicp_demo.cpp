@@ -214,7 +214,7 @@ int main(int argc, char** argv) {
         const LandmarkCloud::ConstPtr target_cloud = toLandmarkCloud(target, weight);
         for (const bool refine : {false, true}) {
           AlignmentSettings settings;
-          settings.k = strategy == WeightStrategy::Base ? 1 : neighbours;
+          settings.k = neighboursFor(strategy, neighbours);
           settings.refine = refine;
           settings.threads = thread_count;
           LandmarkAligner aligner(settings);

@@ -28,7 +28,7 @@ Errors alignDisplaced(const LandmarkMap& source, const LandmarkMap& target, cons
                       WeightStrategy strategy, AlignmentSettings settings) {
   LandmarkMap moved = source;
   moved.transform(d.toIsometry());
-  if (strategy == WeightStrategy::Base) settings.k = 1;
+  settings.k = neighboursFor(strategy, settings.k);
   const AlignmentResult result = alignLandmarkMaps(moved, target, weightFunction(strategy), settings);
   EXPECT_TRUE(result.converged);
   const Eigen::Isometry3d estimate(result.transformation);

@@ -1,14 +1,18 @@
 // The weighted correspondence rule: drop-in equivalence with PCL for k = 1,
-// the argmax and tie rules, the reciprocal rule, weight sources, threads.
+// the argmax and tie rules, the reciprocal rule, weight sources, threads, and
+// the warnings of the PCL setters it ignores.
 
 #include <cmath>
 #include <random>
 
 #include <gtest/gtest.h>
 #include <pcl/common/transforms.h>
+#include <pcl/console/print.h>
+#include <pcl/point_representation.h>
 #include <pcl/point_types.h>
 #include <pcl/registration/correspondence_estimation.h>
 #include <pcl/registration/icp.h>
+#include <pcl/search/kdtree.h>
 
 #include "test_support.h"
 #include "weighted_icp/io/map_format.h"
@@ -369,6 +373,76 @@ TEST(NearestNeighborIndex, ReSettingAnUnchangedCloudDoesNotRebuild) {
   ASSERT_EQ(index.knn(query, scratch), 3u);
   EXPECT_EQ(scratch.indices()[0], 10);  // the rebuilt tree sees the moved point
   EXPECT_EQ(scratch.squaredDistances()[0], 0.0f);
+}
+
+// --- PCL setters it does not honour ----------------------------------------
+
+/// Calls `setters` and returns what they printed to stderr, with PCL's warnings switched on.
+template <typename Setters>
+std::string stderrOf(Setters setters) {
+  const auto previous = pcl::console::getVerbosityLevel();
+  pcl::console::setVerbosityLevel(pcl::console::L_WARN);
+  ::testing::internal::CaptureStderr();
+  setters();
+  const std::string printed = ::testing::internal::GetCapturedStderr();
+  pcl::console::setVerbosityLevel(previous);
+  return printed;
+}
+
+TEST(WeightedCorrespondenceEstimation, IgnoredPclSettersWarnAndChangeNothing) {
+  const auto source = randomCloud(300, 11);
+  const auto target = displaced(*source, {0.03, -0.02, 0.01, 1, 2, 4});
+  // x stretched 100 times: PCL's own class, which honours it, then pairs points differently.
+  auto stretched = std::make_shared<pcl::DefaultPointRepresentation<pcl::PointXYZ>>();
+  const float rescale[3] = {100.0f, 1.0f, 1.0f};
+  stretched->setRescaleValues(rescale);
+  // A source tree over the target cloud, never rebuilt: wrong for the reciprocal search if it were used.
+  auto wrong_tree = std::make_shared<pcl::search::KdTree<pcl::PointXYZ>>();
+  wrong_tree->setInputCloud(target);
+
+  Stock stock, stock_stretched;
+  stock_stretched.setPointRepresentation(stretched);
+  const auto stock_pairs = correspondencesOf(stock, source, target, 0.2);
+  ASSERT_FALSE(stock_pairs.empty());
+  const auto stretched_pairs = correspondencesOf(stock_stretched, source, target, 0.2);
+  bool representation_matters = stock_pairs.size() != stretched_pairs.size();
+  for (std::size_t i = 0; !representation_matters && i < stock_pairs.size(); ++i)
+    representation_matters = stock_pairs[i].index_match != stretched_pairs[i].index_match;
+  ASSERT_TRUE(representation_matters) << "the stretched representation should change PCL's pairs";
+
+  Weighted plain(3), configured(3);
+  const std::string warnings = stderrOf([&] {
+    configured.setPointRepresentation(stretched);
+    configured.setSearchMethodSource(wrong_tree, true);
+  });
+  EXPECT_NE(warnings.find("[pcl::registration::WeightedCorrespondenceEstimation::setPointRepresentation] "
+                          "This class does not use a point representation"),
+            std::string::npos)
+      << warnings;
+  EXPECT_NE(warnings.find("[pcl::registration::WeightedCorrespondenceEstimation::setSearchMethodSource] "
+                          "This class does not use a source search method"),
+            std::string::npos)
+      << warnings;
+  EXPECT_EQ(configured.getSearchMethodSource(), wrong_tree);  // stored, as the base class does
+  for (const bool reciprocal : {false, true}) {
+    SCOPED_TRACE(reciprocal ? "reciprocal" : "plain");
+    expectSameCorrespondences(correspondencesOf(plain, source, target, 0.2, reciprocal),
+                              correspondencesOf(configured, source, target, 0.2, reciprocal));
+  }
+}
+
+TEST(WeightedCorrespondenceEstimation, IcpPassingItsTreesThroughTheBaseDoesNotWarn) {
+  const auto target = randomCloud(200, 12);
+  const auto source = displaced(*target, {0.02, 0.01, 0.0, 0, 0, 2});
+  pcl::IterativeClosestPoint<pcl::PointXYZ, pcl::PointXYZ> icp;
+  icp.setCorrespondenceEstimation(std::make_shared<Weighted>(1));
+  icp.setInputSource(source);
+  icp.setInputTarget(target);
+  icp.setMaximumIterations(5);
+  Cloud aligned;
+  const std::string printed = stderrOf([&] { icp.align(aligned); });
+  EXPECT_EQ(printed.find("setSearchMethodSource"), std::string::npos) << printed;
+  EXPECT_EQ(aligned.size(), source->size());
 }
 
 TEST(WeightedCorrespondenceEstimation, CloneKeepsSettingsAndWorksIndependently) {

@@ -311,10 +311,18 @@ TEST_F(SweepTool, TheKSweepHasNoKOption) {
 }
 
 TEST_F(SweepTool, WithoutMapsTheDefaultSessionMapIsRequired) {
-  const fs::path previous = fs::current_path();
-  fs::current_path(dir_);  // no ../shared/data here
+  // Run from a folder nested in the test's own scratch folder, so that ".." is the test's too and
+  // ../shared/data cannot exist, whatever lies beside the temporary folder.
+  const fs::path nested = dir_ / "cwd";
+  fs::create_directories(nested);
+  // Restores the working folder however the test ends (its scratch folder is removed afterwards).
+  struct WorkingFolder {
+    fs::path previous = fs::current_path();
+    explicit WorkingFolder(const fs::path& path) { fs::current_path(path); }
+    ~WorkingFolder() { fs::current_path(previous); }
+  } working_folder(nested);
+  ASSERT_FALSE(fs::exists("../shared/data/map_fr1_desk.txt"));
   const auto [status, errors] = runTool(yawSweep(), {"--no-plot"});
-  fs::current_path(previous);
   EXPECT_EQ(status, 1);
   EXPECT_NE(errors.find("default --map ../shared/data/map_fr1_desk.txt"), std::string::npos) << errors;
 }

@@ -207,7 +207,7 @@ std::vector<PlannedRun> planRuns(const std::vector<SweepCase>& cases) {
   std::vector<PlannedRun> plan;
   for (const WeightStrategy strategy : allWeightStrategies())
     for (const SweepCase& c : cases) {
-      const unsigned int k = strategy == WeightStrategy::Base ? 1 : c.k;
+      const unsigned int k = neighboursFor(strategy, c.k);
       const Displacement& d = c.displacement;
       if (planned.insert({strategy, k, {d.x, d.y, d.z, d.roll_deg, d.pitch_deg, d.yaw_deg}}).second)
         plan.push_back({strategy, k, d});

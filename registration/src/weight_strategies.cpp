@@ -1,3 +1,5 @@
+// The built-in landmark weights, the strategies naming them, and the weights of a whole map.
+
 #include "weighted_icp/registration/weight_strategies.h"
 
 #include <cmath>
@@ -51,6 +53,10 @@ WeightFunction weightFunction(WeightStrategy strategy) {
     case WeightStrategy::MeanDistance: return MeanObservationDistanceWeight{};
   }
   throw std::invalid_argument("unknown weight strategy");
+}
+
+unsigned int neighboursFor(WeightStrategy strategy, unsigned int k) {
+  return strategy == WeightStrategy::Base ? 1 : k;
 }
 
 std::vector<double> computeWeights(const LandmarkMap& map, const WeightFunction& weight) {

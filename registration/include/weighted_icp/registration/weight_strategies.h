@@ -49,6 +49,14 @@ std::string toString(WeightStrategy strategy);
 WeightStrategy parseWeightStrategy(const std::string& name);
 WeightFunction weightFunction(WeightStrategy strategy);
 
+/// @brief The number of neighbours the weighted rule should consider for `strategy`.
+/// Base is plain ICP: one neighbour whatever k is. Its uniform weights would make the pick among
+/// k neighbours the nearest one anyway; asking for one keeps the search, and what is reported as k, honest.
+/// @param strategy  the weight strategy the alignment uses
+/// @param k         the neighbours asked for, used by every other strategy as is
+/// @return 1 for WeightStrategy::Base, otherwise k
+unsigned int neighboursFor(WeightStrategy strategy, unsigned int k);
+
 /// One weight per landmark of `map`, in order. Throws std::invalid_argument
 /// naming the landmark when `weight` returns a negative or non-finite value.
 std::vector<double> computeWeights(const LandmarkMap& map, const WeightFunction& weight);

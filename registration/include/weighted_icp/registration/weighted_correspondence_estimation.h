@@ -20,6 +20,14 @@
 // comparison, not a rebuild), searches in parallel with results independent of
 // the thread count, and allocates nothing per point. It keeps its own index,
 // so the tree given by setSearchMethodTarget() is not used.
+//
+// Nor are a point representation or a source search tree: setPointRepresentation()
+// and setSearchMethodSource() print a PCL_WARN saying so (as PCL's
+// setSourceNormals() does where normals are not needed), then store the value
+// as the base class would. PCL declares them non-virtual, so this class hides
+// them: only calls on this type warn; calls through a
+// CorrespondenceEstimationBase pointer (IterativeClosestPoint passes its
+// search trees that way on every align()) are not intercepted.
 
 #include <limits>
 #include <memory>
@@ -69,6 +77,17 @@ class WeightedCorrespondenceEstimation
   const std::vector<double>& getSourceWeights() const { return source_weights_; }
   void setSourceWeightField(const std::string& field_name);
   const std::string& getSourceWeightField() const { return source_weight_field_; }
+
+  /// @brief Not used (distances are always plain xyz): warns, then stores the value as the base class does.
+  /// Hides the non-virtual base method, so calls through a base pointer do not warn.
+  /// @param point_representation  ignored by the search
+  void setPointRepresentation(const typename Base::PointRepresentationConstPtr& point_representation);
+
+  /// @brief Not used (the reciprocal rule builds its own source index): warns, then stores the tree as the
+  /// base class does. Hides the non-virtual base method, so calls through a base pointer do not warn.
+  /// @param tree                ignored by the search
+  /// @param force_no_recompute  stored with the tree, also unused
+  void setSearchMethodSource(const typename Base::KdTreeReciprocalPtr& tree, bool force_no_recompute = false);
 
   /// Threads for the search; 0 (default) uses every hardware thread.
   void setNumberOfThreads(unsigned int threads) { threads_ = threads; }

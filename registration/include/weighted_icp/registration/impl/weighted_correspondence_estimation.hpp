@@ -1,4 +1,6 @@
 #pragma once
+// Implementation of WeightedCorrespondenceEstimation, included by the library's instantiations
+// (or by users, with WEIGHTED_ICP_NO_PRECOMPILE, for other point types).
 
 #include <cmath>
 #include <stdexcept>
@@ -124,6 +126,22 @@ void WeightedCorrespondenceEstimation<PointSource, PointTarget, Scalar>::setSour
     const std::string& field_name) {
   source_weight_field_ = field_name;
   source_cloud_updated_ = true;
+}
+
+template <typename PointSource, typename PointTarget, typename Scalar>
+void WeightedCorrespondenceEstimation<PointSource, PointTarget, Scalar>::setPointRepresentation(
+    const typename Base::PointRepresentationConstPtr& point_representation) {
+  PCL_WARN("[pcl::registration::%s::setPointRepresentation] This class does not use a point representation\n",
+           getClassName().c_str());
+  Base::setPointRepresentation(point_representation);
+}
+
+template <typename PointSource, typename PointTarget, typename Scalar>
+void WeightedCorrespondenceEstimation<PointSource, PointTarget, Scalar>::setSearchMethodSource(
+    const typename Base::KdTreeReciprocalPtr& tree, bool force_no_recompute) {
+  PCL_WARN("[pcl::registration::%s::setSearchMethodSource] This class does not use a source search method\n",
+           getClassName().c_str());
+  Base::setSearchMethodSource(tree, force_no_recompute);
 }
 
 template <typename PointSource, typename PointTarget, typename Scalar>
