@@ -336,7 +336,6 @@ void Frontend::insertKeyframe(const Frame& frame, const std::vector<std::pair<st
   }
 
   const double mask_sq = options_.dynamic_mask_radius_px * options_.dynamic_mask_radius_px;
-  std::size_t created = 0;
   for (std::size_t i = 0; i < frame.size(); ++i) {
     if (used[i] || !frame.hasDepth(i)) continue;
     const bool near_moving = std::any_of(dynamic_pixels.begin(), dynamic_pixels.end(), [&](const Eigen::Vector2d& p) {
@@ -344,7 +343,6 @@ void Frontend::insertKeyframe(const Frame& frame, const std::vector<std::pair<st
     });
     if (near_moving) continue;
     createMapPoint(keyframe_id, frame, i);
-    ++created;
   }
   last_keyframe_ = frame;
   tracked_at_last_keyframe_ = tracked.size();  // 0 at a segment's first keyframe: motion decides the next

@@ -3,7 +3,6 @@
 // camera pose estimated for it.
 
 #include <cstddef>
-#include <memory>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -19,8 +18,6 @@ struct RgbdImage {
 };
 
 struct Frame {
-  using Ptr = std::shared_ptr<Frame>;
-
   std::size_t id = 0;
   double timestamp = 0.0;
   std::vector<cv::KeyPoint> keypoints;  // as detected (distorted image)
