@@ -20,6 +20,15 @@ std::string toString(TrackingStatus status) {
   return "unknown";
 }
 
+std::string toString(FrontendState state) {
+  switch (state) {
+    case FrontendState::Initializing: return "initializing";
+    case FrontendState::Tracking: return "tracking";
+    case FrontendState::Lost: return "lost";
+  }
+  return "unknown";
+}
+
 namespace {
 
 double rotationAngleDeg(const Eigen::Isometry3d& motion) {
@@ -102,8 +111,21 @@ TrackingResult Frontend::track(const RgbdImage& image) {
   Frame frame = makeFrame(image, result.used_clahe);
   result.features = frame.size();
   current_color_ = image.color;
-  if (!initialized_) return initialize(frame, result);
+  if (state_ != FrontendState::Tracking) return initialize(frame, result);
   return trackFrame(frame, result);
+}
+
+void Frontend::transitionTo(FrontendState next) {
+  if (next == FrontendState::Lost) {
+    // Everything mapped so far stays; the next keyframe belongs to a new segment.
+    if (state_ == FrontendState::Tracking) ++segment_;
+    motion_.reset();
+  } else if (next == FrontendState::Tracking && state_ != FrontendState::Tracking) {
+    // A segment starts afresh: no motion carries over from before the loss.
+    motion_.reset();
+    metric_velocity_.reset();
+  }
+  state_ = next;
 }
 
 bool Frontend::refusedByQualityGate(TrackingResult& result) {
@@ -211,11 +233,9 @@ TrackingResult Frontend::initialize(Frame& frame, TrackingResult result) {
   }
   // A new segment continues from the last known pose: mini-maps stay in one frame.
   frame.pose_wc = last_pose_wc_.value_or(Eigen::Isometry3d::Identity());
-  motion_.reset();
+  transitionTo(FrontendState::Tracking);
   motion_.update(frame.pose_wc);
-  metric_velocity_.reset();
   last_pose_wc_ = frame.pose_wc;
-  initialized_ = true;
   insertKeyframe(frame, {}, {});
   result.status = TrackingStatus::Initialized;
   setPose(result, frame.pose_wc);
@@ -285,10 +305,7 @@ TrackingResult Frontend::lose(TrackingResult result, const std::string& reason) 
     result.reason = reason + "; BRISQUE " + std::to_string(result.quality_score);
     return result;
   }
-  // Everything mapped so far stays; the next frame starts a new segment.
-  if (initialized_) ++segment_;
-  initialized_ = false;
-  motion_.reset();
+  transitionTo(FrontendState::Lost);
   result.status = TrackingStatus::Lost;
   result.reason = reason;
   return result;

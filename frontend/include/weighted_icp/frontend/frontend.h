@@ -103,6 +103,18 @@ struct TrackingResult {
   }
 };
 
+/// Where the tracker stands between frames (the per-frame outcome is TrackingStatus).
+/// Initializing -> Tracking: a frame with enough depth starts the first segment.
+/// Tracking -> Lost: no pose, the image not refused by the quality gate; the segment ends.
+/// Lost -> Tracking: a frame with enough depth starts a new segment (a new mini-map).
+/// A frame that cannot start a segment leaves Initializing or Lost as it is.
+enum class FrontendState {
+  Initializing,  // no segment yet
+  Tracking,      // a segment is being tracked and mapped
+  Lost           // the last segment ended; the next frame with enough depth starts another
+};
+std::string toString(FrontendState state);
+
 class Frontend {
  public:
   /// Throws if the quality gate's model files are missing (when enabled).
@@ -112,11 +124,15 @@ class Frontend {
   /// depth sizes or a depth image that is not CV_32F.
   TrackingResult track(const RgbdImage& image);
 
+  FrontendState state() const { return state_; }
+  /// The segment the next keyframe belongs to: 0, then one more after each loss.
   std::size_t segment() const { return segment_; }
 
  private:
   Frame makeFrame(const RgbdImage& image, bool& used_clahe);
   double depthAt(const cv::Mat& depth, const cv::Point2f& pixel) const;
+  /// The one place the state changes; ends the segment when tracking is lost.
+  void transitionTo(FrontendState next);
   TrackingResult trackFrame(Frame& frame, TrackingResult result);
   TrackingResult initialize(Frame& frame, TrackingResult result);
   TrackingResult trackRelative(Frame& frame, TrackingResult result, const std::string& why_not_3d);
@@ -140,8 +156,8 @@ class Frontend {
   ConstantVelocityModel motion_;
 
   std::size_t next_frame_id_ = 0;
+  FrontendState state_ = FrontendState::Initializing;
   std::size_t segment_ = 0;
-  bool initialized_ = false;
   std::optional<Eigen::Isometry3d> last_pose_wc_;
   /// Motion between the last two frames tracked with 3D points: what scales 2D-2D.
   std::optional<Eigen::Isometry3d> metric_velocity_;
