@@ -20,6 +20,15 @@ std::string toString(TrackingStatus status) {
   return "unknown";
 }
 
+std::string toString(FrontendState state) {
+  switch (state) {
+    case FrontendState::Initializing: return "initializing";
+    case FrontendState::Tracking: return "tracking";
+    case FrontendState::Lost: return "lost";
+  }
+  return "unknown";
+}
+
 namespace {
 
 double rotationAngleDeg(const Eigen::Isometry3d& motion) {
@@ -102,8 +111,21 @@ TrackingResult Frontend::track(const RgbdImage& image) {
   Frame frame = makeFrame(image, result.used_clahe);
   result.features = frame.size();
   current_color_ = image.color;
-  if (!initialized_) return initialize(frame, result);
+  if (state_ != FrontendState::Tracking) return initialize(frame, result);
   return trackFrame(frame, result);
+}
+
+void Frontend::transitionTo(FrontendState next) {
+  if (next == FrontendState::Lost) {
+    // Everything mapped so far stays; the next keyframe belongs to a new segment.
+    if (state_ == FrontendState::Tracking) ++segment_;
+    motion_.reset();
+  } else if (next == FrontendState::Tracking && state_ != FrontendState::Tracking) {
+    // A segment starts afresh: no motion carries over from before the loss.
+    motion_.reset();
+    metric_velocity_.reset();
+  }
+  state_ = next;
 }
 
 bool Frontend::refusedByQualityGate(TrackingResult& result) {
@@ -117,18 +139,45 @@ TrackingResult Frontend::trackFrame(Frame& frame, TrackingResult result) {
   const auto predicted = motion_.predict();
   const Eigen::Isometry3d guess_wc = predicted ? *predicted : *last_pose_wc_;
   const double gate_px = predicted ? options_.match_gate_px : options_.match_gate_without_motion_px;
+  if (!refreshLocalMap()) return lose(result, "the local map is empty");
 
+  const LocalMatches matched = matchLocalMap(frame, guess_wc, gate_px);
+  result.matches = matched.size();
+  if (matched.size() < static_cast<std::size_t>(options_.pnp.min_inliers))
+    return trackRelative(frame, result, std::to_string(matched.size()) + " 3D-2D matches");
+  const PoseEstimate estimate = estimatePosePnp(matched.points_world, matched.pixels, camera_, guess_wc, options_.pnp);
+  if (!estimate.ok) return trackRelative(frame, result, "PnP failed: " + estimate.failure);
+
+  const MovingPoints moving = rejectMovingPoints(frame, matched, estimate.pose_wc);
+  std::vector<int> static_inliers;
+  for (const int m : estimate.inliers)
+    if (!moving.is_dynamic[m]) static_inliers.push_back(m);
+  result.dynamic = moving.pixels.size();
+  if (static_inliers.size() < static_cast<std::size_t>(options_.pnp.min_inliers))
+    return trackRelative(frame, result, std::to_string(static_inliers.size()) + " static inliers");
+
+  const Eigen::Isometry3d pose_wc = refinePose(frame, matched, static_inliers, estimate.pose_wc);
+  metric_velocity_ = last_pose_wc_->inverse() * pose_wc;
+  acceptPose(frame, result, TrackingStatus::Tracked, pose_wc);
+  result.inliers = static_inliers.size();
+  insertKeyframeIfNeeded(frame, result, matched, static_inliers, moving.pixels);
+  return result;
+}
+
+bool Frontend::refreshLocalMap() {
   // Taken and indexed again only when the map changed (a keyframe, a BA).
   if (map_.revision() != local_map_.revision || local_map_.ids.empty()) {
     local_map_ = map_.localMap(options_.local_map_keyframes);
     if (!local_map_.ids.empty()) matcher_.setReference(local_map_.descriptors);
   }
+  return !local_map_.ids.empty();
+}
+
+Frontend::LocalMatches Frontend::matchLocalMap(const Frame& frame, const Eigen::Isometry3d& guess_wc,
+                                               double gate_px) const {
   const LocalMap& local = local_map_;
-  if (local.ids.empty()) return lose(result, "the local map is empty");
   const Eigen::Isometry3d guess_cw = guess_wc.inverse();
-  std::vector<Eigen::Vector3d> points_world;
-  std::vector<Eigen::Vector2d> pixels;
-  std::vector<std::pair<std::size_t, MapPointId>> matched;  // (feature, point)
+  LocalMatches matched;
   for (const cv::DMatch& match : matcher_.match(frame.descriptors)) {
     const MapPointId id = local.ids[match.trainIdx];
     const auto votes = dynamic_votes_.find(id);
@@ -136,69 +185,69 @@ TrackingResult Frontend::trackFrame(Frame& frame, TrackingResult result) {
     const Eigen::Vector3d point_camera = guess_cw * local.positions[match.trainIdx];
     if (point_camera.z() <= 0.0) continue;
     if ((camera_.project(point_camera) - frame.pixels[match.queryIdx]).norm() > gate_px) continue;
-    points_world.push_back(local.positions[match.trainIdx]);
-    pixels.push_back(frame.pixels[match.queryIdx]);
-    matched.emplace_back(static_cast<std::size_t>(match.queryIdx), id);
+    matched.points_world.push_back(local.positions[match.trainIdx]);
+    matched.pixels.push_back(frame.pixels[match.queryIdx]);
+    matched.ids.emplace_back(static_cast<std::size_t>(match.queryIdx), id);
   }
-  result.matches = matched.size();
-  if (matched.size() < static_cast<std::size_t>(options_.pnp.min_inliers))
-    return trackRelative(frame, result, std::to_string(matched.size()) + " 3D-2D matches");
+  return matched;
+}
 
-  PoseEstimate estimate = estimatePosePnp(points_world, pixels, camera_, guess_wc, options_.pnp);
-  if (!estimate.ok) return trackRelative(frame, result, "PnP failed: " + estimate.failure);
-
-  // Moving points: each match with depth is checked against the motion of the
-  // static majority; flagged ones leave the pose and never become landmarks.
+Frontend::MovingPoints Frontend::rejectMovingPoints(const Frame& frame, const LocalMatches& matched,
+                                                    const Eigen::Isometry3d& pose_wc) {
+  // Each match with depth is checked against the motion of the static
+  // majority; flagged ones leave the pose and never become landmarks.
   std::vector<Eigen::Vector3d> with_depth_world, with_depth_measured;
   std::vector<std::size_t> with_depth_match;
   for (std::size_t m = 0; m < matched.size(); ++m) {
-    const std::size_t feature = matched[m].first;
+    const std::size_t feature = matched.ids[m].first;
     if (!frame.hasDepth(feature)) continue;
-    with_depth_world.push_back(points_world[m]);
+    with_depth_world.push_back(matched.points_world[m]);
     with_depth_measured.push_back(camera_.backProject(frame.pixels[feature].x(), frame.pixels[feature].y(),
                                                       frame.depths[feature]));
     with_depth_match.push_back(m);
   }
-  const std::vector<bool> moving = flagDynamicByDisplacement(with_depth_world, with_depth_measured, estimate.pose_wc,
+  const std::vector<bool> moving = flagDynamicByDisplacement(with_depth_world, with_depth_measured, pose_wc,
                                                              options_.depth_noise, options_.dynamic_filter);
-  std::vector<bool> is_dynamic(matched.size(), false);
-  std::vector<Eigen::Vector2d> dynamic_pixels;
+  MovingPoints flagged;
+  flagged.is_dynamic.assign(matched.size(), false);
   for (std::size_t k = 0; k < moving.size(); ++k) {
     if (!moving[k]) continue;
     const std::size_t m = with_depth_match[k];
-    is_dynamic[m] = true;
-    ++dynamic_votes_[matched[m].second];
-    dynamic_pixels.push_back(pixels[m]);
+    flagged.is_dynamic[m] = true;
+    ++dynamic_votes_[matched.ids[m].second];
+    flagged.pixels.push_back(matched.pixels[m]);
   }
-  std::vector<int> static_inliers;
-  for (const int m : estimate.inliers)
-    if (!is_dynamic[m]) static_inliers.push_back(m);
-  result.dynamic = dynamic_pixels.size();
-  if (static_inliers.size() < static_cast<std::size_t>(options_.pnp.min_inliers))
-    return trackRelative(frame, result, std::to_string(static_inliers.size()) + " static inliers");
-  // Final pose from the static inliers, with their depths as well as pixels.
-  std::vector<double> match_depths(matched.size());
-  for (std::size_t m = 0; m < matched.size(); ++m) match_depths[m] = frame.depths[matched[m].first];
-  estimate.pose_wc = refinePoseHuber(points_world, pixels, static_inliers, camera_, estimate.pose_wc,
-                                     options_.pnp.huber_px, options_.pnp.refine_max_iterations,
-                                     DepthMeasurements{match_depths, options_.depth_noise});
+  return flagged;
+}
 
-  frame.pose_wc = estimate.pose_wc;
-  metric_velocity_ = last_pose_wc_->inverse() * frame.pose_wc;
-  result.status = TrackingStatus::Tracked;
+Eigen::Isometry3d Frontend::refinePose(const Frame& frame, const LocalMatches& matched,
+                                       const std::vector<int>& static_inliers, const Eigen::Isometry3d& pose_wc) const {
+  std::vector<double> match_depths(matched.size());
+  for (std::size_t m = 0; m < matched.size(); ++m) match_depths[m] = frame.depths[matched.ids[m].first];
+  return refinePoseHuber(matched.points_world, matched.pixels, static_inliers, camera_, pose_wc,
+                         options_.pnp.huber_px, options_.pnp.refine_max_iterations,
+                         DepthMeasurements{match_depths, options_.depth_noise});
+}
+
+void Frontend::acceptPose(Frame& frame, TrackingResult& result, TrackingStatus status,
+                          const Eigen::Isometry3d& pose_wc) {
+  frame.pose_wc = pose_wc;
+  result.status = status;
   setPose(result, frame.pose_wc);
-  result.inliers = static_inliers.size();
   motion_.update(frame.pose_wc);
   last_pose_wc_ = frame.pose_wc;
+}
 
-  if (needsKeyframe(frame.pose_wc, static_inliers.size()) && !refusedByQualityGate(result)) {
-    std::vector<std::pair<std::size_t, MapPointId>> tracked;
-    for (const int m : static_inliers) tracked.push_back(matched[m]);
-    insertKeyframe(frame, tracked, dynamic_pixels);
-    setPose(result, frame.pose_wc);
-    result.keyframe = true;
-  }
-  return result;
+void Frontend::insertKeyframeIfNeeded(const Frame& frame, TrackingResult& result, const LocalMatches& matched,
+                                      const std::vector<int>& static_inliers,
+                                      const std::vector<Eigen::Vector2d>& dynamic_pixels) {
+  // The gate is asked last: it costs ~25 ms and only keyframe candidates need it.
+  if (!needsKeyframe(frame.pose_wc, static_inliers.size()) || refusedByQualityGate(result)) return;
+  std::vector<std::pair<std::size_t, MapPointId>> tracked;
+  for (const int m : static_inliers) tracked.push_back(matched.ids[m]);
+  insertKeyframe(frame, tracked, dynamic_pixels);
+  setPose(result, frame.pose_wc);  // now relative to itself
+  result.keyframe = true;
 }
 
 TrackingResult Frontend::initialize(Frame& frame, TrackingResult result) {
@@ -211,11 +260,9 @@ TrackingResult Frontend::initialize(Frame& frame, TrackingResult result) {
   }
   // A new segment continues from the last known pose: mini-maps stay in one frame.
   frame.pose_wc = last_pose_wc_.value_or(Eigen::Isometry3d::Identity());
-  motion_.reset();
+  transitionTo(FrontendState::Tracking);
   motion_.update(frame.pose_wc);
-  metric_velocity_.reset();
   last_pose_wc_ = frame.pose_wc;
-  initialized_ = true;
   insertKeyframe(frame, {}, {});
   result.status = TrackingStatus::Initialized;
   setPose(result, frame.pose_wc);
@@ -230,13 +277,8 @@ TrackingResult Frontend::trackRelative(Frame& frame, TrackingResult result, cons
   // frames feed): a scale error would otherwise compound frame after frame.
   const Eigen::Isometry3d predicted_in_keyframe =
       last_keyframe_.pose_wc.inverse() * *last_pose_wc_ * *metric_velocity_;
-  DescriptorMatcher keyframe_matcher(options_.matcher);
-  keyframe_matcher.setReference(last_keyframe_.descriptors);
   std::vector<Eigen::Vector2d> keyframe_pixels, frame_pixels;
-  for (const cv::DMatch& match : keyframe_matcher.match(frame.descriptors)) {
-    keyframe_pixels.push_back(last_keyframe_.pixels[match.trainIdx]);
-    frame_pixels.push_back(frame.pixels[match.queryIdx]);
-  }
+  matchLastKeyframe(frame, keyframe_pixels, frame_pixels);
   RelativeMotion relative = estimateRelativeMotion2d2d(keyframe_pixels, frame_pixels, camera_);
   if (!relative.ok) return lose(result, why_not_3d + "; 2D-2D: " + relative.failure);
 
@@ -267,15 +309,21 @@ TrackingResult Frontend::trackRelative(Frame& frame, TrackingResult result, cons
   // the measured rotation and the predicted translation.
   if (relative.median_parallax_deg < options_.min_parallax_deg)
     motion.translation() = predicted_in_keyframe.translation();
-  frame.pose_wc = last_keyframe_.pose_wc * motion;
-  result.status = TrackingStatus::TrackedRelative;
+  acceptPose(frame, result, TrackingStatus::TrackedRelative, last_keyframe_.pose_wc * motion);
   result.reason = why_not_3d;
-  setPose(result, frame.pose_wc);
   result.matches = keyframe_pixels.size();
   result.inliers = relative.inliers.size();
-  motion_.update(frame.pose_wc);
-  last_pose_wc_ = frame.pose_wc;
   return result;
+}
+
+void Frontend::matchLastKeyframe(const Frame& frame, std::vector<Eigen::Vector2d>& keyframe_pixels,
+                                 std::vector<Eigen::Vector2d>& frame_pixels) const {
+  DescriptorMatcher keyframe_matcher(options_.matcher);
+  keyframe_matcher.setReference(last_keyframe_.descriptors);
+  for (const cv::DMatch& match : keyframe_matcher.match(frame.descriptors)) {
+    keyframe_pixels.push_back(last_keyframe_.pixels[match.trainIdx]);
+    frame_pixels.push_back(frame.pixels[match.queryIdx]);
+  }
 }
 
 TrackingResult Frontend::lose(TrackingResult result, const std::string& reason) {
@@ -285,10 +333,7 @@ TrackingResult Frontend::lose(TrackingResult result, const std::string& reason) 
     result.reason = reason + "; BRISQUE " + std::to_string(result.quality_score);
     return result;
   }
-  // Everything mapped so far stays; the next frame starts a new segment.
-  if (initialized_) ++segment_;
-  initialized_ = false;
-  motion_.reset();
+  transitionTo(FrontendState::Lost);
   result.status = TrackingStatus::Lost;
   result.reason = reason;
   return result;
@@ -319,13 +364,21 @@ void Frontend::insertKeyframe(const Frame& frame, const std::vector<std::pair<st
   keyframe.segment = segment_;
   const KeyframeId keyframe_id = map_.addKeyframe(keyframe);
   last_keyframe_id_ = keyframe_id;
+  const std::vector<bool> used = observeTrackedPoints(keyframe_id, frame, tracked);
+  createMapPoints(keyframe_id, frame, used, dynamic_pixels);
+  last_keyframe_ = frame;
+  tracked_at_last_keyframe_ = tracked.size();  // 0 at a segment's first keyframe: motion decides the next
+  backend_.keyframeInserted();
+}
 
+std::vector<bool> Frontend::observeTrackedPoints(KeyframeId keyframe, const Frame& frame,
+                                                 const std::vector<std::pair<std::size_t, MapPointId>>& tracked) {
   std::vector<bool> used(frame.size(), false);
   for (const auto& [feature, point_id] : tracked) {
     used[feature] = true;
     const auto point = map_.mapPoint(point_id);
-    if (!point) continue;
-    const MapPointObservation observation{keyframe_id, frame.pixels[feature], frame.depths[feature]};
+    if (!point) continue;  // removed by the backend meanwhile
+    const MapPointObservation observation{keyframe, frame.pixels[feature], frame.depths[feature]};
     FusedPoint fused{point->position, point->covariance};
     if (frame.hasDepth(feature)) {
       const FusedPoint measured =
@@ -334,21 +387,19 @@ void Frontend::insertKeyframe(const Frame& frame, const std::vector<std::pair<st
     }
     map_.addObservation(point_id, observation, fused.position, fused.covariance, frame.descriptors.row(feature).clone());
   }
+  return used;
+}
 
+void Frontend::createMapPoints(KeyframeId keyframe, const Frame& frame, const std::vector<bool>& used,
+                               const std::vector<Eigen::Vector2d>& dynamic_pixels) {
   const double mask_sq = options_.dynamic_mask_radius_px * options_.dynamic_mask_radius_px;
-  std::size_t created = 0;
   for (std::size_t i = 0; i < frame.size(); ++i) {
     if (used[i] || !frame.hasDepth(i)) continue;
     const bool near_moving = std::any_of(dynamic_pixels.begin(), dynamic_pixels.end(), [&](const Eigen::Vector2d& p) {
       return (p - frame.pixels[i]).squaredNorm() < mask_sq;
     });
-    if (near_moving) continue;
-    createMapPoint(keyframe_id, frame, i);
-    ++created;
+    if (!near_moving) createMapPoint(keyframe, frame, i);
   }
-  last_keyframe_ = frame;
-  tracked_at_last_keyframe_ = tracked.size();  // 0 at a segment's first keyframe: motion decides the next
-  backend_.keyframeInserted();
 }
 
 void Frontend::createMapPoint(KeyframeId keyframe, const Frame& frame, std::size_t feature) {

@@ -51,12 +51,6 @@ std::uint64_t Map::revision() const {
   return revision_;
 }
 
-std::optional<Keyframe> Map::lastKeyframe() const {
-  std::lock_guard<std::mutex> lock(mutex_);
-  if (keyframes_.empty()) return std::nullopt;
-  return keyframes_.rbegin()->second;
-}
-
 std::optional<Eigen::Isometry3d> Map::keyframePose(KeyframeId id) const {
   std::lock_guard<std::mutex> lock(mutex_);
   const auto keyframe = keyframes_.find(id);

@@ -2,28 +2,18 @@
 
 #include <stdexcept>
 
+#include "weighted_icp/frontend/landmark_conversion.h"
+
 namespace weighted_icp::frontend {
 
 MiniMapBuilder::MiniMapBuilder(std::size_t keyframes_per_minimap) : keyframes_per_minimap_(keyframes_per_minimap) {
   if (keyframes_per_minimap_ == 0) throw std::invalid_argument("a mini-map needs at least one keyframe");
 }
 
-LandmarkMap MiniMapBuilder::sessionMap(const Map& map) {
-  LandmarkMap session;
-  for (const Keyframe& keyframe : map.keyframes()) session.frames.emplace(keyframe.id, keyframe.pose_wc);
-  for (const MapPoint& point : map.mapPoints()) {
-    Landmark landmark;
-    landmark.id = point.id;
-    landmark.position = point.position;
-    landmark.covariance = point.covariance;
-    for (const auto& o : point.observations) landmark.observations.push_back({o.keyframe, o.pixel.x(), o.pixel.y()});
-    session.landmarks.push_back(std::move(landmark));
-  }
-  return session;
-}
+LandmarkMap MiniMapBuilder::sessionMap(const Map& map) { return toLandmarkMap(map); }
 
 std::vector<LandmarkMap> MiniMapBuilder::build(const Map& map) const {
-  const LandmarkMap session = sessionMap(map);
+  const LandmarkMap session = toLandmarkMap(map);
   const std::vector<Keyframe> keyframes = map.keyframes();
   std::vector<LandmarkMap> minimaps;
   std::size_t start = 0;

@@ -2,6 +2,8 @@
 
 #include <chrono>
 
+#include "weighted_icp/frontend/landmark_conversion.h"
+
 namespace weighted_icp::frontend {
 
 namespace {
@@ -28,6 +30,8 @@ const FrameRecord& RgbdSlam::process(const RgbdImage& image) {
 }
 
 void RgbdSlam::finish() { backend_.flush(); }
+
+LandmarkMap RgbdSlam::sessionMap() const { return toLandmarkMap(map_); }
 
 io::Trajectory RgbdSlam::trajectory() const {
   io::Trajectory trajectory;

@@ -3,7 +3,6 @@
 // camera pose estimated for it.
 
 #include <cstddef>
-#include <memory>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -18,8 +17,6 @@ namespace weighted_icp::frontend {
 using RgbdImage = weighted_icp::RgbdFrame;
 
 struct Frame {
-  using Ptr = std::shared_ptr<Frame>;
-
   std::size_t id = 0;
   double timestamp = 0.0;
   std::vector<cv::KeyPoint> keypoints;  // as detected (distorted image)

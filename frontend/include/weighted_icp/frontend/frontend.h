@@ -103,6 +103,18 @@ struct TrackingResult {
   }
 };
 
+/// Where the tracker stands between frames (the per-frame outcome is TrackingStatus).
+/// Initializing -> Tracking: a frame with enough depth starts the first segment.
+/// Tracking -> Lost: no pose, the image not refused by the quality gate; the segment ends.
+/// Lost -> Tracking: a frame with enough depth starts a new segment (a new mini-map).
+/// A frame that cannot start a segment leaves Initializing or Lost as it is.
+enum class FrontendState {
+  Initializing,  // no segment yet
+  Tracking,      // a segment is being tracked and mapped
+  Lost           // the last segment ended; the next frame with enough depth starts another
+};
+std::string toString(FrontendState state);
+
 class Frontend {
  public:
   /// Throws if the quality gate's model files are missing (when enabled).
@@ -112,22 +124,70 @@ class Frontend {
   /// depth sizes or a depth image that is not CV_32F.
   TrackingResult track(const RgbdImage& image);
 
+  FrontendState state() const { return state_; }
+  /// The segment the next keyframe belongs to: 0, then one more after each loss.
   std::size_t segment() const { return segment_; }
 
  private:
+  /// 3D-2D matches of a frame against the local map: match i pairs feature ids[i].first with point ids[i].second.
+  struct LocalMatches {
+    std::vector<Eigen::Vector3d> points_world;
+    std::vector<Eigen::Vector2d> pixels;
+    std::vector<std::pair<std::size_t, MapPointId>> ids;  // (feature, point)
+    std::size_t size() const { return ids.size(); }
+  };
+  /// Matches flagged as moving: per match, and the pixels of those flagged.
+  struct MovingPoints {
+    std::vector<bool> is_dynamic;
+    std::vector<Eigen::Vector2d> pixels;
+  };
+
   Frame makeFrame(const RgbdImage& image, bool& used_clahe);
   double depthAt(const cv::Mat& depth, const cv::Point2f& pixel) const;
+  /// The one place the state changes; ends the segment when tracking is lost.
+  void transitionTo(FrontendState next);
+  /// 3D-2D tracking against the local map, falling back to 2D-2D.
   TrackingResult trackFrame(Frame& frame, TrackingResult result);
+  /// Takes and indexes the local map again if the map changed; false when it is empty.
+  bool refreshLocalMap();
+  /// Descriptor matches against the local map, minus excluded moving points and those the guess projects too far.
+  LocalMatches matchLocalMap(const Frame& frame, const Eigen::Isometry3d& guess_wc, double gate_px) const;
+  /// Flags the matches with depth whose displacement betrays a moving point, and votes against their map points.
+  MovingPoints rejectMovingPoints(const Frame& frame, const LocalMatches& matched, const Eigen::Isometry3d& pose_wc);
+  /// Huber refinement of the pose on the static inliers, with their depths as well as pixels.
+  Eigen::Isometry3d refinePose(const Frame& frame, const LocalMatches& matched, const std::vector<int>& static_inliers,
+                               const Eigen::Isometry3d& pose_wc) const;
+  /// Records a tracked pose in the frame, the result, the motion model and the last pose.
+  void acceptPose(Frame& frame, TrackingResult& result, TrackingStatus status, const Eigen::Isometry3d& pose_wc);
+  /// Makes the frame a keyframe if it moved or lost enough of the tracked points and its image is good enough.
+  void insertKeyframeIfNeeded(const Frame& frame, TrackingResult& result, const LocalMatches& matched,
+                              const std::vector<int>& static_inliers,
+                              const std::vector<Eigen::Vector2d>& dynamic_pixels);
+  /// Starts a segment at the frame (its first keyframe), if it has enough features with depth.
   TrackingResult initialize(Frame& frame, TrackingResult result);
+  /// 2D-2D pose against the last keyframe, scaled by the last metric motion; loses tracking if impossible.
   TrackingResult trackRelative(Frame& frame, TrackingResult result, const std::string& why_not_3d);
+  /// Pixel pairs (last keyframe, frame) of the descriptor matches between the two.
+  void matchLastKeyframe(const Frame& frame, std::vector<Eigen::Vector2d>& keyframe_pixels,
+                         std::vector<Eigen::Vector2d>& frame_pixels) const;
+  /// No pose for this frame: skipped if the quality gate refuses the image, else tracking is lost.
   TrackingResult lose(TrackingResult result, const std::string& reason);
   /// Sets the pose and its expression relative to the latest keyframe.
   void setPose(TrackingResult& result, const Eigen::Isometry3d& pose_wc) const;
   /// Scores `color` with the gate; true when it is refused.
   bool refusedByQualityGate(TrackingResult& result);
+  /// True when the camera moved or turned enough since the last keyframe, or too few of its points are tracked.
   bool needsKeyframe(const Eigen::Isometry3d& pose_wc, std::size_t tracked) const;
+  /// Adds the frame as a keyframe: it observes the tracked points; its other features with depth become points.
   void insertKeyframe(const Frame& frame, const std::vector<std::pair<std::size_t, MapPointId>>& tracked,
                       const std::vector<Eigen::Vector2d>& dynamic_pixels);
+  /// Adds the keyframe's observation of each tracked point, fused with its depth; returns the features used.
+  std::vector<bool> observeTrackedPoints(KeyframeId keyframe, const Frame& frame,
+                                         const std::vector<std::pair<std::size_t, MapPointId>>& tracked);
+  /// A new map point for each unused feature with depth that is not near a moving one.
+  void createMapPoints(KeyframeId keyframe, const Frame& frame, const std::vector<bool>& used,
+                       const std::vector<Eigen::Vector2d>& dynamic_pixels);
+  /// A map point from one feature's depth, observed by the keyframe.
   void createMapPoint(KeyframeId keyframe, const Frame& frame, std::size_t feature);
 
   Map& map_;
@@ -140,8 +200,8 @@ class Frontend {
   ConstantVelocityModel motion_;
 
   std::size_t next_frame_id_ = 0;
+  FrontendState state_ = FrontendState::Initializing;
   std::size_t segment_ = 0;
-  bool initialized_ = false;
   std::optional<Eigen::Isometry3d> last_pose_wc_;
   /// Motion between the last two frames tracked with 3D points: what scales 2D-2D.
   std::optional<Eigen::Isometry3d> metric_velocity_;

@@ -43,7 +43,6 @@ class Map {
   /// Changes whenever anything in the map does: a tracker holding a LocalMap
   /// of the same revision need not take (or index) it again.
   std::uint64_t revision() const;
-  std::optional<Keyframe> lastKeyframe() const;
   std::optional<Eigen::Isometry3d> keyframePose(KeyframeId id) const;
   std::optional<MapPoint> mapPoint(MapPointId id) const;
   /// Points observed by the last `keyframes` keyframes of the current segment.

@@ -16,13 +16,12 @@ class MiniMapBuilder {
   /// Throws std::invalid_argument for 0.
   explicit MiniMapBuilder(std::size_t keyframes_per_minimap);
 
-  /// Every keyframe as a frame (id = keyframe id), every map point as a
-  /// landmark with all its observations, position and covariance.
+  /// Deprecated: call toLandmarkMap (landmark_conversion.h), which this forwards to.
   static LandmarkMap sessionMap(const Map& map);
 
   /// Consecutive mini-maps of up to N keyframes; a segment (tracking lost and
   /// restarted) always starts a new one. Each keeps only its keyframes'
-  /// observations (LandmarkMap::miniMap).
+  /// observations (LandmarkMap::miniMap of toLandmarkMap's session map).
   std::vector<LandmarkMap> build(const Map& map) const;
 
  private:

@@ -42,7 +42,8 @@ class RgbdSlam {
   /// One pose per frame that got one (camera-to-world), expressed through its
   /// reference keyframe as the backend left it.
   io::Trajectory trajectory() const;
-  LandmarkMap sessionMap() const { return MiniMapBuilder::sessionMap(map_); }
+  /// The whole map in registration's model (toLandmarkMap).
+  LandmarkMap sessionMap() const;
   std::vector<LandmarkMap> miniMaps() const { return minimap_builder_.build(map_); }
 
  private:

@@ -1,0 +1,174 @@
+// The Backend on its own, on a hand-made map of three keyframes with noisy
+// observations of known points: inline and background threads agree, flush
+// and the destructor leave no work behind, outliers leave the map, and every
+// request is counted.
+
+#include <chrono>
+#include <random>
+#include <thread>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "test_geometry_scene.h"
+#include "weighted_icp/frontend/backend.h"
+#include "weighted_icp/frontend/map.h"
+
+namespace {
+
+using namespace weighted_icp;
+using namespace weighted_icp::frontend;
+using weighted_icp::testing::makePose;
+using weighted_icp::testing::projectWorld;
+
+struct Scene {
+  io::PinholeCamera camera = weighted_icp::testing::syntheticCamera();
+  std::vector<Eigen::Isometry3d> true_poses_wc;
+  std::vector<Eigen::Vector3d> true_points;
+  MapPointId outlier_point = 0;  // its observation from the last keyframe is 40 px off
+};
+
+Scene makeScene() {
+  Scene scene;
+  scene.true_poses_wc = {Eigen::Isometry3d::Identity(), makePose({0, 2, 0}, {0.10, 0.0, 0.0}),
+                         makePose({1, 4, 0}, {0.20, 0.02, 0.0})};
+  std::mt19937 rng(7);
+  scene.true_points = weighted_icp::testing::pointsInView(scene.camera, scene.true_poses_wc[0], 80, 1.5, 3.0, rng);
+  return scene;
+}
+
+/// The scene as a SLAM map would hold it mid-session: keyframes after the
+/// first and every point off their true place, observations noisy. Seeded: two
+/// calls give the same map.
+void fillMap(Map& map, const Scene& scene) {
+  std::mt19937 rng(11);
+  for (std::size_t k = 0; k < scene.true_poses_wc.size(); ++k) {
+    Keyframe keyframe;
+    keyframe.pose_wc = k == 0 ? scene.true_poses_wc[k]
+                              : weighted_icp::testing::perturbPose(scene.true_poses_wc[k], 0.02, 1.0, rng);
+    map.addKeyframe(keyframe);
+  }
+  std::normal_distribution<double> offset(0.0, 0.02);
+  for (std::size_t j = 0; j < scene.true_points.size(); ++j) {
+    MapPoint point;
+    point.position = scene.true_points[j] + Eigen::Vector3d(offset(rng), offset(rng), offset(rng));
+    point.descriptor = cv::Mat(1, 32, CV_8U, cv::Scalar::all(0));
+    for (std::size_t k = 0; k < scene.true_poses_wc.size(); ++k) {
+      const Eigen::Vector3d in_camera = scene.true_poses_wc[k].inverse() * scene.true_points[j];
+      Eigen::Vector2d pixel = projectWorld(scene.camera, scene.true_poses_wc[k], scene.true_points[j]) +
+                              weighted_icp::testing::gaussianPixel(0.5, rng);
+      if (j == scene.outlier_point && k + 1 == scene.true_poses_wc.size()) pixel.x() += 40.0;
+      point.observations.push_back({k, pixel, in_camera.z()});
+    }
+    map.addMapPoint(std::move(point));
+  }
+}
+
+BackendOptions inlineOptions() {
+  BackendOptions options;
+  options.background_thread = false;
+  return options;
+}
+
+double worstPoseError(const Map& map, const Scene& scene) {
+  double worst = 0.0;
+  for (const Keyframe& keyframe : map.keyframes())
+    worst = std::max(worst, (keyframe.pose_wc.translation() - scene.true_poses_wc[keyframe.id].translation()).norm());
+  return worst;
+}
+
+TEST(Backend, InlineOptimisationMovesTheWindowTowardsTheTruthAndDropsTheOutlier) {
+  const Scene scene = makeScene();
+  Map map;
+  fillMap(map, scene);
+  const double error_before = worstPoseError(map, scene);
+  Backend backend(map, scene.camera, inlineOptions());
+  backend.keyframeInserted();
+  EXPECT_EQ(backend.optimizationsRun(), 1u);
+  EXPECT_LT(worstPoseError(map, scene), 0.2 * error_before);
+  EXPECT_EQ(map.keyframePose(0)->matrix(), scene.true_poses_wc[0].matrix());  // the oldest fixes the gauge
+  const MapPoint outlier = *map.mapPoint(scene.outlier_point);
+  EXPECT_EQ(outlier.observations.size(), scene.true_poses_wc.size() - 1);
+  for (const auto& observation : outlier.observations) EXPECT_NE(observation.keyframe, 2u);
+  // Covariances now come from the bundle adjustment, no longer the identity the points were made with.
+  EXPECT_LT(map.mapPoint(1)->covariance.norm(), 0.1);
+}
+
+TEST(Backend, BackgroundThreadGivesTheInlineMapOnceFlushed) {
+  const Scene scene = makeScene();
+  Map inline_map, background_map;
+  fillMap(inline_map, scene);
+  fillMap(background_map, scene);
+  Backend inline_backend(inline_map, scene.camera, inlineOptions());
+  Backend background_backend(background_map, scene.camera);
+  inline_backend.keyframeInserted();
+  background_backend.keyframeInserted();
+  background_backend.flush();
+  EXPECT_EQ(background_backend.optimizationsRun(), 1u);
+
+  const auto inline_keyframes = inline_map.keyframes(), background_keyframes = background_map.keyframes();
+  ASSERT_EQ(background_keyframes.size(), inline_keyframes.size());
+  for (std::size_t k = 0; k < inline_keyframes.size(); ++k)
+    EXPECT_EQ(background_keyframes[k].pose_wc.matrix(), inline_keyframes[k].pose_wc.matrix()) << "keyframe " << k;
+  const auto inline_points = inline_map.mapPoints(), background_points = background_map.mapPoints();
+  ASSERT_EQ(background_points.size(), inline_points.size());
+  for (std::size_t j = 0; j < inline_points.size(); ++j) {
+    EXPECT_EQ(background_points[j].position, inline_points[j].position) << "point " << j;
+    EXPECT_EQ(background_points[j].covariance, inline_points[j].covariance) << "point " << j;
+    EXPECT_EQ(background_points[j].observations.size(), inline_points[j].observations.size()) << "point " << j;
+  }
+}
+
+TEST(Backend, FlushReturnsWithNothingPendingOrRunning) {
+  const Scene scene = makeScene();
+  Map map;
+  fillMap(map, scene);
+  Backend backend(map, scene.camera);
+  backend.flush();  // nothing asked yet: returns at once
+  EXPECT_EQ(backend.optimizationsRun(), 0u);
+  for (int i = 0; i < 3; ++i) backend.keyframeInserted();
+  backend.flush();
+  // Requests arriving while one runs are merged, never lost: at least one, at most one each.
+  const std::size_t runs = backend.optimizationsRun();
+  EXPECT_GE(runs, 1u);
+  EXPECT_LE(runs, 3u);
+  const std::uint64_t revision = map.revision();
+  std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  EXPECT_EQ(map.revision(), revision);  // nothing was still on its way
+  EXPECT_EQ(backend.optimizationsRun(), runs);
+}
+
+TEST(Backend, DestructorFinishesPendingWorkBeforeJoining) {
+  const Scene scene = makeScene();
+  Map map;
+  fillMap(map, scene);
+  const std::uint64_t revision = map.revision();
+  const double error_before = worstPoseError(map, scene);
+  {
+    Backend backend(map, scene.camera);
+    backend.keyframeInserted();
+  }  // joins here, with the request possibly not even started
+  EXPECT_GT(map.revision(), revision);
+  EXPECT_LT(worstPoseError(map, scene), error_before);
+}
+
+TEST(Backend, ASingleKeyframeIsCountedButLeftAlone) {
+  const Scene scene = makeScene();
+  Map map;
+  Keyframe keyframe;
+  map.addKeyframe(keyframe);
+  map.addMapPoint([] {
+    MapPoint point;
+    point.position = Eigen::Vector3d(0.0, 0.0, 2.0);
+    point.observations.push_back({0, Eigen::Vector2d(320.0, 240.0), 2.0});
+    return point;
+  }());
+  const std::uint64_t revision = map.revision();
+  Backend backend(map, scene.camera, inlineOptions());
+  backend.keyframeInserted();
+  backend.keyframeInserted();
+  EXPECT_EQ(backend.optimizationsRun(), 2u);  // each inline request counts
+  EXPECT_EQ(map.revision(), revision);        // one pose is all gauge: nothing to optimise
+}
+
+}  // namespace

@@ -1,0 +1,188 @@
+// The Frontend on its own (with a Map and an inline Backend, no RgbdSlam), on
+// the first frames of the synthetic sequence: how it starts, tracks, loses
+// track and starts again, through its FrontendState, and what it refuses.
+
+#include <memory>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "weighted_icp/frontend/backend.h"
+#include "weighted_icp/frontend/frontend.h"
+#include "weighted_icp/frontend/map.h"
+#include "weighted_icp/io/synthetic_rgbd.h"
+
+namespace {
+
+using namespace weighted_icp;
+using frontend::FrontendState;
+using frontend::TrackingStatus;
+
+/// Map, inline backend and front end, declared in the order they depend on each other.
+struct Tracker {
+  explicit Tracker(const io::PinholeCamera& camera)
+      : backend(map, camera, backendOptions()), frontend(map, backend, camera, frontendOptions()) {}
+
+  static frontend::BackendOptions backendOptions() {
+    frontend::BackendOptions options;
+    options.background_thread = false;  // reproducible, and the map is final after each frame
+    return options;
+  }
+  static frontend::FrontendOptions frontendOptions() {
+    frontend::FrontendOptions options;
+    options.quality_gate = false;  // a blank frame must count as lost, not as a bad image
+    return options;
+  }
+
+  frontend::Map map;
+  frontend::Backend backend;
+  frontend::Frontend frontend;
+};
+
+class FrontendTracking : public ::testing::Test {
+ protected:
+  static constexpr std::size_t kFrames = 10;
+
+  /// Renders the frames once for every test (the renderer is the slow part).
+  static void SetUpTestSuite() {
+    io::SyntheticRgbdOptions options;
+    options.frames = kFrames;
+    sequence_ = std::make_unique<io::SyntheticRgbdSequence>(options);
+    for (std::size_t i = 0; i < kFrames; ++i) {
+      const io::SyntheticRgbdFrame frame = sequence_->frame(i);
+      cv::Mat depth;
+      frame.depth.convertTo(depth, CV_32F, 1.0 / sequence_->options().camera.depth_factor);
+      images_.push_back({frame.timestamp, frame.color, depth});
+    }
+  }
+  static void TearDownTestSuite() {
+    images_.clear();
+    sequence_.reset();
+  }
+
+  static const io::PinholeCamera& camera() { return sequence_->options().camera; }
+  static frontend::RgbdImage image(std::size_t i) {
+    const frontend::RgbdImage& stored = images_.at(i);
+    return {stored.timestamp, stored.color.clone(), stored.depth.clone()};
+  }
+  static frontend::RgbdImage blank(std::size_t i) {
+    frontend::RgbdImage blank = image(i);
+    blank.color.setTo(cv::Scalar::all(0));  // no features at all
+    blank.depth.setTo(0.0f);
+    return blank;
+  }
+  /// The true pose of frame i relative to frame 0, where the front end starts its map.
+  static Eigen::Isometry3d truthFromFirst(std::size_t i) {
+    return sequence_->cameraToWorld(0).inverse() * sequence_->cameraToWorld(i);
+  }
+
+  static std::unique_ptr<io::SyntheticRgbdSequence> sequence_;
+  static std::vector<frontend::RgbdImage> images_;
+};
+
+std::unique_ptr<io::SyntheticRgbdSequence> FrontendTracking::sequence_;
+std::vector<frontend::RgbdImage> FrontendTracking::images_;
+
+TEST_F(FrontendTracking, TheFirstFrameStartsTheFirstSegmentAsAKeyframe) {
+  Tracker tracker(camera());
+  EXPECT_EQ(tracker.frontend.state(), FrontendState::Initializing);
+  const frontend::TrackingResult result = tracker.frontend.track(image(0));
+  EXPECT_EQ(result.status, TrackingStatus::Initialized);
+  EXPECT_TRUE(result.hasPose());
+  EXPECT_TRUE(result.keyframe);
+  EXPECT_TRUE(result.pose_wc.isApprox(Eigen::Isometry3d::Identity()));
+  EXPECT_GT(result.features, 0u);
+  EXPECT_EQ(tracker.frontend.state(), FrontendState::Tracking);
+  EXPECT_EQ(tracker.frontend.segment(), 0u);
+  ASSERT_EQ(tracker.map.keyframeCount(), 1u);
+  EXPECT_EQ(tracker.map.keyframes()[0].segment, 0u);
+  EXPECT_GE(tracker.map.mapPointCount(), Tracker::frontendOptions().min_initial_points);
+}
+
+TEST_F(FrontendTracking, FollowingFramesAreTrackedAgainstTheMap) {
+  Tracker tracker(camera());
+  tracker.frontend.track(image(0));
+  for (std::size_t i = 1; i < kFrames; ++i) {
+    const frontend::TrackingResult result = tracker.frontend.track(image(i));
+    ASSERT_EQ(result.status, TrackingStatus::Tracked) << "frame " << i << ": " << result.reason;
+    EXPECT_EQ(tracker.frontend.state(), FrontendState::Tracking);
+    EXPECT_GE(result.inliers, static_cast<std::size_t>(Tracker::frontendOptions().pnp.min_inliers));
+    EXPECT_LE(result.inliers, result.matches);
+    EXPECT_LT((result.pose_wc.translation() - truthFromFirst(i).translation()).norm(), 0.01) << "frame " << i;
+    // The pose relative to its reference keyframe gives the pose back.
+    const Eigen::Isometry3d reference = *tracker.map.keyframePose(result.reference_keyframe);
+    EXPECT_TRUE((reference * result.pose_in_reference).isApprox(result.pose_wc, 1e-9));
+  }
+  EXPECT_EQ(tracker.frontend.segment(), 0u);
+}
+
+TEST_F(FrontendTracking, TooFewFeaturesWithDepthAreLostWithAReasonAndStartNothing) {
+  Tracker tracker(camera());
+  frontend::RgbdImage no_depth = image(0);
+  no_depth.depth.setTo(0.0f);
+  const frontend::TrackingResult result = tracker.frontend.track(no_depth);
+  EXPECT_EQ(result.status, TrackingStatus::Lost);
+  EXPECT_FALSE(result.hasPose());
+  EXPECT_NE(result.reason.find("depth"), std::string::npos) << result.reason;
+  EXPECT_GT(result.features, Tracker::frontendOptions().min_initial_points);  // features, just no depth
+  EXPECT_EQ(tracker.frontend.state(), FrontendState::Initializing);
+  EXPECT_EQ(tracker.map.keyframeCount(), 0u);
+
+  EXPECT_EQ(tracker.frontend.track(image(1)).status, TrackingStatus::Initialized);
+  EXPECT_EQ(tracker.frontend.segment(), 0u);  // nothing had started, so nothing ended
+}
+
+TEST_F(FrontendTracking, ALossEndsTheSegmentAndTheNextGoodFrameStartsANewOne) {
+  Tracker tracker(camera());
+  frontend::TrackingResult last_tracked;
+  for (std::size_t i = 0; i < 5; ++i) last_tracked = tracker.frontend.track(image(i));
+  ASSERT_EQ(last_tracked.status, TrackingStatus::Tracked);
+  const std::size_t keyframes = tracker.map.keyframeCount();
+
+  const frontend::TrackingResult lost = tracker.frontend.track(blank(5));
+  EXPECT_EQ(lost.status, TrackingStatus::Lost);
+  EXPECT_FALSE(lost.reason.empty());
+  EXPECT_EQ(tracker.frontend.state(), FrontendState::Lost);
+  EXPECT_EQ(tracker.frontend.segment(), 1u);
+  // Still nothing to start from: still lost, and the same segment waits.
+  EXPECT_EQ(tracker.frontend.track(blank(6)).status, TrackingStatus::Lost);
+  EXPECT_EQ(tracker.frontend.state(), FrontendState::Lost);
+  EXPECT_EQ(tracker.frontend.segment(), 1u);
+  EXPECT_EQ(tracker.map.keyframeCount(), keyframes);  // what was mapped stays
+
+  const frontend::TrackingResult restarted = tracker.frontend.track(image(7));
+  EXPECT_EQ(restarted.status, TrackingStatus::Initialized);
+  EXPECT_TRUE(restarted.keyframe);
+  EXPECT_EQ(tracker.frontend.state(), FrontendState::Tracking);
+  // The new segment continues from the last known pose, so mini-maps share one world frame.
+  EXPECT_EQ(restarted.pose_wc.matrix(), last_tracked.pose_wc.matrix());
+  const auto all_keyframes = tracker.map.keyframes();
+  ASSERT_EQ(all_keyframes.size(), keyframes + 1);
+  EXPECT_EQ(all_keyframes.back().segment, 1u);
+  EXPECT_EQ(all_keyframes.front().segment, 0u);
+  // The local map is now the new segment's only: tracking goes on from it.
+  EXPECT_EQ(tracker.frontend.track(image(8)).status, TrackingStatus::Tracked);
+  EXPECT_EQ(tracker.frontend.segment(), 1u);
+}
+
+TEST_F(FrontendTracking, BadImagesThrowAndChangeNothing) {
+  Tracker tracker(camera());
+  const frontend::RgbdImage good = image(0);
+  EXPECT_THROW(tracker.frontend.track({0.0, cv::Mat(), cv::Mat()}), std::invalid_argument);
+  EXPECT_THROW(tracker.frontend.track({0.0, good.color, cv::Mat(240, 320, CV_32F, cv::Scalar::all(1.0))}),
+               std::invalid_argument);
+  cv::Mat millimetres;
+  good.depth.convertTo(millimetres, CV_16U, 1000.0);
+  EXPECT_THROW(tracker.frontend.track({0.0, good.color, millimetres}), std::invalid_argument);
+  EXPECT_EQ(tracker.frontend.state(), FrontendState::Initializing);
+  EXPECT_EQ(tracker.map.keyframeCount(), 0u);
+  EXPECT_EQ(tracker.frontend.track(good).status, TrackingStatus::Initialized);
+}
+
+TEST(FrontendStateNames, AreLowerCaseWords) {
+  EXPECT_EQ(frontend::toString(FrontendState::Initializing), "initializing");
+  EXPECT_EQ(frontend::toString(FrontendState::Tracking), "tracking");
+  EXPECT_EQ(frontend::toString(FrontendState::Lost), "lost");
+}
+
+}  // namespace
