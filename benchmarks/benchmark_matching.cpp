@@ -20,8 +20,8 @@
 
 #include "test_perception_support.h"
 #include "benchmark_arguments.h"
-#include "weighted_icp/frontend/descriptor_matcher.h"
-#include "weighted_icp/frontend/feature_extractor.h"
+#include "weighted_icp/frontend/perception/descriptor_matcher.h"
+#include "weighted_icp/frontend/perception/feature_extractor.h"
 
 namespace {
 

@@ -22,7 +22,7 @@
 #include <opencv2/rgbd.hpp>
 
 #include "weighted_icp/core/statistics.h"
-#include "weighted_icp/frontend/rgbd_slam.h"
+#include "weighted_icp/frontend/slam/rgbd_slam.h"
 #include "weighted_icp/io/synthetic_rgbd.h"
 #include "weighted_icp/io/trajectory.h"
 #include "weighted_icp/io/tum_sequence.h"
@@ -36,7 +36,7 @@ namespace {
 struct Sequence {
   std::string name;
   io::PinholeCamera camera;
-  std::vector<frontend::RgbdImage> frames;
+  std::vector<RgbdFrame> frames;
   io::Trajectory truth;
 };
 

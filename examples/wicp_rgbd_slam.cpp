@@ -17,7 +17,7 @@
 
 #include "tool_support.h"
 #include "weighted_icp/core/statistics.h"
-#include "weighted_icp/frontend/rgbd_slam.h"
+#include "weighted_icp/frontend/slam/rgbd_slam.h"
 #include "weighted_icp/io/cloud_io.h"
 #include "weighted_icp/io/map_format.h"
 #include "weighted_icp/io/synthetic_rgbd.h"
@@ -37,7 +37,7 @@ class FrameSource {
  public:
   virtual ~FrameSource() = default;
   virtual std::size_t size() const = 0;
-  virtual frontend::RgbdImage load(std::size_t i) const = 0;
+  virtual RgbdFrame load(std::size_t i) const = 0;
   virtual io::Trajectory groundTruth() const = 0;
   virtual const io::PinholeCamera& camera() const = 0;
   virtual std::string describe() const = 0;
@@ -47,7 +47,7 @@ class TumSource : public FrameSource {
  public:
   TumSource(const std::string& dir, io::PinholeCamera camera) : sequence_(io::TumSequence::open(dir)), camera_(camera) {}
   std::size_t size() const override { return sequence_.size(); }
-  frontend::RgbdImage load(std::size_t i) const override {
+  RgbdFrame load(std::size_t i) const override {
     RgbdFrame images = sequence_.loadFrame(i, camera_);
     if (images.validDepthPixels() == 0)
       std::cerr << "wicp_rgbd_slam: warning: " << sequence_.frame(i).depth_path
@@ -67,7 +67,7 @@ class SyntheticSource : public FrameSource {
  public:
   explicit SyntheticSource(const io::SyntheticRgbdOptions& options) : sequence_(options) {}
   std::size_t size() const override { return sequence_.size(); }
-  frontend::RgbdImage load(std::size_t i) const override {
+  RgbdFrame load(std::size_t i) const override {
     io::SyntheticRgbdFrame frame = sequence_.frame(i);
     cv::Mat depth;
     frame.depth.convertTo(depth, CV_32F, 1.0 / sequence_.options().camera.depth_factor);
@@ -154,7 +154,7 @@ int main(int argc, char** argv) {
     tools::Progress progress("tracking", frames);
     std::size_t unreadable = 0;
     for (std::size_t i = 0; i < frames; ++i) {
-      frontend::RgbdImage image;
+      RgbdFrame image;
       try {
         image = source->load(i);
       } catch (const std::exception& e) {

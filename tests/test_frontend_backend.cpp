@@ -11,8 +11,8 @@
 #include <gtest/gtest.h>
 
 #include "test_geometry_scene.h"
-#include "weighted_icp/frontend/backend.h"
-#include "weighted_icp/frontend/map.h"
+#include "weighted_icp/frontend/slam/backend.h"
+#include "weighted_icp/frontend/slam/map.h"
 
 namespace {
 

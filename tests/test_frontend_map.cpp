@@ -10,7 +10,7 @@
 
 #include <gtest/gtest.h>
 
-#include "weighted_icp/frontend/map.h"
+#include "weighted_icp/frontend/slam/map.h"
 
 namespace {
 

@@ -9,9 +9,9 @@
 #include <gtest/gtest.h>
 
 #include "landmark_map_expectations.h"
-#include "weighted_icp/frontend/landmark_conversion.h"
-#include "weighted_icp/frontend/map.h"
-#include "weighted_icp/frontend/minimap_builder.h"
+#include "weighted_icp/frontend/slam/landmark_conversion.h"
+#include "weighted_icp/frontend/slam/map.h"
+#include "weighted_icp/frontend/slam/minimap_builder.h"
 
 namespace {
 

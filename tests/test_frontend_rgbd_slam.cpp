@@ -10,7 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "test_support.h"
-#include "weighted_icp/frontend/rgbd_slam.h"
+#include "weighted_icp/frontend/slam/rgbd_slam.h"
 #include "weighted_icp/io/synthetic_rgbd.h"
 #include "weighted_icp/io/trajectory.h"
 #include "weighted_icp/io/tum_sequence.h"
@@ -26,7 +26,7 @@ frontend::RgbdSlamOptions deterministic() {
   return options;
 }
 
-frontend::RgbdImage toImage(const io::SyntheticRgbdFrame& frame, const io::PinholeCamera& camera) {
+RgbdFrame toImage(const io::SyntheticRgbdFrame& frame, const io::PinholeCamera& camera) {
   cv::Mat depth;
   frame.depth.convertTo(depth, CV_32F, 1.0 / camera.depth_factor);
   return {frame.timestamp, frame.color, depth};
@@ -137,7 +137,7 @@ TEST(RgbdSlam, AnUntrackableFrameStartsANewSegmentAndKeepsTheMap) {
   frontend::RgbdSlam slam(sequence.options().camera, slam_options);
   std::size_t keyframes_before = 0;
   for (std::size_t i = 0; i < sequence.size(); ++i) {
-    frontend::RgbdImage image = toImage(sequence.frame(i), sequence.options().camera);
+    RgbdFrame image = toImage(sequence.frame(i), sequence.options().camera);
     if (i == 30) {
       keyframes_before = slam.map().keyframeCount();
       image.color.setTo(cv::Scalar::all(0));  // no features: cannot be tracked
@@ -170,7 +170,7 @@ TEST(RgbdSlam, FramesWithoutDepthAreTrackedTwoDimensionally) {
   io::Trajectory truth;
   std::size_t relative = 0;
   for (std::size_t i = 0; i < sequence.size(); ++i) {
-    frontend::RgbdImage image = toImage(sequence.frame(i), sequence.options().camera);
+    RgbdFrame image = toImage(sequence.frame(i), sequence.options().camera);
     // The depth sensor drops out: no new landmarks, and once the old ones are
     // out of view (about frame 75) only 2D-2D geometry is left.
     if (i >= 5) image.depth.setTo(0.0f);

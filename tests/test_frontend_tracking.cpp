@@ -7,9 +7,9 @@
 
 #include <gtest/gtest.h>
 
-#include "weighted_icp/frontend/backend.h"
-#include "weighted_icp/frontend/frontend.h"
-#include "weighted_icp/frontend/map.h"
+#include "weighted_icp/frontend/slam/backend.h"
+#include "weighted_icp/frontend/slam/frontend.h"
+#include "weighted_icp/frontend/slam/map.h"
 #include "weighted_icp/io/synthetic_rgbd.h"
 
 namespace {
@@ -61,12 +61,12 @@ class FrontendTracking : public ::testing::Test {
   }
 
   static const io::PinholeCamera& camera() { return sequence_->options().camera; }
-  static frontend::RgbdImage image(std::size_t i) {
-    const frontend::RgbdImage& stored = images_.at(i);
+  static RgbdFrame image(std::size_t i) {
+    const RgbdFrame& stored = images_.at(i);
     return {stored.timestamp, stored.color.clone(), stored.depth.clone()};
   }
-  static frontend::RgbdImage blank(std::size_t i) {
-    frontend::RgbdImage blank = image(i);
+  static RgbdFrame blank(std::size_t i) {
+    RgbdFrame blank = image(i);
     blank.color.setTo(cv::Scalar::all(0));  // no features at all
     blank.depth.setTo(0.0f);
     return blank;
@@ -77,11 +77,11 @@ class FrontendTracking : public ::testing::Test {
   }
 
   static std::unique_ptr<io::SyntheticRgbdSequence> sequence_;
-  static std::vector<frontend::RgbdImage> images_;
+  static std::vector<RgbdFrame> images_;
 };
 
 std::unique_ptr<io::SyntheticRgbdSequence> FrontendTracking::sequence_;
-std::vector<frontend::RgbdImage> FrontendTracking::images_;
+std::vector<RgbdFrame> FrontendTracking::images_;
 
 TEST_F(FrontendTracking, TheFirstFrameStartsTheFirstSegmentAsAKeyframe) {
   Tracker tracker(camera());
@@ -118,7 +118,7 @@ TEST_F(FrontendTracking, FollowingFramesAreTrackedAgainstTheMap) {
 
 TEST_F(FrontendTracking, TooFewFeaturesWithDepthAreLostWithAReasonAndStartNothing) {
   Tracker tracker(camera());
-  frontend::RgbdImage no_depth = image(0);
+  RgbdFrame no_depth = image(0);
   no_depth.depth.setTo(0.0f);
   const frontend::TrackingResult result = tracker.frontend.track(no_depth);
   EXPECT_EQ(result.status, TrackingStatus::Lost);
@@ -167,7 +167,7 @@ TEST_F(FrontendTracking, ALossEndsTheSegmentAndTheNextGoodFrameStartsANewOne) {
 
 TEST_F(FrontendTracking, BadImagesThrowAndChangeNothing) {
   Tracker tracker(camera());
-  const frontend::RgbdImage good = image(0);
+  const RgbdFrame good = image(0);
   EXPECT_THROW(tracker.frontend.track({0.0, cv::Mat(), cv::Mat()}), std::invalid_argument);
   EXPECT_THROW(tracker.frontend.track({0.0, good.color, cv::Mat(240, 320, CV_32F, cv::Scalar::all(1.0))}),
                std::invalid_argument);

@@ -10,8 +10,8 @@
 #include <gtest/gtest.h>
 
 #include "test_geometry_scene.h"
-#include "weighted_icp/frontend/local_bundle_adjustment.h"
-#include "weighted_icp/frontend/reprojection_residual.h"
+#include "weighted_icp/frontend/geometry/local_bundle_adjustment.h"
+#include "weighted_icp/frontend/geometry/reprojection_residual.h"
 #include "weighted_icp/registration/rigid_motion.h"
 
 namespace {

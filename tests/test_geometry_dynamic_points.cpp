@@ -6,7 +6,7 @@
 #include <gtest/gtest.h>
 
 #include "test_geometry_scene.h"
-#include "weighted_icp/frontend/dynamic_point_filter.h"
+#include "weighted_icp/frontend/geometry/dynamic_point_filter.h"
 
 namespace {
 

@@ -6,8 +6,8 @@
 #include <gtest/gtest.h>
 
 #include "test_geometry_scene.h"
-#include "weighted_icp/frontend/depth_noise_model.h"
-#include "weighted_icp/frontend/motion_model.h"
+#include "weighted_icp/frontend/geometry/depth_noise_model.h"
+#include "weighted_icp/frontend/geometry/motion_model.h"
 
 namespace {
 

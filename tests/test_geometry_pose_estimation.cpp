@@ -11,7 +11,7 @@
 #include <gtest/gtest.h>
 
 #include "test_geometry_scene.h"
-#include "weighted_icp/frontend/pose_estimation.h"
+#include "weighted_icp/frontend/geometry/pose_estimation.h"
 #include "weighted_icp/registration/rigid_motion.h"
 
 namespace {

@@ -11,7 +11,7 @@
 
 #include "test_perception_support.h"
 #include "test_support.h"
-#include "weighted_icp/frontend/feature_extractor.h"
+#include "weighted_icp/frontend/perception/feature_extractor.h"
 
 namespace {
 

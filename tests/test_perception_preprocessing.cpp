@@ -5,7 +5,7 @@
 
 #include "test_perception_support.h"
 #include "test_support.h"
-#include "weighted_icp/frontend/image_preprocessor.h"
+#include "weighted_icp/frontend/perception/image_preprocessor.h"
 
 namespace {
 

@@ -10,7 +10,7 @@
 
 #include "test_perception_support.h"
 #include "test_support.h"
-#include "weighted_icp/frontend/image_quality_gate.h"
+#include "weighted_icp/frontend/perception/image_quality_gate.h"
 
 namespace {
 

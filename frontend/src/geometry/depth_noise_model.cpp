@@ -1,4 +1,4 @@
-#include "weighted_icp/frontend/depth_noise_model.h"
+#include "weighted_icp/frontend/geometry/depth_noise_model.h"
 
 #include <cmath>
 #include <stdexcept>
@@ -12,7 +12,7 @@ namespace weighted_icp::frontend {
 
 double DepthNoiseModel::sigmaDepth(double z) const { return depth_sigma_coefficient * z * z; }
 
-Eigen::Matrix3d pointCovarianceCamera(const io::PinholeCamera& camera, double u, double v, double z,
+Eigen::Matrix3d pointCovarianceCamera(const PinholeCamera& camera, double u, double v, double z,
                                       const DepthNoiseModel& noise) {
   if (const auto problem = detail::cameraProblem(camera)) throw std::invalid_argument(*problem);
   if (!(std::isfinite(z) && z > 0))

@@ -1,4 +1,4 @@
-#include "weighted_icp/frontend/dynamic_point_filter.h"
+#include "weighted_icp/frontend/geometry/dynamic_point_filter.h"
 
 #include <algorithm>
 #include <cmath>
@@ -66,7 +66,7 @@ std::vector<bool> flagDynamicByDisplacement(const std::vector<Eigen::Vector3d>& 
 
 std::vector<double> symmetricEpipolarDistances(const std::vector<Eigen::Vector2d>& pixels1,
                                                const std::vector<Eigen::Vector2d>& pixels2,
-                                               const Eigen::Isometry3d& pose_2_in_1, const io::PinholeCamera& camera) {
+                                               const Eigen::Isometry3d& pose_2_in_1, const PinholeCamera& camera) {
   requireSameSize(pixels1, pixels2, "symmetricEpipolarDistances");
   if (const auto problem = detail::cameraProblem(camera))
     throw std::invalid_argument("symmetricEpipolarDistances: " + *problem);
@@ -90,7 +90,7 @@ std::vector<double> symmetricEpipolarDistances(const std::vector<Eigen::Vector2d
 
 std::vector<bool> flagDynamicByEpipolarDistance(const std::vector<Eigen::Vector2d>& pixels1,
                                                 const std::vector<Eigen::Vector2d>& pixels2,
-                                                const Eigen::Isometry3d& pose_2_in_1, const io::PinholeCamera& camera,
+                                                const Eigen::Isometry3d& pose_2_in_1, const PinholeCamera& camera,
                                                 const DynamicPointFilterOptions& options) {
   const std::vector<double> distances = symmetricEpipolarDistances(pixels1, pixels2, pose_2_in_1, camera);
   std::vector<bool> flags(distances.size(), false);

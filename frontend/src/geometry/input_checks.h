@@ -7,12 +7,12 @@
 
 #include <Eigen/Geometry>
 
-#include "weighted_icp/io/camera.h"
+#include "weighted_icp/core/camera.h"
 
 namespace weighted_icp::frontend::detail {
 
 /// Why the intrinsics cannot project, or nothing.
-inline std::optional<std::string> cameraProblem(const io::PinholeCamera& camera) {
+inline std::optional<std::string> cameraProblem(const PinholeCamera& camera) {
   if (!(std::isfinite(camera.fx) && std::isfinite(camera.fy) && camera.fx > 0 && camera.fy > 0 &&
         std::isfinite(camera.cx) && std::isfinite(camera.cy)))
     return "invalid intrinsics: fx=" + std::to_string(camera.fx) + " fy=" + std::to_string(camera.fy) +

@@ -1,4 +1,4 @@
-#include "weighted_icp/frontend/local_bundle_adjustment.h"
+#include "weighted_icp/frontend/geometry/local_bundle_adjustment.h"
 
 #include <algorithm>
 #include <cmath>
@@ -14,7 +14,7 @@
 
 #include "input_checks.h"
 #include "solver_options.h"
-#include "weighted_icp/frontend/reprojection_residual.h"
+#include "weighted_icp/frontend/geometry/reprojection_residual.h"
 
 namespace weighted_icp::frontend {
 
@@ -23,7 +23,7 @@ namespace {
 constexpr double kOutlierHuberFactor = 3.0;
 constexpr double kChi2TwoDof95 = 5.991, kChi2ThreeDof95 = 7.815;
 
-std::optional<std::string> problemDescription(const BundleAdjustmentProblem& problem, const io::PinholeCamera& camera,
+std::optional<std::string> problemDescription(const BundleAdjustmentProblem& problem, const PinholeCamera& camera,
                                               const BundleAdjustmentOptions& options) {
   if (const auto camera_problem = detail::cameraProblem(camera)) return *camera_problem;
   if (problem.poses_wc.empty()) return "no pose";
@@ -65,7 +65,7 @@ bool usesDepth(const BundleAdjustmentProblem::Observation& observation, const Bu
 }
 
 /// Reprojection error in pixels, or NaN behind the camera.
-double reprojectionError(const io::PinholeCamera& camera, const PoseParameters& pose,
+double reprojectionError(const PinholeCamera& camera, const PoseParameters& pose,
                          const Eigen::Vector3d& point_world, const Eigen::Vector2d& pixel) {
   const Eigen::Vector3d p = pose.toCamera(point_world);
   if (p.z() < kMinPointDepth) return std::numeric_limits<double>::quiet_NaN();
@@ -132,7 +132,7 @@ Unknowns initialUnknowns(const BundleAdjustmentProblem& problem) {
 
 /// Reprojection error of each observation at `unknowns`; NaN behind the camera
 /// or where `usable` (if given) is NaN.
-std::vector<double> reprojectionErrors(const BundleAdjustmentProblem& problem, const io::PinholeCamera& camera,
+std::vector<double> reprojectionErrors(const BundleAdjustmentProblem& problem, const PinholeCamera& camera,
                                        const Unknowns& unknowns, const std::vector<double>* usable = nullptr) {
   std::vector<double> errors(problem.observations.size(), std::numeric_limits<double>::quiet_NaN());
   for (std::size_t i = 0; i < problem.observations.size(); ++i) {
@@ -146,7 +146,7 @@ std::vector<double> reprojectionErrors(const BundleAdjustmentProblem& problem, c
 
 /// Pose and point blocks (points eliminated first by DENSE_SCHUR), one
 /// residual block per observation with a reprojection at the start.
-void buildProblem(const BundleAdjustmentProblem& problem, const io::PinholeCamera& camera,
+void buildProblem(const BundleAdjustmentProblem& problem, const PinholeCamera& camera,
                   const BundleAdjustmentOptions& options, const HuberThresholds& huber,
                   const std::vector<double>& initial_errors, Unknowns& unknowns, SolverProblem& solver) {
   const auto makeLoss = [](double delta) -> std::unique_ptr<ceres::LossFunction> {
@@ -220,7 +220,7 @@ void classifyOutliers(const std::vector<double>& initial_errors, const std::vect
 /// Per point, the Gauss-Newton information from its observations with a
 /// reprojection after the solve (outliers included), poses fixed, each with
 /// the Huber weight the solve gave it.
-std::vector<Eigen::Matrix3d> pointInformation(const BundleAdjustmentProblem& problem, const io::PinholeCamera& camera,
+std::vector<Eigen::Matrix3d> pointInformation(const BundleAdjustmentProblem& problem, const PinholeCamera& camera,
                                               const BundleAdjustmentOptions& options, const HuberThresholds& huber,
                                               const std::vector<double>& final_errors, const Unknowns& unknowns) {
   const double pixel_sigma = options.noise.pixel_sigma;
@@ -258,7 +258,7 @@ void writeBack(const Unknowns& unknowns, const SolverProblem& solver, BundleAdju
 
 }  // namespace
 
-BundleAdjustmentSummary solveLocalBundleAdjustment(BundleAdjustmentProblem& problem, const io::PinholeCamera& camera,
+BundleAdjustmentSummary solveLocalBundleAdjustment(BundleAdjustmentProblem& problem, const PinholeCamera& camera,
                                                    const BundleAdjustmentOptions& options) {
   BundleAdjustmentSummary summary;
   if (const auto description = problemDescription(problem, camera, options)) {

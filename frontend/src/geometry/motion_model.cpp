@@ -1,4 +1,4 @@
-#include "weighted_icp/frontend/motion_model.h"
+#include "weighted_icp/frontend/geometry/motion_model.h"
 
 #include <stdexcept>
 

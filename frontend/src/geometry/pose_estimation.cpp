@@ -1,4 +1,4 @@
-#include "weighted_icp/frontend/pose_estimation.h"
+#include "weighted_icp/frontend/geometry/pose_estimation.h"
 
 #include <cmath>
 #include <stdexcept>
@@ -12,7 +12,7 @@
 
 #include "input_checks.h"
 #include "solver_options.h"
-#include "weighted_icp/frontend/reprojection_residual.h"
+#include "weighted_icp/frontend/geometry/reprojection_residual.h"
 
 namespace weighted_icp::frontend {
 
@@ -34,7 +34,7 @@ std::optional<std::string> pnpOptionsProblem(const PnpOptions& options) {
 /// The candidates in front of the camera whose reprojection error is at most `threshold_px`.
 std::vector<int> selectInliers(const std::vector<Eigen::Vector3d>& points_world,
                                const std::vector<Eigen::Vector2d>& pixels, const std::vector<int>& candidates,
-                               const io::PinholeCamera& camera, const Eigen::Isometry3d& pose_wc, double threshold_px) {
+                               const PinholeCamera& camera, const Eigen::Isometry3d& pose_wc, double threshold_px) {
   const Eigen::Isometry3d pose_cw = pose_wc.inverse();
   std::vector<int> inliers;
   for (const int i : candidates) {
@@ -46,7 +46,7 @@ std::vector<int> selectInliers(const std::vector<Eigen::Vector3d>& points_world,
 }
 
 double rmsReprojection(const std::vector<Eigen::Vector3d>& points_world, const std::vector<Eigen::Vector2d>& pixels,
-                       const std::vector<int>& use, const io::PinholeCamera& camera, const Eigen::Isometry3d& pose_wc) {
+                       const std::vector<int>& use, const PinholeCamera& camera, const Eigen::Isometry3d& pose_wc) {
   if (use.empty()) return 0.0;
   const Eigen::Isometry3d pose_cw = pose_wc.inverse();
   double sum = 0.0;
@@ -58,7 +58,7 @@ double rmsReprojection(const std::vector<Eigen::Vector3d>& points_world, const s
 /// indices), or no inliers when RANSAC finds no model.
 std::pair<Eigen::Isometry3d, std::vector<int>> ransacPnp(const std::vector<Eigen::Vector3d>& points_world,
                                                          const std::vector<Eigen::Vector2d>& pixels,
-                                                         const std::vector<int>& valid, const io::PinholeCamera& camera,
+                                                         const std::vector<int>& valid, const PinholeCamera& camera,
                                                          const PnpOptions& options) {
   std::vector<cv::Point3d> object_points;
   std::vector<cv::Point2d> image_points;
@@ -100,7 +100,7 @@ std::pair<Eigen::Isometry3d, std::vector<int>> ransacPnp(const std::vector<Eigen
 }
 
 Eigen::Isometry3d refinePose(const std::vector<Eigen::Vector3d>& points_world, const std::vector<Eigen::Vector2d>& pixels,
-                             const std::vector<int>& use, const io::PinholeCamera& camera,
+                             const std::vector<int>& use, const PinholeCamera& camera,
                              const Eigen::Isometry3d& initial_wc, double huber_px, int max_iterations,
                              const DepthMeasurements* depth) {
   if (points_world.size() != pixels.size())
@@ -151,14 +151,14 @@ Eigen::Isometry3d refinePose(const std::vector<Eigen::Vector3d>& points_world, c
 
 Eigen::Isometry3d refinePoseHuber(const std::vector<Eigen::Vector3d>& points_world,
                                   const std::vector<Eigen::Vector2d>& pixels, const std::vector<int>& use,
-                                  const io::PinholeCamera& camera, const Eigen::Isometry3d& initial_wc, double huber_px,
+                                  const PinholeCamera& camera, const Eigen::Isometry3d& initial_wc, double huber_px,
                                   int max_iterations) {
   return refinePose(points_world, pixels, use, camera, initial_wc, huber_px, max_iterations, nullptr);
 }
 
 Eigen::Isometry3d refinePoseHuber(const std::vector<Eigen::Vector3d>& points_world,
                                   const std::vector<Eigen::Vector2d>& pixels, const std::vector<int>& use,
-                                  const io::PinholeCamera& camera, const Eigen::Isometry3d& initial_wc, double huber_px,
+                                  const PinholeCamera& camera, const Eigen::Isometry3d& initial_wc, double huber_px,
                                   int max_iterations, const DepthMeasurements& depth) {
   if (depth.depths.size() != points_world.size())
     throw std::invalid_argument("refinePoseHuber: " + std::to_string(depth.depths.size()) + " depths for " +
@@ -167,7 +167,7 @@ Eigen::Isometry3d refinePoseHuber(const std::vector<Eigen::Vector3d>& points_wor
 }
 
 PoseEstimate estimatePosePnp(const std::vector<Eigen::Vector3d>& points_world,
-                             const std::vector<Eigen::Vector2d>& pixels, const io::PinholeCamera& camera,
+                             const std::vector<Eigen::Vector2d>& pixels, const PinholeCamera& camera,
                              const std::optional<Eigen::Isometry3d>& guess_wc, const PnpOptions& options) {
   PoseEstimate estimate;
   if (points_world.size() != pixels.size()) {

@@ -16,7 +16,7 @@
 
 #include "input_checks.h"
 #include "solver_options.h"
-#include "weighted_icp/frontend/pose_estimation.h"
+#include "weighted_icp/frontend/geometry/pose_estimation.h"
 
 namespace weighted_icp::frontend {
 
@@ -165,7 +165,7 @@ struct SampsonDistance {
   }
 };
 
-SampsonDistance sampsonDistance(const io::PinholeCamera& camera, const cv::Point2d& p1, const cv::Point2d& p2) {
+SampsonDistance sampsonDistance(const PinholeCamera& camera, const cv::Point2d& p1, const cv::Point2d& p2) {
   return {{(p1.x - camera.cx) / camera.fx, (p1.y - camera.cy) / camera.fy, 1.0},
           {(p2.x - camera.cx) / camera.fx, (p2.y - camera.cy) / camera.fy, 1.0},
           1.0 / (camera.fx * camera.fx),
@@ -175,7 +175,7 @@ SampsonDistance sampsonDistance(const io::PinholeCamera& camera, const cv::Point
 /// Levenberg-Marquardt on the Sampson distances of `use` (Huber): the
 /// essential matrix from RANSAC comes from a minimal sample and is noisy.
 /// Rotation on the quaternion manifold, translation on the unit sphere.
-void refineEssentialMotion(const io::PinholeCamera& camera, const std::vector<cv::Point2d>& p1,
+void refineEssentialMotion(const PinholeCamera& camera, const std::vector<cv::Point2d>& p1,
                            const std::vector<cv::Point2d>& p2, const std::vector<int>& use, double huber_px,
                            cv::Matx33d& rotation, cv::Vec3d& translation) {
   Eigen::Matrix3d r;
@@ -202,7 +202,7 @@ void refineEssentialMotion(const io::PinholeCamera& camera, const std::vector<cv
 }
 
 /// The matches within `threshold_px` (Sampson) of the epipolar geometry of x2 = R x1 + t.
-std::vector<int> epipolarInliers(const io::PinholeCamera& camera, const std::vector<cv::Point2d>& p1,
+std::vector<int> epipolarInliers(const PinholeCamera& camera, const std::vector<cv::Point2d>& p1,
                                  const std::vector<cv::Point2d>& p2, const cv::Matx33d& rotation,
                                  const cv::Vec3d& translation, double threshold_px) {
   Eigen::Matrix3d r;
@@ -237,7 +237,7 @@ std::optional<Eigen::Isometry3d> poseOfSecondInFirst(const cv::Matx33d& rotation
 /// Fits both models to the finite matches p1/p2 and recovers the motion; the
 /// inliers index p1/p2. OpenCV may throw on degenerate matches.
 RelativeMotion fitTwoViewMotion(const std::vector<cv::Point2d>& p1, const std::vector<cv::Point2d>& p2,
-                                const io::PinholeCamera& camera, const NoiseBounds& bounds) {
+                                const PinholeCamera& camera, const NoiseBounds& bounds) {
   RelativeMotion motion;
   const cv::Matx33d camera_matrix = camera.cameraMatrix();
   cv::Mat essential_mask, homography_mask;
@@ -322,7 +322,7 @@ RelativeMotion fitTwoViewMotion(const std::vector<cv::Point2d>& p1, const std::v
 }  // namespace
 
 RelativeMotion estimateRelativeMotion2d2d(const std::vector<Eigen::Vector2d>& pixels1,
-                                          const std::vector<Eigen::Vector2d>& pixels2, const io::PinholeCamera& camera,
+                                          const std::vector<Eigen::Vector2d>& pixels2, const PinholeCamera& camera,
                                           const RelativeMotionOptions& options) {
   RelativeMotion motion;
   if (pixels1.size() != pixels2.size()) {

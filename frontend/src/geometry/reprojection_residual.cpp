@@ -1,4 +1,4 @@
-#include "weighted_icp/frontend/reprojection_residual.h"
+#include "weighted_icp/frontend/geometry/reprojection_residual.h"
 
 namespace weighted_icp::frontend {
 
@@ -74,7 +74,7 @@ Eigen::Vector3d PoseParameters::toCamera(const Eigen::Vector3d& point_world) con
   return Eigen::Map<const Eigen::Quaterniond>(data()) * point_world + Eigen::Map<const Eigen::Vector3d>(data() + 4);
 }
 
-PixelMeasurement::PixelMeasurement(const io::PinholeCamera& camera, const Eigen::Vector2d& pixel, double pixel_sigma)
+PixelMeasurement::PixelMeasurement(const PinholeCamera& camera, const Eigen::Vector2d& pixel, double pixel_sigma)
     : fx(camera.fx),
       fy(camera.fy),
       cx(camera.cx),
@@ -82,7 +82,7 @@ PixelMeasurement::PixelMeasurement(const io::PinholeCamera& camera, const Eigen:
       pixel(pixel),
       inverse_pixel_sigma(1.0 / pixel_sigma) {}
 
-ReprojectionResidual::ReprojectionResidual(const io::PinholeCamera& camera, const Eigen::Vector2d& pixel,
+ReprojectionResidual::ReprojectionResidual(const PinholeCamera& camera, const Eigen::Vector2d& pixel,
                                            double pixel_sigma)
     : measurement_(camera, pixel, pixel_sigma) {}
 
@@ -91,7 +91,7 @@ bool ReprojectionResidual::Evaluate(double const* const* parameters, double* res
                                 residuals, jacobianOrNull(jacobians, 0), jacobianOrNull(jacobians, 1));
 }
 
-RgbdResidual::RgbdResidual(const io::PinholeCamera& camera, const Eigen::Vector2d& pixel, double pixel_sigma,
+RgbdResidual::RgbdResidual(const PinholeCamera& camera, const Eigen::Vector2d& pixel, double pixel_sigma,
                            double depth, double depth_sigma)
     : measurement_(camera, pixel, pixel_sigma), depth_(depth), inverse_depth_sigma_(1.0 / depth_sigma) {}
 
@@ -101,7 +101,7 @@ bool RgbdResidual::Evaluate(double const* const* parameters, double* residuals, 
                                 jacobianOrNull(jacobians, 1));
 }
 
-PoseOnlyReprojectionResidual::PoseOnlyReprojectionResidual(const io::PinholeCamera& camera,
+PoseOnlyReprojectionResidual::PoseOnlyReprojectionResidual(const PinholeCamera& camera,
                                                            const Eigen::Vector3d& point_world,
                                                            const Eigen::Vector2d& pixel, double pixel_sigma)
     : measurement_(camera, pixel, pixel_sigma), point_world_(point_world) {}

@@ -1,4 +1,4 @@
-#include "weighted_icp/frontend/descriptor_matcher.h"
+#include "weighted_icp/frontend/perception/descriptor_matcher.h"
 
 #include <algorithm>
 #include <stdexcept>

@@ -1,4 +1,4 @@
-#include "weighted_icp/frontend/feature_extractor.h"
+#include "weighted_icp/frontend/perception/feature_extractor.h"
 
 #include <algorithm>
 #include <cmath>

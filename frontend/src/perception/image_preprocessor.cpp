@@ -1,4 +1,4 @@
-#include "weighted_icp/frontend/image_preprocessor.h"
+#include "weighted_icp/frontend/perception/image_preprocessor.h"
 
 #include <stdexcept>
 #include <string>

@@ -1,4 +1,4 @@
-#include "weighted_icp/frontend/image_quality_gate.h"
+#include "weighted_icp/frontend/perception/image_quality_gate.h"
 
 #include <filesystem>
 #include <stdexcept>

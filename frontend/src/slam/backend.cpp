@@ -1,10 +1,10 @@
-#include "weighted_icp/frontend/backend.h"
+#include "weighted_icp/frontend/slam/backend.h"
 
 #include <unordered_map>
 
 namespace weighted_icp::frontend {
 
-Backend::Backend(Map& map, io::PinholeCamera camera, BackendOptions options)
+Backend::Backend(Map& map, PinholeCamera camera, BackendOptions options)
     : map_(map), camera_(camera), options_(options) {
   if (options_.background_thread) thread_ = std::thread([this] { run(); });
 }

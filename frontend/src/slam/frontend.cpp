@@ -1,4 +1,4 @@
-#include "weighted_icp/frontend/frontend.h"
+#include "weighted_icp/frontend/slam/frontend.h"
 
 #include <algorithm>
 #include <cmath>
@@ -36,7 +36,7 @@ double rotationAngleDeg(const Eigen::Isometry3d& motion) {
 }
 
 /// World position and covariance of a feature measured with depth from `pose_wc`.
-FusedPoint measuredPoint(const io::PinholeCamera& camera, const DepthNoiseModel& noise, const Eigen::Isometry3d& pose_wc,
+FusedPoint measuredPoint(const PinholeCamera& camera, const DepthNoiseModel& noise, const Eigen::Isometry3d& pose_wc,
                          const Eigen::Vector2d& pixel, double depth) {
   const Eigen::Matrix3d rotation = pose_wc.linear();
   return {pose_wc * camera.backProject(pixel.x(), pixel.y(), depth),
@@ -45,7 +45,7 @@ FusedPoint measuredPoint(const io::PinholeCamera& camera, const DepthNoiseModel&
 
 }  // namespace
 
-Frontend::Frontend(Map& map, Backend& backend, io::PinholeCamera camera, FrontendOptions options)
+Frontend::Frontend(Map& map, Backend& backend, PinholeCamera camera, FrontendOptions options)
     : map_(map),
       backend_(backend),
       camera_(camera),
@@ -73,14 +73,12 @@ double Frontend::depthAt(const cv::Mat& depth, const cv::Point2f& pixel) const {
   return z;
 }
 
-Frame Frontend::makeFrame(const RgbdImage& image, bool& used_clahe) {
+Frame Frontend::makeFrame(const RgbdFrame& image, bool& used_clahe) {
   if (image.color.empty()) throw std::invalid_argument("frame at " + std::to_string(image.timestamp) + ": empty image");
   if (image.depth.type() != CV_32F || image.depth.size() != image.color.size())
     throw std::invalid_argument("frame at " + std::to_string(image.timestamp) +
                                 ": depth must be CV_32F metres of the colour image's size");
-  cv::Mat gray;
-  if (image.color.channels() == 3) cv::cvtColor(image.color, gray, cv::COLOR_BGR2GRAY);
-  else gray = image.color;
+  const cv::Mat gray = image.gray();
 
   Frame frame;
   frame.id = next_frame_id_++;
@@ -106,7 +104,7 @@ Frame Frontend::makeFrame(const RgbdImage& image, bool& used_clahe) {
   return frame;
 }
 
-TrackingResult Frontend::track(const RgbdImage& image) {
+TrackingResult Frontend::track(const RgbdFrame& image) {
   TrackingResult result;
   Frame frame = makeFrame(image, result.used_clahe);
   result.features = frame.size();

@@ -1,7 +1,7 @@
 // Front-end map -> registration's landmark model (see landmark_conversion.h
 // for what maps to what).
 
-#include "weighted_icp/frontend/landmark_conversion.h"
+#include "weighted_icp/frontend/slam/landmark_conversion.h"
 
 namespace weighted_icp::frontend {
 

@@ -1,4 +1,4 @@
-#include "weighted_icp/frontend/map.h"
+#include "weighted_icp/frontend/slam/map.h"
 
 #include <algorithm>
 #include <set>

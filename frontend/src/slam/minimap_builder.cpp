@@ -1,8 +1,8 @@
-#include "weighted_icp/frontend/minimap_builder.h"
+#include "weighted_icp/frontend/slam/minimap_builder.h"
 
 #include <stdexcept>
 
-#include "weighted_icp/frontend/landmark_conversion.h"
+#include "weighted_icp/frontend/slam/landmark_conversion.h"
 
 namespace weighted_icp::frontend {
 

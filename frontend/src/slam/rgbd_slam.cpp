@@ -1,8 +1,8 @@
-#include "weighted_icp/frontend/rgbd_slam.h"
+#include "weighted_icp/frontend/slam/rgbd_slam.h"
 
 #include <chrono>
 
-#include "weighted_icp/frontend/landmark_conversion.h"
+#include "weighted_icp/frontend/slam/landmark_conversion.h"
 
 namespace weighted_icp::frontend {
 
@@ -14,12 +14,12 @@ BackendOptions withFrontendNoise(BackendOptions backend, const FrontendOptions& 
 }
 }  // namespace
 
-RgbdSlam::RgbdSlam(const io::PinholeCamera& camera, const RgbdSlamOptions& options)
+RgbdSlam::RgbdSlam(const PinholeCamera& camera, const RgbdSlamOptions& options)
     : backend_(map_, camera, withFrontendNoise(options.backend, options.frontend)),
       frontend_(map_, backend_, camera, options.frontend),
       minimap_builder_(options.minimap_keyframes) {}
 
-const FrameRecord& RgbdSlam::process(const RgbdImage& image) {
+const FrameRecord& RgbdSlam::process(const RgbdFrame& image) {
   FrameRecord record;
   record.timestamp = image.timestamp;
   const auto start = std::chrono::steady_clock::now();
@@ -33,8 +33,8 @@ void RgbdSlam::finish() { backend_.flush(); }
 
 LandmarkMap RgbdSlam::sessionMap() const { return toLandmarkMap(map_); }
 
-io::Trajectory RgbdSlam::trajectory() const {
-  io::Trajectory trajectory;
+Trajectory RgbdSlam::trajectory() const {
+  Trajectory trajectory;
   for (const auto& frame : frames_) {
     if (!frame.result.hasPose()) continue;
     // Each frame rides on its reference keyframe, as refined by the backend.

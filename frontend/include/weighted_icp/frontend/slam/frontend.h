@@ -1,0 +1,216 @@
+#pragma once
+// The tracking front end: per frame, features -> matches against the local
+// map -> pose (PnP + Huber LM, or 2D-2D when depth is missing) -> dynamic
+// points out -> keyframe and landmark creation. The backend refines what it
+// creates in its own thread.
+
+#include <cstddef>
+#include <limits>
+#include <optional>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "weighted_icp/frontend/slam/backend.h"
+#include "weighted_icp/frontend/geometry/depth_noise_model.h"
+#include "weighted_icp/frontend/perception/descriptor_matcher.h"
+#include "weighted_icp/frontend/geometry/dynamic_point_filter.h"
+#include "weighted_icp/frontend/perception/feature_extractor.h"
+#include "weighted_icp/frontend/slam/frame.h"
+#include "weighted_icp/frontend/perception/image_quality_gate.h"
+#include "weighted_icp/frontend/slam/map.h"
+#include "weighted_icp/frontend/geometry/motion_model.h"
+#include "weighted_icp/frontend/geometry/pose_estimation.h"
+#include "weighted_icp/core/camera.h"
+
+namespace weighted_icp::frontend {
+
+struct FrontendOptions {
+  FeatureExtractorOptions features;
+  /// Ratio test at 0.9, looser than the matcher's default: the projection
+  /// gate and RANSAC already remove wrong matches, and on repetitive texture a
+  /// strict ratio throws away good ones (measured on both TUM sequences).
+  DescriptorMatcherOptions matcher = [] {
+    DescriptorMatcherOptions options;
+    options.ratio = 0.9f;
+    return options;
+  }();
+  PnpOptions pnp;
+  DynamicPointFilterOptions dynamic_filter;
+  /// Used by the backend too. sigma_z = c z^2 with c = 0.005, not the sensor's
+  /// 0.0015: at a keypoint, depth also suffers from the colour/depth time
+  /// offset (up to 20 ms on TUM) and registration, so it is trusted less.
+  DepthNoiseModel depth_noise{0.005, 1.0};
+  /// BRISQUE quality gate. It costs ~25 ms, so it judges only the frames that
+  /// matter: a keyframe candidate it refuses is tracked but not mapped, and a
+  /// frame that fails to track is skipped (not a tracking loss) if refused.
+  bool quality_gate = true;
+  ImageQualityGateOptions quality;
+  double min_depth_m = 0.2;
+  double max_depth_m = 5.0;
+  /// A keypoint's depth counts only if its 3x3 neighbours are within this
+  /// fraction of it (depth edges mix foreground and background).
+  double depth_edge_tolerance = 0.03;
+  std::size_t local_map_keyframes = 7;
+  /// A match is kept only if the point, projected with the predicted pose,
+  /// lands this close to the feature; wider before the motion is known.
+  double match_gate_px = 40.0;
+  double match_gate_without_motion_px = 120.0;
+  std::size_t min_initial_points = 50;
+  /// 2D-2D below this median parallax keeps the predicted translation.
+  double min_parallax_deg = 1.0;
+  double keyframe_translation_m = 0.08;
+  double keyframe_rotation_deg = 8.0;
+  /// A keyframe when fewer than this fraction of the last keyframe's tracked points are tracked.
+  double keyframe_min_tracked_ratio = 0.5;
+  /// New landmarks are not created this close to a feature flagged as moving.
+  double dynamic_mask_radius_px = 25.0;
+  /// A map point flagged as moving this many times is no longer matched
+  /// (once may be depth noise; it is left out of that frame's pose either way).
+  int dynamic_votes_to_exclude = 2;
+};
+
+enum class TrackingStatus {
+  Initialized,        // a new segment (mini-map) started here
+  Tracked,            // 3D-2D pose
+  TrackedRelative,    // 2D-2D pose, scale from the motion model
+  SkippedLowQuality,  // failed to track and refused by the image quality gate
+  Lost                // no pose; the next frame starts a new segment
+};
+std::string toString(TrackingStatus status);
+
+struct TrackingResult {
+  TrackingStatus status = TrackingStatus::Lost;
+  std::string reason;  // why, when Lost or Skipped
+  Eigen::Isometry3d pose_wc = Eigen::Isometry3d::Identity();
+  /// The keyframe the pose was tracked from, and the pose relative to it: once
+  /// the backend has refined that keyframe, this frame follows it.
+  KeyframeId reference_keyframe = 0;
+  Eigen::Isometry3d pose_in_reference = Eigen::Isometry3d::Identity();
+  bool keyframe = false;
+  /// The quality gate refused this frame: skipped, or tracked but kept out of the map.
+  bool refused_by_quality_gate = false;
+  std::size_t features = 0;
+  std::size_t matches = 0;
+  std::size_t inliers = 0;
+  std::size_t dynamic = 0;
+  bool used_clahe = false;
+  double quality_score = std::numeric_limits<double>::quiet_NaN();
+
+  bool hasPose() const {
+    return status == TrackingStatus::Initialized || status == TrackingStatus::Tracked ||
+           status == TrackingStatus::TrackedRelative;
+  }
+};
+
+/// Where the tracker stands between frames (the per-frame outcome is TrackingStatus).
+/// Initializing -> Tracking: a frame with enough depth starts the first segment.
+/// Tracking -> Lost: no pose, the image not refused by the quality gate; the segment ends.
+/// Lost -> Tracking: a frame with enough depth starts a new segment (a new mini-map).
+/// A frame that cannot start a segment leaves Initializing or Lost as it is.
+enum class FrontendState {
+  Initializing,  // no segment yet
+  Tracking,      // a segment is being tracked and mapped
+  Lost           // the last segment ended; the next frame with enough depth starts another
+};
+std::string toString(FrontendState state);
+
+class Frontend {
+ public:
+  /// Throws if the quality gate's model files are missing (when enabled).
+  Frontend(Map& map, Backend& backend, PinholeCamera camera, FrontendOptions options = {});
+
+  /// Throws std::invalid_argument for an empty image, mismatched colour and
+  /// depth sizes or a depth image that is not CV_32F.
+  TrackingResult track(const RgbdFrame& image);
+
+  FrontendState state() const { return state_; }
+  /// The segment the next keyframe belongs to: 0, then one more after each loss.
+  std::size_t segment() const { return segment_; }
+
+ private:
+  /// 3D-2D matches of a frame against the local map: match i pairs feature ids[i].first with point ids[i].second.
+  struct LocalMatches {
+    std::vector<Eigen::Vector3d> points_world;
+    std::vector<Eigen::Vector2d> pixels;
+    std::vector<std::pair<std::size_t, MapPointId>> ids;  // (feature, point)
+    std::size_t size() const { return ids.size(); }
+  };
+  /// Matches flagged as moving: per match, and the pixels of those flagged.
+  struct MovingPoints {
+    std::vector<bool> is_dynamic;
+    std::vector<Eigen::Vector2d> pixels;
+  };
+
+  Frame makeFrame(const RgbdFrame& image, bool& used_clahe);
+  double depthAt(const cv::Mat& depth, const cv::Point2f& pixel) const;
+  /// The one place the state changes; ends the segment when tracking is lost.
+  void transitionTo(FrontendState next);
+  /// 3D-2D tracking against the local map, falling back to 2D-2D.
+  TrackingResult trackFrame(Frame& frame, TrackingResult result);
+  /// Takes and indexes the local map again if the map changed; false when it is empty.
+  bool refreshLocalMap();
+  /// Descriptor matches against the local map, minus excluded moving points and those the guess projects too far.
+  LocalMatches matchLocalMap(const Frame& frame, const Eigen::Isometry3d& guess_wc, double gate_px) const;
+  /// Flags the matches with depth whose displacement betrays a moving point, and votes against their map points.
+  MovingPoints rejectMovingPoints(const Frame& frame, const LocalMatches& matched, const Eigen::Isometry3d& pose_wc);
+  /// Huber refinement of the pose on the static inliers, with their depths as well as pixels.
+  Eigen::Isometry3d refinePose(const Frame& frame, const LocalMatches& matched, const std::vector<int>& static_inliers,
+                               const Eigen::Isometry3d& pose_wc) const;
+  /// Records a tracked pose in the frame, the result, the motion model and the last pose.
+  void acceptPose(Frame& frame, TrackingResult& result, TrackingStatus status, const Eigen::Isometry3d& pose_wc);
+  /// Makes the frame a keyframe if it moved or lost enough of the tracked points and its image is good enough.
+  void insertKeyframeIfNeeded(const Frame& frame, TrackingResult& result, const LocalMatches& matched,
+                              const std::vector<int>& static_inliers,
+                              const std::vector<Eigen::Vector2d>& dynamic_pixels);
+  /// Starts a segment at the frame (its first keyframe), if it has enough features with depth.
+  TrackingResult initialize(Frame& frame, TrackingResult result);
+  /// 2D-2D pose against the last keyframe, scaled by the last metric motion; loses tracking if impossible.
+  TrackingResult trackRelative(Frame& frame, TrackingResult result, const std::string& why_not_3d);
+  /// Pixel pairs (last keyframe, frame) of the descriptor matches between the two.
+  void matchLastKeyframe(const Frame& frame, std::vector<Eigen::Vector2d>& keyframe_pixels,
+                         std::vector<Eigen::Vector2d>& frame_pixels) const;
+  /// No pose for this frame: skipped if the quality gate refuses the image, else tracking is lost.
+  TrackingResult lose(TrackingResult result, const std::string& reason);
+  /// Sets the pose and its expression relative to the latest keyframe.
+  void setPose(TrackingResult& result, const Eigen::Isometry3d& pose_wc) const;
+  /// Scores `color` with the gate; true when it is refused.
+  bool refusedByQualityGate(TrackingResult& result);
+  /// True when the camera moved or turned enough since the last keyframe, or too few of its points are tracked.
+  bool needsKeyframe(const Eigen::Isometry3d& pose_wc, std::size_t tracked) const;
+  /// Adds the frame as a keyframe: it observes the tracked points; its other features with depth become points.
+  void insertKeyframe(const Frame& frame, const std::vector<std::pair<std::size_t, MapPointId>>& tracked,
+                      const std::vector<Eigen::Vector2d>& dynamic_pixels);
+  /// Adds the keyframe's observation of each tracked point, fused with its depth; returns the features used.
+  std::vector<bool> observeTrackedPoints(KeyframeId keyframe, const Frame& frame,
+                                         const std::vector<std::pair<std::size_t, MapPointId>>& tracked);
+  /// A new map point for each unused feature with depth that is not near a moving one.
+  void createMapPoints(KeyframeId keyframe, const Frame& frame, const std::vector<bool>& used,
+                       const std::vector<Eigen::Vector2d>& dynamic_pixels);
+  /// A map point from one feature's depth, observed by the keyframe.
+  void createMapPoint(KeyframeId keyframe, const Frame& frame, std::size_t feature);
+
+  Map& map_;
+  Backend& backend_;
+  PinholeCamera camera_;
+  FrontendOptions options_;
+  FeatureExtractor extractor_;
+  DescriptorMatcher matcher_;
+  std::optional<ImageQualityGate> quality_gate_;
+  ConstantVelocityModel motion_;
+
+  std::size_t next_frame_id_ = 0;
+  FrontendState state_ = FrontendState::Initializing;
+  std::size_t segment_ = 0;
+  std::optional<Eigen::Isometry3d> last_pose_wc_;
+  /// Motion between the last two frames tracked with 3D points: what scales 2D-2D.
+  std::optional<Eigen::Isometry3d> metric_velocity_;
+  Frame last_keyframe_;
+  KeyframeId last_keyframe_id_ = 0;
+  std::size_t tracked_at_last_keyframe_ = 0;
+  std::map<MapPointId, int> dynamic_votes_;
+  LocalMap local_map_;  // what matcher_ is indexed on
+  cv::Mat current_color_;  // the image being tracked, for the quality gate
+};
+
+}  // namespace weighted_icp::frontend

@@ -1,0 +1,57 @@
+#pragma once
+// The whole RGB-D SLAM: Map, Frontend and Backend wired together, with the
+// per-frame record the tools report from.
+
+#include <cstddef>
+#include <memory>
+#include <vector>
+
+#include "weighted_icp/frontend/slam/backend.h"
+#include "weighted_icp/frontend/slam/frontend.h"
+#include "weighted_icp/frontend/slam/map.h"
+#include "weighted_icp/frontend/slam/minimap_builder.h"
+#include "weighted_icp/core/camera.h"
+#include "weighted_icp/core/trajectory.h"
+#include "weighted_icp/registration/landmark_map.h"
+
+namespace weighted_icp::frontend {
+
+struct RgbdSlamOptions {
+  FrontendOptions frontend;
+  BackendOptions backend;
+  std::size_t minimap_keyframes = 10;
+};
+
+struct FrameRecord {
+  double timestamp = 0.0;
+  TrackingResult result;
+  double tracking_ms = 0.0;  // time spent in Frontend::track
+};
+
+class RgbdSlam {
+ public:
+  RgbdSlam(const PinholeCamera& camera, const RgbdSlamOptions& options = {});
+
+  const FrameRecord& process(const RgbdFrame& image);
+  /// Waits for the backend to finish its pending optimisation.
+  void finish();
+
+  const std::vector<FrameRecord>& frames() const { return frames_; }
+  const Map& map() const { return map_; }
+  std::size_t optimizationsRun() const { return backend_.optimizationsRun(); }
+  /// One pose per frame that got one (camera-to-world), expressed through its
+  /// reference keyframe as the backend left it.
+  Trajectory trajectory() const;
+  /// The whole map in registration's model (toLandmarkMap).
+  LandmarkMap sessionMap() const;
+  std::vector<LandmarkMap> miniMaps() const { return minimap_builder_.build(map_); }
+
+ private:
+  Map map_;  // first: the backend and frontend hold references to it
+  Backend backend_;
+  Frontend frontend_;
+  MiniMapBuilder minimap_builder_;
+  std::vector<FrameRecord> frames_;
+};
+
+}  // namespace weighted_icp::frontend
