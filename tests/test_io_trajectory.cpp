@@ -10,39 +10,15 @@
 #include <gtest/gtest.h>
 
 #include "test_support.h"
+#include "trajectory_fixtures.h"
 #include "weighted_icp/io/trajectory.h"
 
 using namespace weighted_icp;
+using namespace weighted_icp::testing;
 namespace fs = std::filesystem;
 using Pairs = std::vector<std::pair<std::size_t, std::size_t>>;
 
 namespace {
-
-Eigen::Isometry3d rigidMotion(double x, double y, double z, double roll, double pitch, double yaw) {
-  Eigen::Isometry3d motion = Eigen::Isometry3d::Identity();
-  motion.linear() = (Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY()) *
-                     Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitX()))
-                        .toRotationMatrix();
-  motion.translation() = Eigen::Vector3d(x, y, z);
-  return motion;
-}
-
-/// A camera moving along a 3D curve (no three positions collinear) and turning, at 30 Hz.
-io::Trajectory curvedTrajectory(std::size_t n) {
-  io::Trajectory trajectory;
-  for (std::size_t k = 0; k < n; ++k) {
-    const double t = 0.0333 * static_cast<double>(k);
-    trajectory.push_back({1305031102.0 + t, rigidMotion(std::cos(t), std::sin(1.3 * t), 0.2 * t, 0.1 * t, -0.05 * t,
-                                                        0.3 * std::sin(t))});
-  }
-  return trajectory;
-}
-
-/// `trajectory` seen from another world frame: every pose premultiplied by `motion`.
-io::Trajectory moved(io::Trajectory trajectory, const Eigen::Isometry3d& motion) {
-  for (auto& stamped : trajectory) stamped.pose = motion * stamped.pose;
-  return trajectory;
-}
 
 std::string writeText(const fs::path& path, const std::string& text) {
   std::ofstream out(path);

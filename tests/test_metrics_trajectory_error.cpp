@@ -7,40 +7,12 @@
 
 #include <gtest/gtest.h>
 
+#include "trajectory_fixtures.h"
 #include "weighted_icp/io/trajectory.h"
 #include "weighted_icp/metrics/trajectory_error.h"
 
 using namespace weighted_icp;
-
-namespace {
-
-Eigen::Isometry3d rigidMotion(double x, double y, double z, double roll, double pitch, double yaw) {
-  Eigen::Isometry3d motion = Eigen::Isometry3d::Identity();
-  motion.linear() = (Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY()) *
-                     Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitX()))
-                        .toRotationMatrix();
-  motion.translation() = Eigen::Vector3d(x, y, z);
-  return motion;
-}
-
-/// A camera moving along a 3D curve (no three positions collinear) and turning, at 30 Hz.
-io::Trajectory curvedTrajectory(std::size_t n) {
-  io::Trajectory trajectory;
-  for (std::size_t k = 0; k < n; ++k) {
-    const double t = 0.0333 * static_cast<double>(k);
-    trajectory.push_back({1305031102.0 + t, rigidMotion(std::cos(t), std::sin(1.3 * t), 0.2 * t, 0.1 * t, -0.05 * t,
-                                                        0.3 * std::sin(t))});
-  }
-  return trajectory;
-}
-
-/// `trajectory` seen from another world frame: every pose premultiplied by `motion`.
-io::Trajectory moved(io::Trajectory trajectory, const Eigen::Isometry3d& motion) {
-  for (auto& stamped : trajectory) stamped.pose = motion * stamped.pose;
-  return trajectory;
-}
-
-}  // namespace
+using namespace weighted_icp::testing;
 
 TEST(TrajectoryAte, RigidlyMovedTrajectoryHasNoErrorAndTheAlignmentUndoesTheMotion) {
   const io::Trajectory truth = curvedTrajectory(60);
