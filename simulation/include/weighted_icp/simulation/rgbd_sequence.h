@@ -23,11 +23,11 @@
 
 #include "weighted_icp/io/camera.h"
 
-namespace weighted_icp::io {
+namespace weighted_icp::simulation {
 
 /// TUM freiburg 1's RGB intrinsics without its lens distortion, 640 x 480,
 /// depth factor 5000.
-PinholeCamera syntheticRgbdCamera();
+io::PinholeCamera syntheticRgbdCamera();
 
 struct SyntheticRgbdOptions {
   /// Drives the textures, the camera path's phases, the moving object's
@@ -37,7 +37,7 @@ struct SyntheticRgbdOptions {
   std::size_t frames = 150;
   double fps = 30.0;  // timestamps are frame / fps seconds
   /// Must have no distortion: the renderer casts undistorted rays.
-  PinholeCamera camera = syntheticRgbdCamera();
+  io::PinholeCamera camera = syntheticRgbdCamera();
 
   /// A textured box carried across the view now and then, covering up to
   /// about a fifth of the image while it passes.
@@ -115,4 +115,4 @@ class SyntheticRgbdSequence {
 void writeTumSequence(const SyntheticRgbdSequence& sequence, const std::string& dir, bool overwrite = false,
                       const std::function<void(std::size_t)>& frame_written = {});
 
-}  // namespace weighted_icp::io
+}  // namespace weighted_icp::simulation

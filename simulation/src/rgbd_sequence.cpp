@@ -1,4 +1,4 @@
-#include "weighted_icp/io/synthetic_rgbd.h"
+#include "weighted_icp/simulation/rgbd_sequence.h"
 
 #include <algorithm>
 #include <array>
@@ -16,7 +16,7 @@
 #include <opencv2/imgproc.hpp>
 #include <unistd.h>
 
-namespace weighted_icp::io {
+namespace weighted_icp::simulation {
 
 namespace {
 
@@ -223,8 +223,8 @@ struct SyntheticRgbdSequence::Scene {
   std::uint64_t noise_seed = 0;
 };
 
-PinholeCamera syntheticRgbdCamera() {
-  PinholeCamera camera = tumCamera(1);
+io::PinholeCamera syntheticRgbdCamera() {
+  io::PinholeCamera camera = io::tumCamera(1);
   camera.distortion = {};
   camera.width = 640;
   camera.height = 480;
@@ -238,7 +238,7 @@ void validate(const SyntheticRgbdOptions& options) {
   const auto require = [](bool ok, const std::string& message) {
     if (!ok) throw std::invalid_argument("synthetic RGB-D: " + message);
   };
-  const PinholeCamera& camera = options.camera;
+  const io::PinholeCamera& camera = options.camera;
   require(options.frames > 0, "frames must be at least 1");
   // Timestamps are written with microseconds: faster frames would share names.
   require(options.fps > 0.0 && options.fps <= 1000.0, "fps must be in (0, 1000]");
@@ -376,7 +376,7 @@ struct BoxInFrame {
   }
 };
 
-BoxInFrame prepare(const TexturedBox& box, const Eigen::Isometry3d& camera_to_world, const PinholeCamera& camera) {
+BoxInFrame prepare(const TexturedBox& box, const Eigen::Isometry3d& camera_to_world, const io::PinholeCamera& camera) {
   BoxInFrame prepared{&box, std::cos(box.geometry.yaw), std::sin(box.geometry.yaw), {}, box.geometry.size / 2.0,
                       cv::Rect(0, 0, camera.width, camera.height)};
   prepared.camera_in_box = prepared.toBox(camera_to_world.translation() - box.geometry.center);
@@ -487,7 +487,7 @@ const std::vector<float>& normalTable() {
 SyntheticRgbdFrame SyntheticRgbdSequence::frame(std::size_t i) const {
   if (i >= size())
     throw std::out_of_range("synthetic RGB-D: frame " + std::to_string(i) + " of " + std::to_string(size()));
-  const PinholeCamera& camera = options_.camera;
+  const io::PinholeCamera& camera = options_.camera;
   SyntheticRgbdFrame frame;
   frame.timestamp = timestamp(i);
   frame.camera_to_world = cameraToWorld(i);
@@ -674,4 +674,4 @@ void writeTumSequence(const SyntheticRgbdSequence& sequence, const std::string& 
   }
 }
 
-}  // namespace weighted_icp::io
+}  // namespace weighted_icp::simulation

@@ -18,10 +18,10 @@
 #include <Eigen/Geometry>
 
 #include "weighted_icp/io/camera.h"
-#include "weighted_icp/io/synthetic_rgbd.h"
+#include "weighted_icp/simulation/rgbd_sequence.h"
 #include "weighted_icp/registration/landmark_map.h"
 
-namespace weighted_icp::io {
+namespace weighted_icp::simulation {
 
 struct SyntheticSessionOptions {
   std::uint64_t seed = 1;
@@ -48,7 +48,7 @@ struct SyntheticSessionOptions {
   Eigen::Vector3d look_at{-1.4, 1.6, 0.8};
 
   /// Must have no distortion: observations are ideal pinhole projections.
-  PinholeCamera camera = syntheticRgbdCamera();
+  io::PinholeCamera camera = syntheticRgbdCamera();
   double min_depth = 0.5;  // metres along the optical axis
   double max_depth = 4.0;
   /// A surface seen more obliquely than this (from its normal) yields no feature.
@@ -83,4 +83,4 @@ struct SyntheticSession {
 /// option out of range, std::runtime_error when no landmark is observed.
 SyntheticSession generateSyntheticSession(const SyntheticSessionOptions& options);
 
-}  // namespace weighted_icp::io
+}  // namespace weighted_icp::simulation

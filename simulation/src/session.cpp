@@ -1,4 +1,4 @@
-#include "weighted_icp/io/synthetic_session.h"
+#include "weighted_icp/simulation/session.h"
 
 #include <algorithm>
 #include <cmath>
@@ -7,7 +7,7 @@
 #include <stdexcept>
 #include <string>
 
-namespace weighted_icp::io {
+namespace weighted_icp::simulation {
 
 namespace {
 
@@ -249,7 +249,7 @@ void validate(const SyntheticSessionOptions& o) {
 
 /// Covariance, in camera coordinates, of the back-projection of pixel (u, v)
 /// at `depth`: first-order propagation of independent pixel and depth noise.
-Eigen::Matrix3d backProjectionCovariance(const PinholeCamera& camera, double u, double v, double depth,
+Eigen::Matrix3d backProjectionCovariance(const io::PinholeCamera& camera, double u, double v, double depth,
                                          double pixel_sigma, double depth_sigma) {
   Eigen::Matrix3d jacobian;  // d(x, y, z) / d(u, v, depth)
   jacobian << depth / camera.fx, 0.0, (u - camera.cx) / camera.fx,  //
@@ -281,7 +281,7 @@ SyntheticSession generateSyntheticSession(const SyntheticSessionOptions& options
     world_to_camera.push_back(truth_poses[k].inverse());
   }
 
-  const PinholeCamera& camera = options.camera;
+  const io::PinholeCamera& camera = options.camera;
   const double min_facing_cosine = std::cos(options.max_viewing_angle_deg * kDegree);
   for (const SurfacePoint& point : points) {
     Landmark estimated, truth;
@@ -338,4 +338,4 @@ SyntheticSession generateSyntheticSession(const SyntheticSessionOptions& options
   return session;
 }
 
-}  // namespace weighted_icp::io
+}  // namespace weighted_icp::simulation
