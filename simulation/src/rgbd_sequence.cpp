@@ -16,6 +16,8 @@
 #include <opencv2/imgproc.hpp>
 #include <unistd.h>
 
+#include "random_source.h"
+
 namespace weighted_icp::simulation {
 
 namespace {
@@ -23,44 +25,10 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kDegree = kPi / 180.0;
 
-// --- Randomness: our own mapping from engine bits, so output does not depend
-// on the standard library's distributions.
-
-/// splitmix64's finaliser: sub-seeds and the per-pixel noise hash.
-std::uint64_t mixBits(std::uint64_t x) {
-  x += 0x9e3779b97f4a7c15ULL;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
-  return x ^ (x >> 31);
-}
-
-double unitInterval(std::uint64_t bits) { return static_cast<double>(bits >> 11) * 0x1.0p-53; }  // [0, 1)
-
-/// Box-Muller: two independent standard normal deviates from two hashes.
-std::pair<double, double> normalPair(std::uint64_t a, std::uint64_t b) {
-  const double radius = std::sqrt(-2.0 * std::log(1.0 - unitInterval(a)));  // 1 - u is in (0, 1]
-  const double angle = 2.0 * kPi * unitInterval(b);
-  return {radius * std::cos(angle), radius * std::sin(angle)};
-}
-
-class Random {
- public:
-  explicit Random(std::uint64_t seed) : engine_(seed) {}
-  double uniform(double low, double high) { return low + (high - low) * unitInterval(engine_()); }
-  int integer(int low, int high_inclusive) {
-    return std::min(high_inclusive, low + static_cast<int>(uniform(0.0, high_inclusive - low + 1.0)));
-  }
-  bool chance(double probability) { return uniform(0.0, 1.0) < probability; }
-  cv::Scalar color(int low, int high) { return cv::Scalar(integer(low, high), integer(low, high), integer(low, high)); }
-
- private:
-  std::mt19937_64 engine_;
-};
-
 // Independent streams of the one seed, so options do not shift each other's draws.
 enum class Stream : std::uint64_t { RoomTextures = 1, ObjectTextures, Path, Noise };
 std::uint64_t subSeed(std::uint64_t seed, Stream stream, std::uint64_t index = 0) {
-  return mixBits(mixBits(seed ^ (static_cast<std::uint64_t>(stream) << 56)) + index);
+  return simulation::subSeed(seed, static_cast<std::uint64_t>(stream), index);
 }
 
 // --- Textures: one image per box face, drawn with cv:: shapes so that corners
@@ -70,11 +38,15 @@ std::uint64_t subSeed(std::uint64_t seed, Stream stream, std::uint64_t index = 0
 // 4 mm: a pixel at 2 m. The moving object passes at 1 m, so finer.
 constexpr double kRoomTexelsPerMetre = 250.0, kObjectTexelsPerMetre = 500.0;
 
+cv::Scalar randomColor(RandomSource& random, int low, int high) {
+  return cv::Scalar(random.integer(low, high), random.integer(low, high), random.integer(low, high));
+}
+
 cv::Mat makeTexture(double width_m, double height_m, double texels_per_metre, std::uint64_t seed) {
-  Random random(seed);
+  RandomSource random(seed);
   const int cols = std::max(8, static_cast<int>(std::lround(width_m * texels_per_metre)));
   const int rows = std::max(8, static_cast<int>(std::lround(height_m * texels_per_metre)));
-  cv::Mat texture(rows, cols, CV_8UC3, random.color(70, 190));
+  cv::Mat texture(rows, cols, CV_8UC3, randomColor(random, 70, 190));
   const double area = width_m * height_m;
   const auto count = [&](double per_square_metre) { return 1 + static_cast<int>(area * per_square_metre); };
   const auto texels = [&](double metres) { return std::max(1, static_cast<int>(std::lround(metres * texels_per_metre))); };
@@ -85,13 +57,13 @@ cv::Mat makeTexture(double width_m, double height_m, double texels_per_metre, st
   for (int n = count(0.8); n > 0; --n) {
     const cv::Point corner = anywhere();
     const cv::Size size(texels(random.uniform(0.2, 0.8)), texels(random.uniform(0.2, 0.8)));
-    cv::rectangle(texture, cv::Rect(corner, size), random.color(40, 220), cv::FILLED);
+    cv::rectangle(texture, cv::Rect(corner, size), randomColor(random, 40, 220), cv::FILLED);
   }
   for (int n = count(30.0); n > 0; --n) {
     const cv::Point corner = anywhere();
     const cv::Size size(texels(random.uniform(0.02, 0.2)), texels(random.uniform(0.02, 0.2)));
     const int thickness = random.chance(0.6) ? cv::FILLED : stroke();
-    cv::rectangle(texture, cv::Rect(corner, size), random.color(10, 245), thickness, cv::LINE_AA);
+    cv::rectangle(texture, cv::Rect(corner, size), randomColor(random, 10, 245), thickness, cv::LINE_AA);
   }
   for (int n = count(10.0); n > 0; --n) {  // turned quadrilaterals: corners at all angles
     const cv::Point centre = anywhere();
@@ -102,11 +74,11 @@ cv::Mat makeTexture(double width_m, double height_m, double texels_per_metre, st
       const double a = angle + k * kPi / 2.0 + random.uniform(-0.3, 0.3);
       corners[k] = centre + cv::Point(static_cast<int>(radius * std::cos(a)), static_cast<int>(radius * std::sin(a)));
     }
-    cv::fillConvexPoly(texture, corners.data(), 4, random.color(10, 245), cv::LINE_AA);
+    cv::fillConvexPoly(texture, corners.data(), 4, randomColor(random, 10, 245), cv::LINE_AA);
   }
   for (int n = count(20.0); n > 0; --n) {
     const int thickness = random.chance(0.75) ? cv::FILLED : stroke();
-    cv::circle(texture, anywhere(), texels(random.uniform(0.01, 0.08)), random.color(10, 245), thickness, cv::LINE_AA);
+    cv::circle(texture, anywhere(), texels(random.uniform(0.01, 0.08)), randomColor(random, 10, 245), thickness, cv::LINE_AA);
   }
   for (int n = count(10.0); n > 0; --n) {
     const cv::Point start = anywhere();
@@ -114,12 +86,12 @@ cv::Mat makeTexture(double width_m, double height_m, double texels_per_metre, st
     const double angle = random.uniform(0.0, 2.0 * kPi);
     const cv::Point end =
         start + cv::Point(static_cast<int>(length * std::cos(angle)), static_cast<int>(length * std::sin(angle)));
-    cv::line(texture, start, end, random.color(10, 245), stroke(), cv::LINE_AA);
+    cv::line(texture, start, end, randomColor(random, 10, 245), stroke(), cv::LINE_AA);
   }
   for (int n = count(2.0); n > 0; --n) {  // small checkerboards, as on calibration prints
     const cv::Point origin = anywhere();
     const int square = texels(random.uniform(0.02, 0.04));
-    const cv::Scalar dark = random.color(10, 80), light = random.color(170, 245);
+    const cv::Scalar dark = randomColor(random, 10, 80), light = randomColor(random, 170, 245);
     for (int r = 0; r < 4; ++r)
       for (int c = 0; c < 4; ++c)
         cv::rectangle(texture, cv::Rect(origin + cv::Point(c * square, r * square), cv::Size(square, square)),
@@ -132,7 +104,7 @@ cv::Mat makeTexture(double width_m, double height_m, double texels_per_metre, st
     for (int k = random.integer(2, 6); k > 0; --k) word += kGlyphs[random.integer(0, static_cast<int>(kGlyphs.size()) - 1)];
     const double scale = random.uniform(0.03, 0.12) * texels_per_metre / kHersheyCapHeight;
     cv::putText(texture, word, anywhere(), random.chance(0.5) ? cv::FONT_HERSHEY_SIMPLEX : cv::FONT_HERSHEY_DUPLEX,
-                scale, random.color(10, 245), stroke(), cv::LINE_AA);
+                scale, randomColor(random, 10, 245), stroke(), cv::LINE_AA);
   }
   return texture;
 }
@@ -275,7 +247,7 @@ SyntheticRgbdSequence::SyntheticRgbdSequence(const SyntheticRgbdOptions& options
         scene->object_faces = makeBoxTextures(kObjectSize, kObjectTexelsPerMetre, subSeed(options_.seed, Stream::ObjectTextures));
     }
   });
-  Random path_random(subSeed(options_.seed, Stream::Path));
+  RandomSource path_random(subSeed(options_.seed, Stream::Path));
   scene->path_start_angle = path_random.uniform(0.0, 2.0 * kPi);
   for (double& phase : scene->path_phases) phase = path_random.uniform(0.0, 2.0 * kPi);
   scene->noise_seed = subSeed(options_.seed, Stream::Noise);
@@ -467,21 +439,6 @@ double shading(const Eigen::Vector3d& point, const Eigen::Vector3d& normal) {
   return kAmbient + kDirectional * std::max(0.0, normal.dot(kLightDirection)) + kLamp * lamp;
 }
 
-/// Standard normal deviates (Box-Muller, fixed seed), picked by a pixel's
-/// hash: a log and a sincos per pixel would cost a sixth of a frame.
-const std::vector<float>& normalTable() {
-  static const std::vector<float> table = [] {
-    std::vector<float> values(1 << 16);
-    for (std::size_t k = 0; k < values.size(); k += 2) {
-      const auto [first, second] = normalPair(mixBits(2 * k), mixBits(2 * k + 1));
-      values[k] = static_cast<float>(first);
-      values[k + 1] = static_cast<float>(second);
-    }
-    return values;
-  }();
-  return table;
-}
-
 }  // namespace
 
 SyntheticRgbdFrame SyntheticRgbdSequence::frame(std::size_t i) const {
@@ -514,7 +471,7 @@ SyntheticRgbdFrame SyntheticRgbdSequence::frame(std::size_t i) const {
   const Eigen::Vector3d direction_step = rotation.col(0) / camera.fx;  // per pixel column
   const double cos_max_incidence = std::cos(options_.max_incidence_deg * kDegree);
   const std::uint64_t frame_seed = mixBits(scene_->noise_seed ^ mixBits(i));
-  const std::vector<float>& normal_deviates = normalTable();
+  const std::vector<float>& normal_deviates = hashedNormalTable();
   const double max_value = std::numeric_limits<std::uint16_t>::max();
   const double disparity_scale = camera.fx * kDisparityBaseline * kDisparitySubpixel;  // subpixel units * metres
 

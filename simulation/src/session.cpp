@@ -2,44 +2,17 @@
 
 #include <algorithm>
 #include <cmath>
-#include <random>
 #include <sstream>
 #include <stdexcept>
 #include <string>
+
+#include "random_source.h"
 
 namespace weighted_icp::simulation {
 
 namespace {
 
 constexpr double kDegree = M_PI / 180.0;
-
-/// Draws from std::mt19937_64 with our own transforms: the standard
-/// distributions are implementation-defined, and the session must be the same
-/// on every toolchain for a seed.
-class RandomSource {
- public:
-  /// Independent streams per purpose, so that changing, say, the drift leaves
-  /// the landmark layout of a seed as it was.
-  RandomSource(std::uint64_t seed, std::uint32_t stream) {
-    std::seed_seq sequence{static_cast<std::uint32_t>(seed), static_cast<std::uint32_t>(seed >> 32), stream};
-    engine_.seed(sequence);
-  }
-  /// Uniform in the open interval (0, 1): 53 random bits, centred in their cell.
-  double uniform() { return (static_cast<double>(engine_() >> 11) + 0.5) * 0x1.0p-53; }
-  double uniform(double low, double high) { return low + (high - low) * uniform(); }
-  /// Standard normal by Box-Muller.
-  double normal() {
-    const double radius = std::sqrt(-2.0 * std::log(uniform()));
-    return radius * std::cos(2.0 * M_PI * uniform());
-  }
-  Eigen::Vector3d normal3() {
-    const double x = normal(), y = normal(), z = normal();
-    return {x, y, z};
-  }
-
- private:
-  std::mt19937_64 engine_;
-};
 
 enum Stream : std::uint32_t { kLayoutStream = 1, kDriftStream = 2, kObservationStream = 3 };
 
@@ -142,11 +115,11 @@ std::vector<SurfacePoint> placeLandmarks(const Room& room, std::size_t count, Ra
   std::vector<SurfacePoint> points;
   points.reserve(count);
   while (points.size() < count) {
-    const double pick = random.uniform(0.0, total);
+    const double pick = random.openUniform(0.0, total);
     std::size_t index = 0;
     while (index + 1 < room.surfaces.size() && cumulative_area[index] < pick) ++index;
     const Rectangle& surface = room.surfaces[index];
-    const double s = random.uniform(), t = random.uniform();
+    const double s = random.openUnit(), t = random.openUnit();
     const Eigen::Vector3d position = surface.corner + s * surface.edge_a + t * surface.edge_b;
     if (!room.covered(position, surface)) points.push_back({position, surface.normal});
   }
@@ -297,7 +270,7 @@ SyntheticSession generateSyntheticSession(const SyntheticSessionOptions& options
       const Eigen::Vector2d pixel = camera.project(in_camera);
       if (!camera.inImage(pixel)) continue;
       if (room.occluded(truth_poses[k].translation(), point.position)) continue;
-      if (observation_random.uniform() >= options.detection_probability) continue;
+      if (observation_random.openUnit() >= options.detection_probability) continue;
 
       const double u_noise = observation_random.normal();  // sequenced: draw order fixes the session
       const double v_noise = observation_random.normal();
