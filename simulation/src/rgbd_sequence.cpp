@@ -1,3 +1,7 @@
+// The synthetic RGB-D sequence (see rgbd_sequence.h): the room and its
+// furniture, the camera path, the moving object, and the renderer that ray
+// casts them into colour and depth images as a Kinect-like sensor would.
+
 #include "weighted_icp/simulation/rgbd_sequence.h"
 
 #include <algorithm>
@@ -8,7 +12,6 @@
 #include <fstream>
 #include <iomanip>
 #include <limits>
-#include <random>
 #include <stdexcept>
 #include <system_error>
 
@@ -17,6 +20,8 @@
 #include <unistd.h>
 
 #include "random_source.h"
+#include "raycasting.h"
+#include "textures.h"
 
 namespace weighted_icp::simulation {
 
@@ -31,100 +36,10 @@ std::uint64_t subSeed(std::uint64_t seed, Stream stream, std::uint64_t index = 0
   return simulation::subSeed(seed, static_cast<std::uint64_t>(stream), index);
 }
 
-// --- Textures: one image per box face, drawn with cv:: shapes so that corners
-// (rectangles, checkers, letters) and blobs (circles) abound at every scale a
-// camera 1-4 m away resolves.
-
-// 4 mm: a pixel at 2 m. The moving object passes at 1 m, so finer.
-constexpr double kRoomTexelsPerMetre = 250.0, kObjectTexelsPerMetre = 500.0;
-
-cv::Scalar randomColor(RandomSource& random, int low, int high) {
-  return cv::Scalar(random.integer(low, high), random.integer(low, high), random.integer(low, high));
-}
-
-cv::Mat makeTexture(double width_m, double height_m, double texels_per_metre, std::uint64_t seed) {
-  RandomSource random(seed);
-  const int cols = std::max(8, static_cast<int>(std::lround(width_m * texels_per_metre)));
-  const int rows = std::max(8, static_cast<int>(std::lround(height_m * texels_per_metre)));
-  cv::Mat texture(rows, cols, CV_8UC3, randomColor(random, 70, 190));
-  const double area = width_m * height_m;
-  const auto count = [&](double per_square_metre) { return 1 + static_cast<int>(area * per_square_metre); };
-  const auto texels = [&](double metres) { return std::max(1, static_cast<int>(std::lround(metres * texels_per_metre))); };
-  const auto stroke = [&] { return texels(random.uniform(0.004, 0.012)); };
-  const auto anywhere = [&] { return cv::Point(random.integer(0, cols - 1), random.integer(0, rows - 1)); };
-
-  // Large panels first (posters, doors), so small marks sit on varied grounds.
-  for (int n = count(0.8); n > 0; --n) {
-    const cv::Point corner = anywhere();
-    const cv::Size size(texels(random.uniform(0.2, 0.8)), texels(random.uniform(0.2, 0.8)));
-    cv::rectangle(texture, cv::Rect(corner, size), randomColor(random, 40, 220), cv::FILLED);
-  }
-  for (int n = count(30.0); n > 0; --n) {
-    const cv::Point corner = anywhere();
-    const cv::Size size(texels(random.uniform(0.02, 0.2)), texels(random.uniform(0.02, 0.2)));
-    const int thickness = random.chance(0.6) ? cv::FILLED : stroke();
-    cv::rectangle(texture, cv::Rect(corner, size), randomColor(random, 10, 245), thickness, cv::LINE_AA);
-  }
-  for (int n = count(10.0); n > 0; --n) {  // turned quadrilaterals: corners at all angles
-    const cv::Point centre = anywhere();
-    const double radius = random.uniform(0.02, 0.12) * texels_per_metre;
-    const double angle = random.uniform(0.0, 2.0 * kPi);
-    std::array<cv::Point, 4> corners;
-    for (int k = 0; k < 4; ++k) {
-      const double a = angle + k * kPi / 2.0 + random.uniform(-0.3, 0.3);
-      corners[k] = centre + cv::Point(static_cast<int>(radius * std::cos(a)), static_cast<int>(radius * std::sin(a)));
-    }
-    cv::fillConvexPoly(texture, corners.data(), 4, randomColor(random, 10, 245), cv::LINE_AA);
-  }
-  for (int n = count(20.0); n > 0; --n) {
-    const int thickness = random.chance(0.75) ? cv::FILLED : stroke();
-    cv::circle(texture, anywhere(), texels(random.uniform(0.01, 0.08)), randomColor(random, 10, 245), thickness, cv::LINE_AA);
-  }
-  for (int n = count(10.0); n > 0; --n) {
-    const cv::Point start = anywhere();
-    const double length = random.uniform(0.05, 0.4) * texels_per_metre;
-    const double angle = random.uniform(0.0, 2.0 * kPi);
-    const cv::Point end =
-        start + cv::Point(static_cast<int>(length * std::cos(angle)), static_cast<int>(length * std::sin(angle)));
-    cv::line(texture, start, end, randomColor(random, 10, 245), stroke(), cv::LINE_AA);
-  }
-  for (int n = count(2.0); n > 0; --n) {  // small checkerboards, as on calibration prints
-    const cv::Point origin = anywhere();
-    const int square = texels(random.uniform(0.02, 0.04));
-    const cv::Scalar dark = randomColor(random, 10, 80), light = randomColor(random, 170, 245);
-    for (int r = 0; r < 4; ++r)
-      for (int c = 0; c < 4; ++c)
-        cv::rectangle(texture, cv::Rect(origin + cv::Point(c * square, r * square), cv::Size(square, square)),
-                      (r + c) % 2 ? dark : light, cv::FILLED);
-  }
-  static const std::string kGlyphs = "ABCDEFGHJKLMNPQRSTUVWXYZ0123456789#%&";
-  constexpr double kHersheyCapHeight = 22.0;  // texels at font scale 1
-  for (int n = count(12.0); n > 0; --n) {  // text-like marks: labels, signs
-    std::string word;
-    for (int k = random.integer(2, 6); k > 0; --k) word += kGlyphs[random.integer(0, static_cast<int>(kGlyphs.size()) - 1)];
-    const double scale = random.uniform(0.03, 0.12) * texels_per_metre / kHersheyCapHeight;
-    cv::putText(texture, word, anywhere(), random.chance(0.5) ? cv::FONT_HERSHEY_SIMPLEX : cv::FONT_HERSHEY_DUPLEX,
-                scale, randomColor(random, 10, 245), stroke(), cv::LINE_AA);
-  }
-  return texture;
-}
-
-// A face is numbered 2 * axis + (1 on the box's + side, 0 on its - side). Its
-// texture's columns run along face_u and its rows down face_v, so walls and box
-// sides have their texture upright (v is z).
-int faceU(int axis) { return axis == 0 ? 1 : 0; }
-int faceV(int axis) { return axis == 2 ? 1 : 2; }
-
-using FaceTextures = std::array<cv::Mat, 6>;
-
-FaceTextures makeBoxTextures(const Eigen::Vector3d& size, double texels_per_metre, std::uint64_t seed) {
-  FaceTextures faces;
-  for (int face = 0; face < 6; ++face)
-    faces[face] = makeTexture(size[faceU(face / 2)], size[faceV(face / 2)], texels_per_metre, mixBits(seed + face));
-  return faces;
-}
-
 // --- The scene.
+
+// Texture resolution: 4 mm, a pixel at 2 m. The moving object passes at 1 m, so finer.
+constexpr double kRoomTexelsPerMetre = 250.0, kObjectTexelsPerMetre = 500.0;
 
 const Eigen::Vector3d kRoomSize(6.0, 5.0, 3.0);
 
@@ -175,12 +90,16 @@ constexpr double kDimGain = 0.25, kDimGamma = 1.5, kDimBlackLevel = 4.0, kDimNoi
 constexpr double kDisparityBaseline = 0.075, kDisparitySubpixel = 8.0;
 
 struct TexturedBox {
-  SceneBox geometry;
+  RayBox shape;
   const FaceTextures* faces = nullptr;
   double texels_per_metre = kRoomTexelsPerMetre;
   bool seen_from_inside = false;  // the room
   bool is_moving_object = false;
 };
+
+TexturedBox texturedBox(const SceneBox& box, const FaceTextures* faces, double texels_per_metre, bool is_moving_object) {
+  return {RayBox::centred(box.center, box.size, box.yaw), faces, texels_per_metre, false, is_moving_object};
+}
 
 Eigen::Matrix3d yawRotation(double yaw) { return Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix(); }
 
@@ -332,105 +251,23 @@ std::optional<SceneBox> SyntheticRgbdSequence::movingObject(std::size_t i) const
 namespace {
 
 /// A box as seen in one frame: the camera in the box's frame, and the pixels
-/// that can see it (the bounding rectangle of its projected corners).
+/// that can see it.
 struct BoxInFrame {
   const TexturedBox* box;
-  double cos_yaw, sin_yaw;
   Eigen::Vector3d camera_in_box;
-  Eigen::Vector3d half_size;
   cv::Rect pixels;
-
-  Eigen::Vector3d toBox(const Eigen::Vector3d& world) const {
-    return {cos_yaw * world.x() + sin_yaw * world.y(), -sin_yaw * world.x() + cos_yaw * world.y(), world.z()};
-  }
-  Eigen::Vector3d toWorld(const Eigen::Vector3d& local) const {
-    return {cos_yaw * local.x() - sin_yaw * local.y(), sin_yaw * local.x() + cos_yaw * local.y(), local.z()};
-  }
 };
 
 BoxInFrame prepare(const TexturedBox& box, const Eigen::Isometry3d& camera_to_world, const io::PinholeCamera& camera) {
-  BoxInFrame prepared{&box, std::cos(box.geometry.yaw), std::sin(box.geometry.yaw), {}, box.geometry.size / 2.0,
-                      cv::Rect(0, 0, camera.width, camera.height)};
-  prepared.camera_in_box = prepared.toBox(camera_to_world.translation() - box.geometry.center);
-  if (box.seen_from_inside) return prepared;
-  const Eigen::Isometry3d world_to_camera = camera_to_world.inverse();
-  double min_u = std::numeric_limits<double>::infinity(), min_v = min_u, max_u = -min_u, max_v = -min_u;
-  int corners_behind = 0;
-  for (int corner = 0; corner < 8; ++corner) {
-    const Eigen::Vector3d offset((corner & 1 ? 1 : -1) * prepared.half_size.x(),
-                                 (corner & 2 ? 1 : -1) * prepared.half_size.y(),
-                                 (corner & 4 ? 1 : -1) * prepared.half_size.z());
-    const Eigen::Vector3d in_camera = world_to_camera * (box.geometry.center + prepared.toWorld(offset));
-    if (in_camera.z() <= 1e-3) {
-      ++corners_behind;
-      continue;
-    }
-    const Eigen::Vector2d pixel = camera.project(in_camera);
-    min_u = std::min(min_u, pixel.x()), max_u = std::max(max_u, pixel.x());
-    min_v = std::min(min_v, pixel.y()), max_v = std::max(max_v, pixel.y());
-  }
-  // All behind: unseen. Some behind: its outline is unbounded, test every pixel.
-  if (corners_behind == 8) prepared.pixels = cv::Rect();
-  if (corners_behind > 0) return prepared;
-  const cv::Rect bounds(cv::Point(static_cast<int>(std::floor(min_u)) - 1, static_cast<int>(std::floor(min_v)) - 1),
-                        cv::Point(static_cast<int>(std::ceil(max_u)) + 2, static_cast<int>(std::ceil(max_v)) + 2));
-  prepared.pixels = bounds & prepared.pixels;
-  return prepared;
+  return {&box, box.shape.pointInBox(camera_to_world.translation()),
+          box.seen_from_inside ? cv::Rect(0, 0, camera.width, camera.height)
+                               : pixelBounds(box.shape, camera_to_world, camera)};
 }
 
 struct Hit {
-  double t = std::numeric_limits<double>::infinity();  // along a ray whose camera z is 1: the depth
+  FaceHit face;  // t along a ray whose camera z is 1: the depth
   const BoxInFrame* box = nullptr;
-  int axis = 0;
-  bool positive_side = false;  // the face on the box's + side of `axis`
 };
-
-/// From inside (the room): the face the ray leaves through.
-void leaveRoom(const BoxInFrame& room, const Eigen::Vector3d& d, Hit& hit) {
-  const Eigen::Vector3d& o = room.camera_in_box;
-  for (int axis = 0; axis < 3; ++axis) {
-    if (d[axis] == 0.0) continue;
-    const bool positive = d[axis] > 0.0;
-    const double t = ((positive ? room.half_size[axis] : -room.half_size[axis]) - o[axis]) / d[axis];
-    if (t < hit.t) hit = {t, &room, axis, positive};
-  }
-}
-
-/// From outside: the face the ray enters through, if nearer than `hit` (slab test).
-void enterBox(const BoxInFrame& box, const Eigen::Vector3d& world_direction, Hit& hit) {
-  const Eigen::Vector3d d = box.toBox(world_direction);
-  const Eigen::Vector3d& o = box.camera_in_box;
-  double t_near = 0.0, t_far = hit.t;
-  int near_axis = -1;
-  for (int axis = 0; axis < 3; ++axis) {
-    if (d[axis] == 0.0) {
-      if (std::abs(o[axis]) > box.half_size[axis]) return;
-      continue;
-    }
-    const double inverse = 1.0 / d[axis];
-    double t1 = (-box.half_size[axis] - o[axis]) * inverse, t2 = (box.half_size[axis] - o[axis]) * inverse;
-    if (t1 > t2) std::swap(t1, t2);
-    if (t1 > t_near) t_near = t1, near_axis = axis;
-    t_far = std::min(t_far, t2);
-    if (t_near > t_far) return;
-  }
-  if (near_axis < 0 || t_near >= hit.t) return;  // the camera is inside, or something is nearer
-  hit = {t_near, &box, near_axis, d[near_axis] < 0.0};
-}
-
-cv::Vec3d sampleBilinear(const cv::Mat& texture, double col, double row) {
-  col = std::clamp(col, 0.0, texture.cols - 1.0);
-  row = std::clamp(row, 0.0, texture.rows - 1.0);
-  const int c0 = std::min(static_cast<int>(col), texture.cols - 2);  // textures are at least 8 x 8
-  const int r0 = std::min(static_cast<int>(row), texture.rows - 2);
-  const double a = col - c0, b = row - r0;
-  const cv::Vec3b* top = texture.ptr<cv::Vec3b>(r0) + c0;
-  const cv::Vec3b* bottom = texture.ptr<cv::Vec3b>(r0 + 1) + c0;
-  cv::Vec3d value;
-  for (int k = 0; k < 3; ++k)
-    value[k] = (1 - b) * ((1 - a) * top[0][k] + a * top[1][k]) + b * ((1 - a) * bottom[0][k] + a * bottom[1][k]);
-  return value;
-}
 
 double shading(const Eigen::Vector3d& point, const Eigen::Vector3d& normal) {
   const Eigen::Vector3d to_lamp = kLampPosition - point;
@@ -438,6 +275,126 @@ double shading(const Eigen::Vector3d& point, const Eigen::Vector3d& normal) {
   const double lamp = std::max(0.0, normal.dot(to_lamp) / lamp_distance) / (1.0 + 0.15 * lamp_distance * lamp_distance);
   return kAmbient + kDirectional * std::max(0.0, normal.dot(kLightDirection)) + kLamp * lamp;
 }
+
+/// Renders the pixels of one frame: what is fixed for the frame, and the steps
+/// of one pixel (cast, shade, measure depth).
+class FrameRenderer {
+ public:
+  FrameRenderer(const SyntheticRgbdOptions& options, const std::vector<BoxInFrame>& boxes, const BoxInFrame& room,
+                const Eigen::Isometry3d& camera_to_world, std::uint64_t frame_seed)
+      : options_(options),
+        camera_(options.camera),
+        boxes_(boxes),
+        room_(room),
+        rotation_(camera_to_world.linear()),
+        camera_position_(camera_to_world.translation()),
+        direction_step_(rotation_.col(0) / camera_.fx),  // per pixel column
+        cos_max_incidence_(std::cos(options.max_incidence_deg * kDegree)),
+        frame_seed_(frame_seed),
+        normal_deviates_(hashedNormalTable()),
+        disparity_scale_(camera_.fx * kDisparityBaseline * kDisparitySubpixel) {}  // subpixel units * metres
+
+  void renderRow(int v, SyntheticRgbdFrame& frame, std::vector<const BoxInFrame*>& row_boxes) const {
+    row_boxes.clear();
+    for (const BoxInFrame& box : boxes_)
+      if (v >= box.pixels.y && v < box.pixels.y + box.pixels.height) row_boxes.push_back(&box);
+    const Eigen::Vector3d row_direction =
+        rotation_ * Eigen::Vector3d(-camera_.cx / camera_.fx, (v - camera_.cy) / camera_.fy, 1.0);
+    cv::Vec3b* color_row = frame.color.ptr<cv::Vec3b>(v);
+    std::uint16_t* depth_row = frame.depth.ptr<std::uint16_t>(v);
+    std::uint8_t* mask_row = frame.moving_object_mask.ptr<std::uint8_t>(v);
+    for (int u = 0; u < camera_.width; ++u) {
+      const Eigen::Vector3d direction = row_direction + u * direction_step_;
+      const Hit hit = cast(u, direction, row_boxes);
+      const Eigen::Vector3d normal = hit.box->box->shape.toWorld(localNormal(hit));
+      const std::uint64_t pixel_hash = mixBits(frame_seed_ ^ static_cast<std::uint64_t>(v * camera_.width + u));
+      color_row[u] = color(hit, direction, normal, normal_deviates_[pixel_hash & 0xffff]);
+      depth_row[u] = depth(hit.face.t, direction, normal, normal_deviates_[(pixel_hash >> 16) & 0xffff]);
+      mask_row[u] = hit.box->box->is_moving_object ? 255 : 0;
+    }
+  }
+
+ private:
+  /// The nearest face along the ray: the room's wall it leaves through, unless
+  /// a box whose pixels include u is entered first.
+  Hit cast(int u, const Eigen::Vector3d& direction, const std::vector<const BoxInFrame*>& row_boxes) const {
+    Hit hit;
+    room_.box->shape.leave(room_.camera_in_box, room_.box->shape.toBox(direction), hit.face);
+    hit.box = &room_;
+    for (const BoxInFrame* box : row_boxes)
+      if (u >= box->pixels.x && u < box->pixels.x + box->pixels.width &&
+          box->box->shape.enter(box->camera_in_box, box->box->shape.toBox(direction), hit.face))
+        hit.box = box;
+    return hit;
+  }
+
+  /// The face's normal towards the camera, in the box's frame: outwards for
+  /// boxes, inwards for the room.
+  static Eigen::Vector3d localNormal(const Hit& hit) {
+    Eigen::Vector3d local_normal = Eigen::Vector3d::Zero();
+    local_normal[hit.face.axis] = normalSign(hit);
+    return local_normal;
+  }
+  static double normalSign(const Hit& hit) {
+    return (hit.face.positive_side != hit.box->box->seen_from_inside) ? 1.0 : -1.0;
+  }
+
+  /// Texture times lighting, then the sensor's response and noise.
+  cv::Vec3b color(const Hit& hit, const Eigen::Vector3d& direction, const Eigen::Vector3d& normal,
+                  double image_noise) const {
+    const BoxInFrame& seen = *hit.box;
+    const TexturedBox& box = *seen.box;
+    const Eigen::Vector3d local = seen.camera_in_box + hit.face.t * box.shape.toBox(direction);
+    // Columns run to the viewer's right (e_v x normal), so text reads the right way round.
+    const int axis = hit.face.axis, u_axis = faceU(axis), v_axis = faceV(axis);
+    const double column_sign = axis == 1 ? -normalSign(hit) : normalSign(hit);
+    const cv::Vec3d albedo = sampleBilinear(
+        (*box.faces)[2 * axis + (hit.face.positive_side ? 1 : 0)],
+        (column_sign * local[u_axis] + box.shape.upper()[u_axis]) * box.texels_per_metre - 0.5,
+        (box.shape.upper()[v_axis] - local[v_axis]) * box.texels_per_metre - 0.5);
+    const double light = shading(camera_position_ + hit.face.t * direction, normal);
+    cv::Vec3b pixel;
+    for (int k = 0; k < 3; ++k) {
+      const double radiance = std::min(1.0, albedo[k] * light * (1.0 / 255.0));
+      static_assert(kDimGamma == 1.5, "the dim image's gamma is computed as r * sqrt(r)");
+      const double value = options_.dim_lighting ? kDimBlackLevel + 255.0 * kDimGain * radiance * std::sqrt(radiance) +
+                                                       kDimNoiseSigma * image_noise
+                                                 : 255.0 * radiance + kNoiseSigma * image_noise;
+      pixel[k] = cv::saturate_cast<std::uint8_t>(value);
+    }
+    return pixel;
+  }
+
+  /// The stored depth of a hit at `t` (the depth, as the ray's camera z is 1):
+  /// 0 out of the sensor's range or incidence, else noisy and quantised as a
+  /// Kinect's if asked.
+  std::uint16_t depth(double t, const Eigen::Vector3d& direction, const Eigen::Vector3d& normal,
+                      double depth_noise) const {
+    double depth = t;
+    const double cos_incidence = std::abs(normal.dot(direction)) / direction.norm();
+    const bool measurable =
+        depth >= options_.min_depth && depth <= options_.max_depth && cos_incidence >= cos_max_incidence_;
+    if (measurable && options_.depth_noise) {
+      depth += options_.depth_noise_coefficient * depth * depth * depth_noise;
+      // Values are positive: truncating x + 0.5 rounds, without a libm call.
+      depth = disparity_scale_ / std::max(1.0, std::trunc(disparity_scale_ / depth + 0.5));
+    }
+    const double stored = depth * camera_.depth_factor + 0.5;
+    constexpr double kMaxValue = std::numeric_limits<std::uint16_t>::max();
+    return measurable && stored < kMaxValue + 1.0 ? static_cast<std::uint16_t>(stored) : 0;
+  }
+
+  const SyntheticRgbdOptions& options_;
+  const io::PinholeCamera& camera_;
+  const std::vector<BoxInFrame>& boxes_;
+  const BoxInFrame& room_;
+  const Eigen::Matrix3d rotation_;
+  const Eigen::Vector3d camera_position_, direction_step_;
+  const double cos_max_incidence_;
+  const std::uint64_t frame_seed_;
+  const std::vector<float>& normal_deviates_;
+  const double disparity_scale_;
+};
 
 }  // namespace
 
@@ -452,13 +409,13 @@ SyntheticRgbdFrame SyntheticRgbdSequence::frame(std::size_t i) const {
   frame.depth.create(camera.height, camera.width, CV_16UC1);
   frame.moving_object_mask.create(camera.height, camera.width, CV_8UC1);
 
-  const TexturedBox room{{Eigen::Vector3d(0.0, 0.0, kRoomSize.z() / 2.0), kRoomSize, 0.0},
+  const TexturedBox room{RayBox::centred(Eigen::Vector3d(0.0, 0.0, kRoomSize.z() / 2.0), kRoomSize, 0.0),
                          &scene_->room_faces, kRoomTexelsPerMetre, true, false};
   std::vector<TexturedBox> boxes;
   for (std::size_t k = 0; k < furniture().size(); ++k)
-    boxes.push_back({furniture()[k], &scene_->furniture_faces[k], kRoomTexelsPerMetre, false, false});
+    boxes.push_back(texturedBox(furniture()[k], &scene_->furniture_faces[k], kRoomTexelsPerMetre, false));
   if (const auto object = movingObject(i))
-    boxes.push_back({*object, &scene_->object_faces, kObjectTexelsPerMetre, false, true});
+    boxes.push_back(texturedBox(*object, &scene_->object_faces, kObjectTexelsPerMetre, true));
   const BoxInFrame room_in_frame = prepare(room, frame.camera_to_world, camera);
   std::vector<BoxInFrame> boxes_in_frame;
   for (const TexturedBox& box : boxes) {
@@ -466,76 +423,11 @@ SyntheticRgbdFrame SyntheticRgbdSequence::frame(std::size_t i) const {
     if (!prepared.pixels.empty()) boxes_in_frame.push_back(prepared);
   }
 
-  const Eigen::Matrix3d rotation = frame.camera_to_world.linear();
-  const Eigen::Vector3d camera_position = frame.camera_to_world.translation();
-  const Eigen::Vector3d direction_step = rotation.col(0) / camera.fx;  // per pixel column
-  const double cos_max_incidence = std::cos(options_.max_incidence_deg * kDegree);
-  const std::uint64_t frame_seed = mixBits(scene_->noise_seed ^ mixBits(i));
-  const std::vector<float>& normal_deviates = hashedNormalTable();
-  const double max_value = std::numeric_limits<std::uint16_t>::max();
-  const double disparity_scale = camera.fx * kDisparityBaseline * kDisparitySubpixel;  // subpixel units * metres
-
+  const FrameRenderer renderer(options_, boxes_in_frame, room_in_frame, frame.camera_to_world,
+                               mixBits(scene_->noise_seed ^ mixBits(i)));
   cv::parallel_for_(cv::Range(0, camera.height), [&](const cv::Range& rows) {
     std::vector<const BoxInFrame*> row_boxes;
-    for (int v = rows.start; v < rows.end; ++v) {
-      row_boxes.clear();
-      for (const BoxInFrame& box : boxes_in_frame)
-        if (v >= box.pixels.y && v < box.pixels.y + box.pixels.height) row_boxes.push_back(&box);
-      const Eigen::Vector3d row_direction = rotation * Eigen::Vector3d(-camera.cx / camera.fx, (v - camera.cy) / camera.fy, 1.0);
-      cv::Vec3b* color_row = frame.color.ptr<cv::Vec3b>(v);
-      std::uint16_t* depth_row = frame.depth.ptr<std::uint16_t>(v);
-      std::uint8_t* mask_row = frame.moving_object_mask.ptr<std::uint8_t>(v);
-      for (int u = 0; u < camera.width; ++u) {
-        const Eigen::Vector3d direction = row_direction + u * direction_step;
-        Hit hit;
-        leaveRoom(room_in_frame, direction, hit);
-        for (const BoxInFrame* box : row_boxes)
-          if (u >= box->pixels.x && u < box->pixels.x + box->pixels.width) enterBox(*box, direction, hit);
-
-        const BoxInFrame& seen = *hit.box;
-        const TexturedBox& box = *seen.box;
-        // The face's normal towards the camera: outwards for boxes, inwards for the room.
-        const double normal_sign = (hit.positive_side != box.seen_from_inside) ? 1.0 : -1.0;
-        Eigen::Vector3d local_normal = Eigen::Vector3d::Zero();
-        local_normal[hit.axis] = normal_sign;
-        const Eigen::Vector3d normal = seen.toWorld(local_normal);
-        const Eigen::Vector3d local = seen.camera_in_box + hit.t * seen.toBox(direction);
-        // Columns run to the viewer's right (e_v x normal), so text reads the right way round.
-        const int u_axis = faceU(hit.axis), v_axis = faceV(hit.axis);
-        const double column_sign = hit.axis == 1 ? -normal_sign : normal_sign;
-        const cv::Vec3d albedo = sampleBilinear(
-            (*box.faces)[2 * hit.axis + (hit.positive_side ? 1 : 0)],
-            (column_sign * local[u_axis] + seen.half_size[u_axis]) * box.texels_per_metre - 0.5,
-            (seen.half_size[v_axis] - local[v_axis]) * box.texels_per_metre - 0.5);
-        const double light = shading(camera_position + hit.t * direction, normal);
-
-        const std::uint64_t pixel_hash = mixBits(frame_seed ^ static_cast<std::uint64_t>(v * camera.width + u));
-        const double image_noise = normal_deviates[pixel_hash & 0xffff];
-        const double depth_noise = normal_deviates[(pixel_hash >> 16) & 0xffff];
-        for (int k = 0; k < 3; ++k) {
-          const double radiance = std::min(1.0, albedo[k] * light * (1.0 / 255.0));
-          static_assert(kDimGamma == 1.5, "the dim image's gamma is computed as r * sqrt(r)");
-          const double value = options_.dim_lighting
-                                   ? kDimBlackLevel + 255.0 * kDimGain * radiance * std::sqrt(radiance) +
-                                         kDimNoiseSigma * image_noise
-                                   : 255.0 * radiance + kNoiseSigma * image_noise;
-          color_row[u][k] = cv::saturate_cast<std::uint8_t>(value);
-        }
-
-        double depth = hit.t;
-        const double cos_incidence = std::abs(normal.dot(direction)) / direction.norm();
-        const bool measurable =
-            depth >= options_.min_depth && depth <= options_.max_depth && cos_incidence >= cos_max_incidence;
-        if (measurable && options_.depth_noise) {
-          depth += options_.depth_noise_coefficient * depth * depth * depth_noise;
-          // Values are positive: truncating x + 0.5 rounds, without a libm call.
-          depth = disparity_scale / std::max(1.0, std::trunc(disparity_scale / depth + 0.5));
-        }
-        const double stored = depth * camera.depth_factor + 0.5;
-        depth_row[u] = measurable && stored < max_value + 1.0 ? static_cast<std::uint16_t>(stored) : 0;
-        mask_row[u] = box.is_moving_object ? 255 : 0;
-      }
-    }
+    for (int v = rows.start; v < rows.end; ++v) renderer.renderRow(v, frame, row_boxes);
   });
   return frame;
 }

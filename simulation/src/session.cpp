@@ -1,3 +1,8 @@
+// The synthetic SLAM session (see session.h): landmarks placed on the room's
+// surfaces, a camera arc, the observations a feature tracker would make (ray
+// cast against the furniture for occlusion) and the map a drifting odometry
+// builds from them.
+
 #include "weighted_icp/simulation/session.h"
 
 #include <algorithm>
@@ -7,6 +12,7 @@
 #include <string>
 
 #include "random_source.h"
+#include "raycasting.h"
 
 namespace weighted_icp::simulation {
 
@@ -15,33 +21,6 @@ namespace {
 constexpr double kDegree = M_PI / 180.0;
 
 enum Stream : std::uint32_t { kLayoutStream = 1, kDriftStream = 2, kObservationStream = 3 };
-
-/// Furniture: an axis-aligned box standing in the room.
-struct Block {
-  Eigen::Vector3d min, max;
-
-  bool contains(const Eigen::Vector3d& point) const {
-    return (point.array() >= min.array()).all() && (point.array() <= max.array()).all();
-  }
-  /// Whether the segment from `from` to just before `to` passes through the
-  /// block (slab test): `to` may lie on the block's own face.
-  bool blocks(const Eigen::Vector3d& from, const Eigen::Vector3d& to) const {
-    const Eigen::Vector3d direction = to - from;
-    double enter = 0.0, leave = 1.0 - 1e-9;
-    for (int axis = 0; axis < 3; ++axis) {
-      if (std::abs(direction[axis]) < 1e-15) {
-        if (from[axis] < min[axis] || from[axis] > max[axis]) return false;
-        continue;
-      }
-      const double t1 = (min[axis] - from[axis]) / direction[axis];
-      const double t2 = (max[axis] - from[axis]) / direction[axis];
-      enter = std::max(enter, std::min(t1, t2));
-      leave = std::min(leave, std::max(t1, t2));
-      if (enter > leave) return false;
-    }
-    return true;
-  }
-};
 
 /// A textured planar patch: corner + s * edge_a + t * edge_b, s, t in [0, 1].
 struct Rectangle {
@@ -53,14 +32,15 @@ struct Rectangle {
 
 struct Room {
   std::vector<Rectangle> surfaces;
-  std::vector<Block> blocks;
+  /// Furniture: axis-aligned boxes standing in the room.
+  std::vector<RayBox> blocks;
 
   /// The five upper faces of a block standing on the floor or on another
   /// block. Faces turned to a wall are kept: no camera ever faces them, so
   /// their landmarks go unobserved and are dropped.
   void addBlock(const Eigen::Vector3d& min, const Eigen::Vector3d& max) {
     const int index = static_cast<int>(blocks.size());
-    blocks.push_back({min, max});
+    blocks.push_back(RayBox::fromCorners(min, max));
     const Eigen::Vector3d size = max - min;
     const Eigen::Vector3d dx(size.x(), 0, 0), dy(0, size.y(), 0), dz(0, 0, size.z());
     surfaces.push_back({Eigen::Vector3d(min.x(), min.y(), max.z()), dx, dy, Eigen::Vector3d::UnitZ(), index});
@@ -77,8 +57,8 @@ struct Room {
     return false;
   }
   bool occluded(const Eigen::Vector3d& camera_centre, const Eigen::Vector3d& point) const {
-    for (const Block& block : blocks)
-      if (block.blocks(camera_centre, point)) return true;
+    for (const RayBox& block : blocks)
+      if (block.blocksSegment(camera_centre, point)) return true;
     return false;
   }
 };
