@@ -12,6 +12,7 @@
 
 #include "tool_support.h"
 #include "weighted_icp/simulation/rgbd_sequence.h"
+#include "weighted_icp/simulation/tum_export.h"
 
 namespace po = boost::program_options;
 using namespace weighted_icp;

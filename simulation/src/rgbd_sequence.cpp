@@ -7,17 +7,9 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <cstdio>
-#include <filesystem>
-#include <fstream>
-#include <iomanip>
 #include <limits>
 #include <stdexcept>
-#include <system_error>
-
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
-#include <unistd.h>
+#include <string>
 
 #include "random_source.h"
 #include "raycasting.h"
@@ -430,97 +422,6 @@ SyntheticRgbdFrame SyntheticRgbdSequence::frame(std::size_t i) const {
     for (int v = rows.start; v < rows.end; ++v) renderer.renderRow(v, frame, row_boxes);
   });
   return frame;
-}
-
-// --- The TUM RGB-D layout.
-
-namespace {
-
-std::string timestampText(double timestamp) {
-  char text[32];
-  std::snprintf(text, sizeof(text), "%.6f", timestamp);
-  return text;
-}
-
-void writeImage(const std::filesystem::path& path, const cv::Mat& image) {
-  if (!cv::imwrite(path.string(), image)) throw std::runtime_error("cannot write " + path.string());
-}
-
-}  // namespace
-
-void writeTumSequence(const SyntheticRgbdSequence& sequence, const std::string& dir, bool overwrite,
-                      const std::function<void(std::size_t)>& frame_written) {
-  namespace fs = std::filesystem;
-  fs::path target = fs::path(dir).lexically_normal();
-  if (!target.has_filename()) target = target.parent_path();  // "out/" names "out"
-  if (target.empty()) throw std::runtime_error("writeTumSequence: no folder given");
-  std::error_code error;
-  if (fs::exists(target, error)) {
-    if (!fs::is_directory(target)) throw std::runtime_error(target.string() + " exists and is not a folder");
-    if (!fs::is_empty(target) && !overwrite)
-      throw std::runtime_error(target.string() + " exists and is not empty; not overwriting it");
-  }
-  const fs::path parent = target.has_parent_path() ? target.parent_path() : fs::path(".");
-  fs::create_directories(parent, error);
-  if (error) throw std::runtime_error("cannot create " + parent.string() + ": " + error.message());
-
-  // Beside the target, so the final rename stays on one file system.
-  fs::path temporary;
-  for (int attempt = 0;; ++attempt) {
-    temporary = parent / (target.filename().string() + ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(attempt));
-    if (fs::create_directory(temporary, error)) break;
-    if (error) throw std::runtime_error("cannot write in " + parent.string() + ": " + error.message());
-  }
-  try {
-    fs::create_directory(temporary / "rgb");
-    fs::create_directory(temporary / "depth");
-    std::ofstream rgb_list(temporary / "rgb.txt"), depth_list(temporary / "depth.txt"),
-        groundtruth(temporary / "groundtruth.txt");
-    rgb_list << "# color images\n# synthetic RGB-D sequence, seed " << sequence.options().seed
-             << "\n# timestamp filename\n";
-    depth_list << "# depth maps\n# synthetic RGB-D sequence, seed " << sequence.options().seed
-               << "\n# timestamp filename\n";
-    groundtruth << "# ground truth trajectory (camera to world, exact)\n# synthetic RGB-D sequence, seed "
-                << sequence.options().seed << "\n# timestamp tx ty tz qx qy qz qw\n"
-                << std::setprecision(std::numeric_limits<double>::max_digits10);
-    for (std::size_t i = 0; i < sequence.size(); ++i) {
-      const SyntheticRgbdFrame frame = sequence.frame(i);
-      const std::string stamp = timestampText(frame.timestamp);
-      writeImage(temporary / "rgb" / (stamp + ".png"), frame.color);
-      writeImage(temporary / "depth" / (stamp + ".png"), frame.depth);
-      rgb_list << stamp << " rgb/" << stamp << ".png\n";
-      depth_list << stamp << " depth/" << stamp << ".png\n";
-      Eigen::Quaterniond rotation(frame.camera_to_world.linear());
-      if (rotation.w() < 0.0) rotation.coeffs() = -rotation.coeffs();  // one of the two equal quaternions
-      const Eigen::Vector3d& t = frame.camera_to_world.translation();
-      groundtruth << stamp << ' ' << t.x() << ' ' << t.y() << ' ' << t.z() << ' ' << rotation.x() << ' '
-                  << rotation.y() << ' ' << rotation.z() << ' ' << rotation.w() << '\n';
-      if (frame_written) frame_written(i);
-    }
-    for (std::ofstream* list : {&rgb_list, &depth_list, &groundtruth}) {
-      list->close();
-      if (!*list) throw std::runtime_error("cannot write the lists in " + temporary.string());
-    }
-    if (fs::exists(target) && !fs::is_empty(target)) {
-      // Replace: move the old folder aside, the new one in, then delete the old.
-      const fs::path old = temporary.string() + ".old";
-      fs::rename(target, old);
-      fs::rename(temporary, target, error);
-      if (error) {
-        fs::rename(old, target);
-        throw fs::filesystem_error("rename", temporary, target, error);
-      }
-      fs::remove_all(old, error);
-    } else {
-      fs::rename(temporary, target);  // replaces an empty folder
-    }
-  } catch (const fs::filesystem_error& e) {
-    fs::remove_all(temporary, error);
-    throw std::runtime_error("cannot write " + target.string() + ": " + e.code().message());
-  } catch (...) {
-    fs::remove_all(temporary, error);
-    throw;
-  }
 }
 
 }  // namespace weighted_icp::simulation

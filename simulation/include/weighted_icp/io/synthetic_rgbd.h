@@ -5,6 +5,7 @@
 // library (link weighted_icp::simulation); these names keep old code compiling.
 
 #include "weighted_icp/simulation/rgbd_sequence.h"
+#include "weighted_icp/simulation/tum_export.h"
 
 namespace weighted_icp::io {
 

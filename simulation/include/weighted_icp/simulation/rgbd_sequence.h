@@ -11,10 +11,8 @@
 
 #include <cstddef>
 #include <cstdint>
-#include <functional>
 #include <memory>
 #include <optional>
-#include <string>
 #include <vector>
 
 #include <Eigen/Core>
@@ -104,15 +102,5 @@ class SyntheticRgbdSequence {
   SyntheticRgbdOptions options_;
   std::unique_ptr<const Scene> scene_;
 };
-
-/// Writes the sequence in the TUM RGB-D layout: rgb/ and depth/ (PNG, named
-/// by timestamp), rgb.txt and depth.txt (the same timestamps), groundtruth.txt
-/// (`timestamp tx ty tz qx qy qz qw`, camera-to-world, digits enough to read
-/// back the exact doubles). The folder appears complete or not at all: it is
-/// written beside `dir` under a temporary name and renamed at the end. An
-/// existing non-empty `dir` is refused (std::runtime_error) unless
-/// `overwrite`. `frame_written(i)` is called after each frame, for progress.
-void writeTumSequence(const SyntheticRgbdSequence& sequence, const std::string& dir, bool overwrite = false,
-                      const std::function<void(std::size_t)>& frame_written = {});
 
 }  // namespace weighted_icp::simulation
