@@ -23,10 +23,11 @@
 
 namespace weighted_icp::simulation {
 
-/// TUM freiburg 1's RGB intrinsics without its lens distortion, 640 x 480,
-/// depth factor 5000.
+/// @brief The sequences' default camera: TUM freiburg 1's RGB intrinsics
+/// without its lens distortion, 640 x 480, depth factor 5000.
 io::PinholeCamera syntheticRgbdCamera();
 
+/// @brief What to render: length, camera, scene variants and sensor model.
 struct SyntheticRgbdOptions {
   /// Drives the textures, the camera path's phases, the moving object's
   /// texture and all noise. Options other than the seed do not change what
@@ -57,13 +58,14 @@ struct SyntheticRgbdOptions {
   double max_incidence_deg = 75.0;
 };
 
-/// An axis-aligned box turned by `yaw` about the vertical axis through its centre.
+/// @brief An axis-aligned box turned by `yaw` about the vertical axis through its centre.
 struct SceneBox {
   Eigen::Vector3d center = Eigen::Vector3d::Zero();
   Eigen::Vector3d size = Eigen::Vector3d::Ones();  // metres along its own x, y, z
   double yaw = 0.0;                                // radians
 };
 
+/// @brief One rendered frame with its true pose.
 struct SyntheticRgbdFrame {
   double timestamp = 0.0;
   cv::Mat color;  // CV_8UC3, BGR
@@ -72,29 +74,34 @@ struct SyntheticRgbdFrame {
   cv::Mat moving_object_mask;  // CV_8UC1, 255 where the moving object is seen
 };
 
+/// @brief The sequence: a scene drawn once from the seed, frames rendered on demand.
 class SyntheticRgbdSequence {
  public:
-  /// Draws the scene's textures (some 0.3 s of CPU). Throws std::invalid_argument
-  /// naming the first option out of range.
+  /// @brief Draws the scene's textures (some 0.3 s of CPU).
+  /// @param options checked: std::invalid_argument names the first one out of range
   explicit SyntheticRgbdSequence(const SyntheticRgbdOptions& options);
   ~SyntheticRgbdSequence();
   SyntheticRgbdSequence(SyntheticRgbdSequence&&) noexcept;
   SyntheticRgbdSequence& operator=(SyntheticRgbdSequence&&) noexcept;
 
+  /// @brief The number of frames (options().frames).
   std::size_t size() const;
+  /// @brief The options it was made with.
   const SyntheticRgbdOptions& options() const;
 
-  /// Renders frame i (0 <= i < size(), else std::out_of_range).
+  /// @brief Renders frame i.
+  /// @param i 0 <= i < size(), else std::out_of_range
   SyntheticRgbdFrame frame(std::size_t i) const;
-  /// The true camera-to-world pose and timestamp of frame i, without rendering.
+  /// @brief The true camera-to-world pose of frame i, without rendering.
   Eigen::Isometry3d cameraToWorld(std::size_t i) const;
+  /// @brief The timestamp of frame i: i / fps seconds.
   double timestamp(std::size_t i) const;
 
-  /// The scene: the room spans [-x/2, x/2] x [-y/2, y/2] x [0, z] of this
-  /// size; the furniture stands in it; the moving object, when on and
-  /// present in frame i, is one more box.
+  /// @brief The room's size: it spans [-x/2, x/2] x [-y/2, y/2] x [0, z].
   Eigen::Vector3d roomSize() const;
+  /// @brief The furniture standing in the room.
   const std::vector<SceneBox>& furniture() const;
+  /// @brief The moving object in frame i: one more box, when on and present.
   std::optional<SceneBox> movingObject(std::size_t i) const;
 
  private:

@@ -18,11 +18,12 @@
 #include <Eigen/Geometry>
 
 #include "weighted_icp/io/camera.h"
-#include "weighted_icp/simulation/rgbd_sequence.h"
 #include "weighted_icp/registration/landmark_map.h"
+#include "weighted_icp/simulation/rgbd_sequence.h"
 
 namespace weighted_icp::simulation {
 
+/// @brief The room, camera path, sensor and odometry of a session.
 struct SyntheticSessionOptions {
   std::uint64_t seed = 1;
   std::size_t num_frames = 240;
@@ -67,6 +68,7 @@ struct SyntheticSessionOptions {
   double drift_translation_sigma = 0.001;  // metres
 };
 
+/// @brief A session's estimated map and its exact truth.
 struct SyntheticSession {
   /// What a drifting visual odometry builds: odometry poses, and landmark
   /// positions back-projected from noisy pixels and depths with them (mean
@@ -79,8 +81,9 @@ struct SyntheticSession {
   std::vector<Eigen::Isometry3d> true_camera_poses;
 };
 
-/// Deterministic for a seed. Throws std::invalid_argument naming the first
-/// option out of range, std::runtime_error when no landmark is observed.
+/// @brief Generates a session, deterministically for a seed.
+/// @param options checked: std::invalid_argument names the first one out of
+///        range; std::runtime_error when no landmark is observed
 SyntheticSession generateSyntheticSession(const SyntheticSessionOptions& options);
 
 }  // namespace weighted_icp::simulation
