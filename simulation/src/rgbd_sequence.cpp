@@ -89,7 +89,8 @@ struct TexturedBox {
   bool is_moving_object = false;
 };
 
-TexturedBox texturedBox(const SceneBox& box, const FaceTextures* faces, double texels_per_metre, bool is_moving_object) {
+TexturedBox texturedBox(const SceneBox& box, const FaceTextures* faces, double texels_per_metre,
+                        bool is_moving_object) {
   return {RayBox::centred(box.center, box.size, box.yaw), faces, texels_per_metre, false, is_moving_object};
 }
 
@@ -148,14 +149,17 @@ SyntheticRgbdSequence::SyntheticRgbdSequence(const SyntheticRgbdOptions& options
   scene->furniture_faces.resize(layout.size());
   // One job per box, each with its own seed: the result does not depend on threads.
   const int jobs = static_cast<int>(layout.size()) + 2;
+  const std::uint64_t seed = options_.seed;
   cv::parallel_for_(cv::Range(0, jobs), [&](const cv::Range& range) {
     for (int job = range.start; job < range.end; ++job) {
       if (job < static_cast<int>(layout.size()))
-        scene->furniture_faces[job] = makeBoxTextures(layout[job].size, kRoomTexelsPerMetre, subSeed(options_.seed, Stream::RoomTextures, job + 1));
+        scene->furniture_faces[job] =
+            makeBoxTextures(layout[job].size, kRoomTexelsPerMetre, subSeed(seed, Stream::RoomTextures, job + 1));
       else if (job == static_cast<int>(layout.size()))
-        scene->room_faces = makeBoxTextures(kRoomSize, kRoomTexelsPerMetre, subSeed(options_.seed, Stream::RoomTextures, 0));
+        scene->room_faces = makeBoxTextures(kRoomSize, kRoomTexelsPerMetre, subSeed(seed, Stream::RoomTextures, 0));
       else if (options_.moving_object)
-        scene->object_faces = makeBoxTextures(kObjectSize, kObjectTexelsPerMetre, subSeed(options_.seed, Stream::ObjectTextures));
+        scene->object_faces =
+            makeBoxTextures(kObjectSize, kObjectTexelsPerMetre, subSeed(seed, Stream::ObjectTextures));
     }
   });
   RandomSource path_random(subSeed(options_.seed, Stream::Path));
@@ -221,8 +225,8 @@ std::optional<SceneBox> SyntheticRgbdSequence::movingObject(std::size_t i) const
   const std::size_t step = (i - kFirstCrossing) % kCrossingPeriod;
   if (step >= kCrossingFrames) return std::nullopt;
   // A straight line in the world, across the view of the crossing's middle frame.
-  const PathPoint middle =
-      pathPoint(scene_->path_start_angle, scene_->path_phases, kFirstCrossing + crossing * kCrossingPeriod + kCrossingFrames / 2);
+  const std::size_t middle_frame = kFirstCrossing + crossing * kCrossingPeriod + kCrossingFrames / 2;
+  const PathPoint middle = pathPoint(scene_->path_start_angle, scene_->path_phases, middle_frame);
   const Eigen::Vector3d forward(std::cos(middle.heading), std::sin(middle.heading), 0.0);
   const Eigen::Vector3d left(-forward.y(), forward.x(), 0.0);
   const double progress = (static_cast<double>(step) + 0.5) / kCrossingFrames;  // (0, 1)
