@@ -23,10 +23,10 @@
 
 #include "weighted_icp/core/statistics.h"
 #include "weighted_icp/frontend/slam/rgbd_slam.h"
-#include "weighted_icp/io/synthetic_rgbd.h"
 #include "weighted_icp/io/trajectory.h"
 #include "weighted_icp/io/tum_sequence.h"
 #include "weighted_icp/metrics/trajectory_error.h"
+#include "weighted_icp/simulation/rgbd_sequence.h"
 
 namespace po = boost::program_options;
 using namespace weighted_icp;
@@ -59,13 +59,13 @@ Sequence loadTum(const std::string& dir, const std::string& name, int freiburg) 
 }
 
 Sequence makeSynthetic(std::size_t frames, bool moving_object) {
-  io::SyntheticRgbdOptions options;
+  simulation::SyntheticRgbdOptions options;
   options.frames = frames;
   options.moving_object = moving_object;
-  const io::SyntheticRgbdSequence synthetic(options);
+  const simulation::SyntheticRgbdSequence synthetic(options);
   Sequence sequence{moving_object ? "synthetic, moving object" : "synthetic", options.camera, {}, {}};
   for (std::size_t i = 0; i < synthetic.size(); ++i) {
-    io::SyntheticRgbdFrame frame = synthetic.frame(i);
+    simulation::SyntheticRgbdFrame frame = synthetic.frame(i);
     cv::Mat depth;
     frame.depth.convertTo(depth, CV_32F, 1.0 / options.camera.depth_factor);
     sequence.frames.push_back({frame.timestamp, frame.color, depth});

@@ -27,9 +27,9 @@
 #include "tool_support.h"
 #include "weighted_icp/core/statistics.h"
 #include "weighted_icp/io/map_format.h"
-#include "weighted_icp/io/synthetic_session.h"
 #include "weighted_icp/registration/landmark_alignment.h"
 #include "weighted_icp/registration/rigid_motion.h"
+#include "weighted_icp/simulation/session.h"
 
 namespace po = boost::program_options;
 namespace fs = std::filesystem;
@@ -124,7 +124,7 @@ void printSummaryTable(const std::vector<AlignmentRecord>& records, std::size_t 
 int main(int argc, char** argv) {
   return tools::runTool("wicp_demo", [&] {
     const auto start = std::chrono::steady_clock::now();
-    io::SyntheticSessionOptions session_options;
+    simulation::SyntheticSessionOptions session_options;
     long long seed = static_cast<long long>(session_options.seed);
     long long frames = static_cast<long long>(session_options.num_frames);
     long long landmarks = static_cast<long long>(session_options.num_landmarks);
@@ -168,7 +168,7 @@ int main(int argc, char** argv) {
     const Eigen::Isometry3d true_alignment = displacement.toIsometry().inverse();
 
     const auto generation_start = std::chrono::steady_clock::now();
-    const io::SyntheticSession session = io::generateSyntheticSession(session_options);
+    const simulation::SyntheticSession session = simulation::generateSyntheticSession(session_options);
     const double generation_s =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - generation_start).count();
     std::size_t observations = 0;

@@ -20,11 +20,11 @@
 #include "weighted_icp/frontend/slam/rgbd_slam.h"
 #include "weighted_icp/io/cloud_io.h"
 #include "weighted_icp/io/map_format.h"
-#include "weighted_icp/io/synthetic_rgbd.h"
 #include "weighted_icp/io/trajectory.h"
 #include "weighted_icp/io/tum_sequence.h"
 #include "weighted_icp/metrics/trajectory_error.h"
 #include "weighted_icp/registration/landmark_point.h"
+#include "weighted_icp/simulation/rgbd_sequence.h"
 
 namespace po = boost::program_options;
 namespace fs = std::filesystem;
@@ -65,10 +65,10 @@ class TumSource : public FrameSource {
 
 class SyntheticSource : public FrameSource {
  public:
-  explicit SyntheticSource(const io::SyntheticRgbdOptions& options) : sequence_(options) {}
+  explicit SyntheticSource(const simulation::SyntheticRgbdOptions& options) : sequence_(options) {}
   std::size_t size() const override { return sequence_.size(); }
   RgbdFrame load(std::size_t i) const override {
-    io::SyntheticRgbdFrame frame = sequence_.frame(i);
+    simulation::SyntheticRgbdFrame frame = sequence_.frame(i);
     cv::Mat depth;
     frame.depth.convertTo(depth, CV_32F, 1.0 / sequence_.options().camera.depth_factor);
     return {frame.timestamp, frame.color, depth};
@@ -88,7 +88,7 @@ class SyntheticSource : public FrameSource {
   }
 
  private:
-  io::SyntheticRgbdSequence sequence_;
+  simulation::SyntheticRgbdSequence sequence_;
 };
 
 /// TUM folders are named after their sensor (rgbd_dataset_freiburg3_teddy, tum_fr1_xyz_head).
@@ -112,7 +112,7 @@ int main(int argc, char** argv) {
     std::string dataset, camera_spec, out_dir, matcher_name = "flann";
     std::size_t max_frames = 0;
     frontend::RgbdSlamOptions options;
-    io::SyntheticRgbdOptions synthetic;
+    simulation::SyntheticRgbdOptions synthetic;
     po::options_description description(
         "wicp_rgbd_slam [--dataset DIR] [--camera fr1|fr2|fr3|FILE.yaml] [--max-frames N]\n"
         "               [--minimap-keyframes N] --out DIR\n"

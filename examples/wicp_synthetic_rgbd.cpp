@@ -11,7 +11,8 @@
 #include <boost/program_options.hpp>
 
 #include "tool_support.h"
-#include "weighted_icp/io/synthetic_rgbd.h"
+#include "weighted_icp/simulation/rgbd_sequence.h"
+#include "weighted_icp/simulation/tum_export.h"
 
 namespace po = boost::program_options;
 using namespace weighted_icp;
@@ -19,7 +20,7 @@ using namespace weighted_icp;
 int main(int argc, char** argv) {
   return tools::runTool("wicp_synthetic_rgbd", [&] {
     std::string out_dir;
-    io::SyntheticRgbdOptions options;
+    simulation::SyntheticRgbdOptions options;
     // Signed, so that "--frames -3" is an error rather than a wrapped huge count.
     long long frames = static_cast<long long>(options.frames);
     bool no_depth_noise = false, overwrite = false;
@@ -44,10 +45,10 @@ int main(int argc, char** argv) {
     options.frames = static_cast<std::size_t>(frames);
     options.depth_noise = !no_depth_noise;
 
-    const io::SyntheticRgbdSequence sequence(options);
+    const simulation::SyntheticRgbdSequence sequence(options);
     tools::Progress progress("rendering", sequence.size());
     const auto start = std::chrono::steady_clock::now();
-    io::writeTumSequence(sequence, out_dir, overwrite, [&](std::size_t) { progress.step(); });
+    simulation::writeTumSequence(sequence, out_dir, overwrite, [&](std::size_t) { progress.step(); });
     progress.finish();
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     std::cout << "wrote " << sequence.size() << " frames to " << out_dir << " (" << std::fixed << std::setprecision(1)

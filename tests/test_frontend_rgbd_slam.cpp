@@ -11,10 +11,10 @@
 
 #include "test_support.h"
 #include "weighted_icp/frontend/slam/rgbd_slam.h"
-#include "weighted_icp/io/synthetic_rgbd.h"
 #include "weighted_icp/io/trajectory.h"
 #include "weighted_icp/io/tum_sequence.h"
 #include "weighted_icp/metrics/trajectory_error.h"
+#include "weighted_icp/simulation/rgbd_sequence.h"
 
 namespace {
 
@@ -26,13 +26,13 @@ frontend::RgbdSlamOptions deterministic() {
   return options;
 }
 
-RgbdFrame toImage(const io::SyntheticRgbdFrame& frame, const io::PinholeCamera& camera) {
+RgbdFrame toImage(const simulation::SyntheticRgbdFrame& frame, const PinholeCamera& camera) {
   cv::Mat depth;
   frame.depth.convertTo(depth, CV_32F, 1.0 / camera.depth_factor);
   return {frame.timestamp, frame.color, depth};
 }
 
-double syntheticAte(const io::SyntheticRgbdSequence& sequence, frontend::RgbdSlam& slam) {
+double syntheticAte(const simulation::SyntheticRgbdSequence& sequence, frontend::RgbdSlam& slam) {
   io::Trajectory truth;
   for (std::size_t i = 0; i < sequence.size(); ++i) {
     slam.process(toImage(sequence.frame(i), sequence.options().camera));
@@ -42,8 +42,8 @@ double syntheticAte(const io::SyntheticRgbdSequence& sequence, frontend::RgbdSla
   return metrics::computeAte(truth, slam.trajectory()).translation.rmse;
 }
 
-io::SyntheticRgbdOptions syntheticOptions(bool moving_object) {
-  io::SyntheticRgbdOptions options;
+simulation::SyntheticRgbdOptions syntheticOptions(bool moving_object) {
+  simulation::SyntheticRgbdOptions options;
   options.frames = 90;
   options.moving_object = moving_object;
   return options;
@@ -63,7 +63,7 @@ double meanReprojectionErrorPx(const LandmarkMap& map, const io::PinholeCamera& 
 }
 
 TEST(RgbdSlam, SyntheticSequenceIsTrackedBelowOneCentimetre) {
-  const io::SyntheticRgbdSequence sequence(syntheticOptions(false));
+  const simulation::SyntheticRgbdSequence sequence(syntheticOptions(false));
   frontend::RgbdSlam slam(sequence.options().camera, deterministic());
   const double ate = syntheticAte(sequence, slam);
   EXPECT_LT(ate, 0.01);
@@ -76,8 +76,8 @@ TEST(RgbdSlam, SyntheticSequenceIsTrackedBelowOneCentimetre) {
 }
 
 TEST(RgbdSlam, AMovingObjectIsRejectedAndDoesNotHurtTheTrajectory) {
-  const io::SyntheticRgbdSequence still(syntheticOptions(false));
-  const io::SyntheticRgbdSequence moving(syntheticOptions(true));
+  const simulation::SyntheticRgbdSequence still(syntheticOptions(false));
+  const simulation::SyntheticRgbdSequence moving(syntheticOptions(true));
   frontend::RgbdSlam still_slam(still.options().camera, deterministic());
   frontend::RgbdSlam moving_slam(moving.options().camera, deterministic());
   const double still_ate = syntheticAte(still, still_slam);
@@ -104,9 +104,9 @@ TEST(RgbdSlam, AMovingObjectIsRejectedAndDoesNotHurtTheTrajectory) {
 }
 
 TEST(RgbdSlam, DeterministicModeRepeatsExactly) {
-  io::SyntheticRgbdOptions options = syntheticOptions(false);
+  simulation::SyntheticRgbdOptions options = syntheticOptions(false);
   options.frames = 40;
-  const io::SyntheticRgbdSequence sequence(options);
+  const simulation::SyntheticRgbdSequence sequence(options);
   io::Trajectory runs[2];
   for (auto& run : runs) {
     frontend::RgbdSlam slam(sequence.options().camera, deterministic());
@@ -119,9 +119,9 @@ TEST(RgbdSlam, DeterministicModeRepeatsExactly) {
 }
 
 TEST(RgbdSlam, BackgroundBundleAdjustmentRunsAndIsFlushed) {
-  io::SyntheticRgbdOptions options = syntheticOptions(false);
+  simulation::SyntheticRgbdOptions options = syntheticOptions(false);
   options.frames = 60;
-  const io::SyntheticRgbdSequence sequence(options);
+  const simulation::SyntheticRgbdSequence sequence(options);
   frontend::RgbdSlam slam(sequence.options().camera);  // backend in its own thread
   EXPECT_LT(syntheticAte(sequence, slam), 0.01);
   EXPECT_GE(slam.optimizationsRun(), 1u);
@@ -129,9 +129,9 @@ TEST(RgbdSlam, BackgroundBundleAdjustmentRunsAndIsFlushed) {
 }
 
 TEST(RgbdSlam, AnUntrackableFrameStartsANewSegmentAndKeepsTheMap) {
-  io::SyntheticRgbdOptions options = syntheticOptions(false);
+  simulation::SyntheticRgbdOptions options = syntheticOptions(false);
   options.frames = 60;
-  const io::SyntheticRgbdSequence sequence(options);
+  const simulation::SyntheticRgbdSequence sequence(options);
   frontend::RgbdSlamOptions slam_options = deterministic();
   slam_options.frontend.quality_gate = false;  // a blank frame must count as lost, not as a bad image
   frontend::RgbdSlam slam(sequence.options().camera, slam_options);
@@ -163,9 +163,9 @@ TEST(RgbdSlam, AnUntrackableFrameStartsANewSegmentAndKeepsTheMap) {
 }
 
 TEST(RgbdSlam, FramesWithoutDepthAreTrackedTwoDimensionally) {
-  io::SyntheticRgbdOptions options = syntheticOptions(false);
+  simulation::SyntheticRgbdOptions options = syntheticOptions(false);
   options.frames = 100;
-  const io::SyntheticRgbdSequence sequence(options);
+  const simulation::SyntheticRgbdSequence sequence(options);
   frontend::RgbdSlam slam(sequence.options().camera, deterministic());
   io::Trajectory truth;
   std::size_t relative = 0;

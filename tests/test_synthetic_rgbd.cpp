@@ -22,8 +22,9 @@
 #include <opencv2/imgproc.hpp>
 
 #include "test_support.h"
-#include "weighted_icp/io/synthetic_rgbd.h"
 #include "weighted_icp/io/tum_sequence.h"
+#include "weighted_icp/simulation/rgbd_sequence.h"
+#include "weighted_icp/simulation/tum_export.h"
 
 namespace {
 
@@ -34,8 +35,8 @@ using weighted_icp::testing::scratchDir;
 
 constexpr std::uint64_t kSeed = 7;
 
-io::SyntheticRgbdOptions exactOptions(bool moving_object) {
-  io::SyntheticRgbdOptions options;
+simulation::SyntheticRgbdOptions exactOptions(bool moving_object) {
+  simulation::SyntheticRgbdOptions options;
   options.seed = kSeed;
   options.depth_noise = false;
   options.moving_object = moving_object;
@@ -43,12 +44,12 @@ io::SyntheticRgbdOptions exactOptions(bool moving_object) {
 }
 
 // Building a sequence draws its textures (a fraction of a second): share them.
-const io::SyntheticRgbdSequence& exactStatic() {
-  static const io::SyntheticRgbdSequence sequence(exactOptions(false));
+const simulation::SyntheticRgbdSequence& exactStatic() {
+  static const simulation::SyntheticRgbdSequence sequence(exactOptions(false));
   return sequence;
 }
-const io::SyntheticRgbdSequence& exactWithObject() {
-  static const io::SyntheticRgbdSequence sequence(exactOptions(true));
+const simulation::SyntheticRgbdSequence& exactWithObject() {
+  static const simulation::SyntheticRgbdSequence sequence(exactOptions(true));
   return sequence;
 }
 
@@ -71,7 +72,7 @@ struct RayHit {
   Eigen::Vector3d normal = Eigen::Vector3d::Zero();
 };
 
-void castAgainstBox(const io::SceneBox& box, const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
+void castAgainstBox(const simulation::SceneBox& box, const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
                     RayHit& nearest) {
   const Eigen::Matrix3d box_to_world = Eigen::AngleAxisd(box.yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   const Eigen::Vector3d o = box_to_world.transpose() * (origin - box.center);
@@ -94,7 +95,7 @@ void castAgainstBox(const io::SceneBox& box, const Eigen::Vector3d& origin, cons
   }
 }
 
-RayHit castRay(const io::SyntheticRgbdSequence& sequence, std::size_t frame, const Eigen::Vector3d& origin,
+RayHit castRay(const simulation::SyntheticRgbdSequence& sequence, std::size_t frame, const Eigen::Vector3d& origin,
                const Eigen::Vector3d& direction) {
   RayHit nearest;
   const Eigen::Vector3d room = sequence.roomSize();
@@ -109,13 +110,13 @@ RayHit castRay(const io::SyntheticRgbdSequence& sequence, std::size_t frame, con
       nearest.normal[axis] = direction[axis] > 0.0 ? -1.0 : 1.0;
     }
   }
-  for (const io::SceneBox& box : sequence.furniture()) castAgainstBox(box, origin, direction, nearest);
+  for (const simulation::SceneBox& box : sequence.furniture()) castAgainstBox(box, origin, direction, nearest);
   if (const auto object = sequence.movingObject(frame)) castAgainstBox(*object, origin, direction, nearest);
   return nearest;
 }
 
 /// Signed distance-like measure to a box's surface: 0 on it.
-double boxSurfaceOffset(const io::SceneBox& box, const Eigen::Vector3d& point) {
+double boxSurfaceOffset(const simulation::SceneBox& box, const Eigen::Vector3d& point) {
   const Eigen::Vector3d local =
       Eigen::AngleAxisd(-box.yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix() * (point - box.center);
   return (local.cwiseAbs() - box.size / 2.0).maxCoeff();
@@ -132,9 +133,9 @@ std::vector<std::size_t> framesWithObject(std::size_t step) {
 // --- Determinism and options.
 
 TEST(SyntheticRgbd, SameSeedGivesIdenticalFramesAndPoses) {
-  const io::SyntheticRgbdSequence again(exactOptions(false));
+  const simulation::SyntheticRgbdSequence again(exactOptions(false));
   for (const std::size_t i : {0, 77}) {
-    const io::SyntheticRgbdFrame first = exactStatic().frame(i), second = again.frame(i);
+    const simulation::SyntheticRgbdFrame first = exactStatic().frame(i), second = again.frame(i);
     EXPECT_EQ(cv::norm(first.color, second.color, cv::NORM_INF), 0.0) << "frame " << i;
     EXPECT_EQ(cv::norm(first.depth, second.depth, cv::NORM_INF), 0.0) << "frame " << i;
     EXPECT_TRUE(first.camera_to_world.matrix() == second.camera_to_world.matrix()) << "frame " << i;
@@ -145,29 +146,29 @@ TEST(SyntheticRgbd, SameSeedGivesIdenticalFramesAndPoses) {
 TEST(SyntheticRgbd, RenderingDoesNotDependOnTheThreadCount) {
   const int threads = cv::getNumThreads();
   cv::setNumThreads(1);
-  const io::SyntheticRgbdSequence single_threaded(exactOptions(false));
-  const io::SyntheticRgbdFrame single = single_threaded.frame(12);
+  const simulation::SyntheticRgbdSequence single_threaded(exactOptions(false));
+  const simulation::SyntheticRgbdFrame single = single_threaded.frame(12);
   cv::setNumThreads(threads);
-  const io::SyntheticRgbdFrame parallel = exactStatic().frame(12);
+  const simulation::SyntheticRgbdFrame parallel = exactStatic().frame(12);
   EXPECT_EQ(cv::norm(single.color, parallel.color, cv::NORM_INF), 0.0);
   EXPECT_EQ(cv::norm(single.depth, parallel.depth, cv::NORM_INF), 0.0);
 }
 
 TEST(SyntheticRgbd, DifferentSeedGivesDifferentTexture) {
-  io::SyntheticRgbdOptions options = exactOptions(false);
+  simulation::SyntheticRgbdOptions options = exactOptions(false);
   options.seed = kSeed + 1;
-  const io::SyntheticRgbdSequence other(options);
+  const simulation::SyntheticRgbdSequence other(options);
   // Grey levels of two unrelated textures differ by tens on average; noise alone by about 1.
   EXPECT_GT(meanAbsoluteDifference(exactStatic().frame(0).color, other.frame(0).color), 15.0);
 }
 
 TEST(SyntheticRgbd, DepthNoiseIsDeterministicAndUnbiased) {
-  const io::SyntheticRgbdSequence noisy(io::SyntheticRgbdOptions{});
-  const io::SyntheticRgbdSequence noisy_again(io::SyntheticRgbdOptions{});
+  const simulation::SyntheticRgbdSequence noisy(simulation::SyntheticRgbdOptions{});
+  const simulation::SyntheticRgbdSequence noisy_again(simulation::SyntheticRgbdOptions{});
   EXPECT_EQ(cv::norm(noisy.frame(3).depth, noisy_again.frame(3).depth, cv::NORM_INF), 0.0);
-  io::SyntheticRgbdOptions exact;
+  simulation::SyntheticRgbdOptions exact;
   exact.depth_noise = false;
-  const io::SyntheticRgbdSequence clean(exact);
+  const simulation::SyntheticRgbdSequence clean(exact);
   const cv::Mat noisy_depth = noisy.frame(3).depth, clean_depth = clean.frame(3).depth;
   cv::Mat noisy_metres, clean_metres;
   noisy_depth.convertTo(noisy_metres, CV_64F, 1.0 / 5000.0);
@@ -185,23 +186,23 @@ TEST(SyntheticRgbd, DepthNoiseIsDeterministicAndUnbiased) {
 
 TEST(SyntheticRgbd, RejectsBadOptions) {
   const auto rejects = [](auto change) {
-    io::SyntheticRgbdOptions options;
+    simulation::SyntheticRgbdOptions options;
     change(options);
-    EXPECT_THROW(io::SyntheticRgbdSequence{options}, std::invalid_argument);
+    EXPECT_THROW(simulation::SyntheticRgbdSequence{options}, std::invalid_argument);
   };
-  rejects([](io::SyntheticRgbdOptions& o) { o.frames = 0; });
-  rejects([](io::SyntheticRgbdOptions& o) { o.fps = 0.0; });
-  rejects([](io::SyntheticRgbdOptions& o) { o.depth_noise_coefficient = -0.001; });
-  rejects([](io::SyntheticRgbdOptions& o) { o.camera.distortion[0] = 0.1; });
-  rejects([](io::SyntheticRgbdOptions& o) { o.camera.depth_factor = 0.0; });
-  rejects([](io::SyntheticRgbdOptions& o) { o.max_depth = o.min_depth; });
+  rejects([](simulation::SyntheticRgbdOptions& o) { o.frames = 0; });
+  rejects([](simulation::SyntheticRgbdOptions& o) { o.fps = 0.0; });
+  rejects([](simulation::SyntheticRgbdOptions& o) { o.depth_noise_coefficient = -0.001; });
+  rejects([](simulation::SyntheticRgbdOptions& o) { o.camera.distortion[0] = 0.1; });
+  rejects([](simulation::SyntheticRgbdOptions& o) { o.camera.depth_factor = 0.0; });
+  rejects([](simulation::SyntheticRgbdOptions& o) { o.max_depth = o.min_depth; });
   EXPECT_THROW(exactStatic().frame(exactStatic().size()), std::out_of_range);
 }
 
 // --- Geometry.
 
 TEST(SyntheticRgbd, CameraMovesLikeAHandHeldCamera) {
-  const io::SyntheticRgbdSequence& sequence = exactStatic();
+  const simulation::SyntheticRgbdSequence& sequence = exactStatic();
   double path_length = 0.0;
   for (std::size_t i = 1; i < sequence.size(); ++i) {
     const Eigen::Isometry3d step = sequence.cameraToWorld(i - 1).inverse() * sequence.cameraToWorld(i);
@@ -216,7 +217,7 @@ TEST(SyntheticRgbd, CameraMovesLikeAHandHeldCamera) {
 }
 
 TEST(SyntheticRgbd, DepthEqualsTheDistanceAlongTheRayToTheScene) {
-  const io::SyntheticRgbdSequence& sequence = exactWithObject();
+  const simulation::SyntheticRgbdSequence& sequence = exactWithObject();
   const io::PinholeCamera& camera = sequence.options().camera;
   const double cos_max_incidence = std::cos(sequence.options().max_incidence_deg * M_PI / 180.0);
   std::vector<std::size_t> frames = {0, 100};
@@ -224,7 +225,7 @@ TEST(SyntheticRgbd, DepthEqualsTheDistanceAlongTheRayToTheScene) {
   ASSERT_FALSE(with_object.empty());
   frames.push_back(with_object.front());
   for (const std::size_t i : frames) {
-    const io::SyntheticRgbdFrame frame = sequence.frame(i);
+    const simulation::SyntheticRgbdFrame frame = sequence.frame(i);
     const Eigen::Vector3d origin = frame.camera_to_world.translation();
     std::size_t checked = 0, measurable = 0, wrong = 0;
     for (int v = 0; v < camera.height; v += 4) {
@@ -251,12 +252,12 @@ TEST(SyntheticRgbd, DepthEqualsTheDistanceAlongTheRayToTheScene) {
 }
 
 TEST(SyntheticRgbd, BackProjectedPixelsLieOnTheRoomsSurfaces) {
-  const io::SyntheticRgbdSequence& sequence = exactWithObject();
+  const simulation::SyntheticRgbdSequence& sequence = exactWithObject();
   const io::PinholeCamera& camera = sequence.options().camera;
   const Eigen::Vector3d room = sequence.roomSize();
   std::size_t on_furniture = 0;
   for (const std::size_t i : {20, 60, 140}) {
-    const io::SyntheticRgbdFrame frame = sequence.frame(i);
+    const simulation::SyntheticRgbdFrame frame = sequence.frame(i);
     for (int v = 3; v < camera.height; v += 12) {
       for (int u = 5; u < camera.width; u += 12) {
         const std::uint16_t stored = frame.depth.at<std::uint16_t>(v, u);
@@ -266,7 +267,7 @@ TEST(SyntheticRgbd, BackProjectedPixelsLieOnTheRoomsSurfaces) {
         double offset = std::min({std::abs(std::abs(point.x()) - room.x() / 2), std::abs(std::abs(point.y()) - room.y() / 2),
                                   std::abs(point.z()), std::abs(point.z() - room.z())});
         const double on_room = offset;
-        for (const io::SceneBox& box : sequence.furniture()) offset = std::min(offset, std::abs(boxSurfaceOffset(box, point)));
+        for (const simulation::SceneBox& box : sequence.furniture()) offset = std::min(offset, std::abs(boxSurfaceOffset(box, point)));
         if (const auto object = sequence.movingObject(i)) offset = std::min(offset, std::abs(boxSurfaceOffset(*object, point)));
         EXPECT_LT(offset, 0.0005) << "frame " << i << " pixel " << u << ' ' << v << " -> " << point.transpose();
         if (offset < on_room) ++on_furniture;
@@ -282,10 +283,10 @@ double normalisedCrossCorrelation(const cv::Mat& a, const cv::Mat& b) {
 }
 
 TEST(SyntheticRgbd, TexturedPointsLookTheSameFromTwoViews) {
-  const io::SyntheticRgbdSequence& sequence = exactStatic();
+  const simulation::SyntheticRgbdSequence& sequence = exactStatic();
   const io::PinholeCamera& camera = sequence.options().camera;
   const std::size_t first_index = 30, second_index = 42;  // 12 frames: some 10 cm and 7 deg apart
-  const io::SyntheticRgbdFrame first = sequence.frame(first_index), second = sequence.frame(second_index);
+  const simulation::SyntheticRgbdFrame first = sequence.frame(first_index), second = sequence.frame(second_index);
   cv::Mat first_gray, second_gray;
   gray(first.color).convertTo(first_gray, CV_32F);
   gray(second.color).convertTo(second_gray, CV_32F);
@@ -329,7 +330,7 @@ TEST(SyntheticRgbd, MovingObjectComesAndGoesAndIsNearerThanTheRoom) {
   int largest = 0;
   const int pixels = exactWithObject().options().camera.width * exactWithObject().options().camera.height;
   for (std::size_t i = 0; i < exactWithObject().size(); i += 5) {
-    const io::SyntheticRgbdFrame with = exactWithObject().frame(i);
+    const simulation::SyntheticRgbdFrame with = exactWithObject().frame(i);
     const int covered = cv::countNonZero(with.moving_object_mask);
     largest = std::max(largest, covered);
     if (covered == 0) {
@@ -337,7 +338,7 @@ TEST(SyntheticRgbd, MovingObjectComesAndGoesAndIsNearerThanTheRoom) {
       continue;
     }
     ++frames_with;
-    const io::SyntheticRgbdFrame without = exactStatic().frame(i);
+    const simulation::SyntheticRgbdFrame without = exactStatic().frame(i);
     EXPECT_EQ(cv::countNonZero(without.moving_object_mask), 0);
     // Where the object is not, nothing changed; where it is, it hides a farther surface.
     const cv::Mat elsewhere = with.moving_object_mask == 0;
@@ -365,7 +366,7 @@ TEST(SyntheticRgbd, MovingObjectComesAndGoesAndIsNearerThanTheRoom) {
 // --- Images for a feature tracker.
 
 TEST(SyntheticRgbd, NormalFramesHavePlentyOfCorners) {
-  const io::SyntheticRgbdSequence sequence(io::SyntheticRgbdOptions{});
+  const simulation::SyntheticRgbdSequence sequence(simulation::SyntheticRgbdOptions{});
   for (const std::size_t i : {0, 50, 100, 149}) {
     std::vector<cv::Point2f> corners;
     cv::goodFeaturesToTrack(gray(sequence.frame(i).color), corners, 500, 0.01, 10);
@@ -374,9 +375,9 @@ TEST(SyntheticRgbd, NormalFramesHavePlentyOfCorners) {
 }
 
 TEST(SyntheticRgbd, DimLightingIsDarkerFlatterAndDefeatsFixedThresholds) {
-  io::SyntheticRgbdOptions dim_options = exactOptions(false);
+  simulation::SyntheticRgbdOptions dim_options = exactOptions(false);
   dim_options.dim_lighting = true;
-  const io::SyntheticRgbdSequence dim_sequence(dim_options);
+  const simulation::SyntheticRgbdSequence dim_sequence(dim_options);
   for (const std::size_t i : {10, 110}) {
     const cv::Mat normal = gray(exactStatic().frame(i).color), dim = gray(dim_sequence.frame(i).color);
     cv::Scalar normal_mean, normal_contrast, dim_mean, dim_contrast;
@@ -414,18 +415,18 @@ std::vector<std::vector<std::string>> readListFile(const fs::path& path) {
   return rows;
 }
 
-io::SyntheticRgbdSequence shortSequence() {
-  io::SyntheticRgbdOptions options;
+simulation::SyntheticRgbdSequence shortSequence() {
+  simulation::SyntheticRgbdOptions options;
   options.seed = kSeed;
   options.frames = 4;
-  return io::SyntheticRgbdSequence(options);
+  return simulation::SyntheticRgbdSequence(options);
 }
 
 TEST(SyntheticRgbd, WritesTheTumLayout) {
   const fs::path dir = scratchDir("synthetic_rgbd_write") / "sequence";
-  const io::SyntheticRgbdSequence sequence = shortSequence();
+  const simulation::SyntheticRgbdSequence sequence = shortSequence();
   std::vector<std::size_t> reported;
-  io::writeTumSequence(sequence, dir.string(), false, [&](std::size_t i) { reported.push_back(i); });
+  simulation::writeTumSequence(sequence, dir.string(), false, [&](std::size_t i) { reported.push_back(i); });
   EXPECT_EQ(reported, (std::vector<std::size_t>{0, 1, 2, 3}));
   // Nothing left beside it: the temporary folder became `dir`.
   EXPECT_EQ(std::distance(fs::directory_iterator(dir.parent_path()), fs::directory_iterator()), 1);
@@ -440,10 +441,10 @@ TEST(SyntheticRgbd, WritesTheTumLayout) {
     ASSERT_EQ(depth[i].size(), 2u);
     ASSERT_EQ(truth[i].size(), 8u);
     EXPECT_EQ(rgb[i][0], depth[i][0]);
-    EXPECT_EQ(rgb[i][0], truth[i][0]);
+    EXPECT_EQ(std::stod(rgb[i][0]), std::stod(truth[i][0]));  // the same time, written by io's trajectory writer
     EXPECT_NEAR(std::stod(rgb[i][0]), sequence.timestamp(i), 1e-6);
 
-    const io::SyntheticRgbdFrame frame = sequence.frame(i);
+    const simulation::SyntheticRgbdFrame frame = sequence.frame(i);
     const cv::Mat color = cv::imread((dir / rgb[i][1]).string(), cv::IMREAD_UNCHANGED);
     const cv::Mat depth_image = cv::imread((dir / depth[i][1]).string(), cv::IMREAD_UNCHANGED);
     ASSERT_EQ(color.type(), CV_8UC3);
@@ -473,22 +474,22 @@ TEST(SyntheticRgbd, WritesTheTumLayout) {
 TEST(SyntheticRgbd, RefusesANonEmptyFolderUnlessToldToOverwrite) {
   const fs::path dir = scratchDir("synthetic_rgbd_refuse") / "sequence";
   fs::create_directories(dir);
-  io::writeTumSequence(shortSequence(), dir.string());  // an empty folder is fine
+  simulation::writeTumSequence(shortSequence(), dir.string());  // an empty folder is fine
   ASSERT_TRUE(fs::exists(dir / "rgb.txt"));
   std::ofstream(dir / "keep.txt") << "mine\n";
 
-  EXPECT_THROW(io::writeTumSequence(shortSequence(), dir.string()), std::runtime_error);
+  EXPECT_THROW(simulation::writeTumSequence(shortSequence(), dir.string()), std::runtime_error);
   EXPECT_TRUE(fs::exists(dir / "keep.txt"));
   EXPECT_EQ(std::distance(fs::directory_iterator(dir.parent_path()), fs::directory_iterator()), 1);
 
-  io::writeTumSequence(shortSequence(), dir.string(), true);
+  simulation::writeTumSequence(shortSequence(), dir.string(), true);
   EXPECT_FALSE(fs::exists(dir / "keep.txt"));
   EXPECT_TRUE(fs::exists(dir / "groundtruth.txt"));
   EXPECT_EQ(std::distance(fs::directory_iterator(dir.parent_path()), fs::directory_iterator()), 1);
 
   const fs::path file = dir.parent_path() / "a_file";
   std::ofstream(file) << "x";
-  EXPECT_THROW(io::writeTumSequence(shortSequence(), file.string(), true), std::runtime_error);
+  EXPECT_THROW(simulation::writeTumSequence(shortSequence(), file.string(), true), std::runtime_error);
 }
 
 // --- The tool, run as a user would.

@@ -17,15 +17,15 @@
 #include "landmark_map_expectations.h"
 #include "test_support.h"
 #include "weighted_icp/io/map_format.h"
-#include "weighted_icp/io/synthetic_session.h"
 #include "weighted_icp/registration/landmark_alignment.h"
 #include "weighted_icp/registration/rigid_motion.h"
+#include "weighted_icp/simulation/session.h"
 
 namespace weighted_icp {
 namespace {
 
-using io::SyntheticSession;
-using io::SyntheticSessionOptions;
+using simulation::SyntheticSession;
+using simulation::SyntheticSessionOptions;
 
 /// A third of the default session: its first 80 frames, at the same camera
 /// speed, so mini-maps of 40 frames overlap as much as the demo's.
@@ -72,9 +72,9 @@ std::vector<double> ranks(const std::vector<double>& values) {
 }
 
 TEST(SyntheticSession, IsDeterministicForASeedAndDiffersBetweenSeeds) {
-  const SyntheticSession first = io::generateSyntheticSession(reducedOptions(7));
-  const SyntheticSession again = io::generateSyntheticSession(reducedOptions(7));
-  const SyntheticSession other = io::generateSyntheticSession(reducedOptions(8));
+  const SyntheticSession first = simulation::generateSyntheticSession(reducedOptions(7));
+  const SyntheticSession again = simulation::generateSyntheticSession(reducedOptions(7));
+  const SyntheticSession other = simulation::generateSyntheticSession(reducedOptions(8));
   EXPECT_EQ(serialized(first.estimated), serialized(again.estimated));
   EXPECT_EQ(serialized(first.truth), serialized(again.truth));
   EXPECT_NE(serialized(first.estimated), serialized(other.estimated));
@@ -83,7 +83,7 @@ TEST(SyntheticSession, IsDeterministicForASeedAndDiffersBetweenSeeds) {
 
 TEST(SyntheticSession, EstimatedAndTrueMapsShareFramesLandmarksAndObservations) {
   const SyntheticSessionOptions options = reducedOptions();
-  const SyntheticSession session = io::generateSyntheticSession(options);
+  const SyntheticSession session = simulation::generateSyntheticSession(options);
   ASSERT_EQ(session.estimated.frames.size(), options.num_frames);
   ASSERT_EQ(session.truth.frames.size(), options.num_frames);
   ASSERT_EQ(session.true_camera_poses.size(), options.num_frames);
@@ -121,7 +121,7 @@ TEST(SyntheticSession, EstimatedAndTrueMapsShareFramesLandmarksAndObservations) 
 
 TEST(SyntheticSession, ObservationsLieInTheImageAndReprojectWithinPixelNoise) {
   const SyntheticSessionOptions options = reducedOptions();
-  const SyntheticSession session = io::generateSyntheticSession(options);
+  const SyntheticSession session = simulation::generateSyntheticSession(options);
   const double sigma = options.pixel_noise_sigma;
   double squared_residuals = 0.0;
   std::size_t residuals = 0;
@@ -146,7 +146,7 @@ TEST(SyntheticSession, ObservationsLieInTheImageAndReprojectWithinPixelNoise) {
 }
 
 TEST(SyntheticSession, EstimatedPositionsScatterAroundTheDriftedTruthAsTheirCovarianceSays) {
-  const SyntheticSession session = io::generateSyntheticSession(reducedOptions());
+  const SyntheticSession session = simulation::generateSyntheticSession(reducedOptions());
   // Where the odometry puts the true point, averaged over the observations:
   // the estimate differs from it only by measurement noise, which the
   // covariance describes, so the squared Mahalanobis distances follow a
@@ -173,7 +173,7 @@ TEST(SyntheticSession, EstimatedPositionsScatterAroundTheDriftedTruthAsTheirCova
 }
 
 TEST(SyntheticSession, FartherLandmarksHaveLargerCovariance) {
-  const SyntheticSession session = io::generateSyntheticSession(reducedOptions());
+  const SyntheticSession session = simulation::generateSyntheticSession(reducedOptions());
   std::vector<double> covariance_norms, per_observation_covariance_norms, mean_distances;
   for (const Landmark& landmark : session.estimated.landmarks) {
     const LandmarkMetrics metrics = session.estimated.metrics(landmark);
@@ -199,7 +199,7 @@ TEST(SyntheticSession, OdometryDriftGrowsWithFrameIndex) {
   double first_quarter_error = 0.0, last_quarter_error = 0.0;
   for (int seed = 1; seed <= kSeeds; ++seed) {
     options.seed = static_cast<std::uint64_t>(seed);
-    const SyntheticSession session = io::generateSyntheticSession(options);
+    const SyntheticSession session = simulation::generateSyntheticSession(options);
     EXPECT_EQ(translationError(session.estimated.frames.at(0), session.truth.frames.at(0)), 0.0);
     EXPECT_EQ(rotationErrorDeg(session.estimated.frames.at(0), session.truth.frames.at(0)), 0.0);
     for (std::size_t k = 0; k < quarter; ++k) {
@@ -218,13 +218,13 @@ TEST(SyntheticSession, WithoutDriftTheOdometryIsTheTruth) {
   SyntheticSessionOptions options = reducedOptions();
   options.drift_rotation_sigma_deg = 0.0;
   options.drift_translation_sigma = 0.0;
-  const SyntheticSession session = io::generateSyntheticSession(options);
+  const SyntheticSession session = simulation::generateSyntheticSession(options);
   for (const auto& [id, pose] : session.estimated.frames)
     EXPECT_TRUE(pose.isApprox(session.truth.frames.at(id), 1e-9)) << "frame " << id;
 }
 
 TEST(SyntheticSession, WrittenMapReadsBackUnchanged) {
-  const SyntheticSession session = io::generateSyntheticSession(reducedOptions());
+  const SyntheticSession session = simulation::generateSyntheticSession(reducedOptions());
   const auto path = (testing::scratchDir("synthetic_session") / "session.txt").string();
   io::writeLandmarkMap(session.estimated, path);
   const LandmarkMap read = io::readLandmarkMap(path);
@@ -242,7 +242,7 @@ TEST(SyntheticSession, RejectsOptionsOutOfRangeNamingThem) {
     SyntheticSessionOptions options = reducedOptions();
     spoil(options);
     try {
-      io::generateSyntheticSession(options);
+      simulation::generateSyntheticSession(options);
       ADD_FAILURE() << "accepted a bad " << option;
     } catch (const std::invalid_argument& e) {
       EXPECT_NE(std::string(e.what()).find(option), std::string::npos) << e.what();
@@ -275,7 +275,7 @@ TEST(SyntheticSession, RejectsOptionsOutOfRangeNamingThem) {
 
 TEST(SyntheticSession, PlainIcpRecoversAKnownDisplacementBetweenConsecutiveMiniMaps) {
   const SyntheticSessionOptions options = reducedOptions();
-  const SyntheticSession session = io::generateSyntheticSession(options);
+  const SyntheticSession session = simulation::generateSyntheticSession(options);
   const std::vector<LandmarkMap> minimaps = session.estimated.splitIntoMiniMaps(options.num_frames / 2);
   ASSERT_EQ(minimaps.size(), 2u);
   const LandmarkMap target = minimaps[0].withMinObservations(2);

@@ -18,11 +18,12 @@
 #include <Eigen/Geometry>
 
 #include "weighted_icp/io/camera.h"
-#include "weighted_icp/io/synthetic_rgbd.h"
 #include "weighted_icp/registration/landmark_map.h"
+#include "weighted_icp/simulation/rgbd_sequence.h"
 
-namespace weighted_icp::io {
+namespace weighted_icp::simulation {
 
+/// @brief The room, camera path, sensor and odometry of a session.
 struct SyntheticSessionOptions {
   std::uint64_t seed = 1;
   std::size_t num_frames = 240;
@@ -48,7 +49,7 @@ struct SyntheticSessionOptions {
   Eigen::Vector3d look_at{-1.4, 1.6, 0.8};
 
   /// Must have no distortion: observations are ideal pinhole projections.
-  PinholeCamera camera = syntheticRgbdCamera();
+  io::PinholeCamera camera = syntheticRgbdCamera();
   double min_depth = 0.5;  // metres along the optical axis
   double max_depth = 4.0;
   /// A surface seen more obliquely than this (from its normal) yields no feature.
@@ -67,6 +68,7 @@ struct SyntheticSessionOptions {
   double drift_translation_sigma = 0.001;  // metres
 };
 
+/// @brief A session's estimated map and its exact truth.
 struct SyntheticSession {
   /// What a drifting visual odometry builds: odometry poses, and landmark
   /// positions back-projected from noisy pixels and depths with them (mean
@@ -79,8 +81,9 @@ struct SyntheticSession {
   std::vector<Eigen::Isometry3d> true_camera_poses;
 };
 
-/// Deterministic for a seed. Throws std::invalid_argument naming the first
-/// option out of range, std::runtime_error when no landmark is observed.
+/// @brief Generates a session, deterministically for a seed.
+/// @param options checked: std::invalid_argument names the first one out of
+///        range; std::runtime_error when no landmark is observed
 SyntheticSession generateSyntheticSession(const SyntheticSessionOptions& options);
 
-}  // namespace weighted_icp::io
+}  // namespace weighted_icp::simulation

@@ -11,10 +11,8 @@
 
 #include <cstddef>
 #include <cstdint>
-#include <functional>
 #include <memory>
 #include <optional>
-#include <string>
 #include <vector>
 
 #include <Eigen/Core>
@@ -23,12 +21,13 @@
 
 #include "weighted_icp/io/camera.h"
 
-namespace weighted_icp::io {
+namespace weighted_icp::simulation {
 
-/// TUM freiburg 1's RGB intrinsics without its lens distortion, 640 x 480,
-/// depth factor 5000.
-PinholeCamera syntheticRgbdCamera();
+/// @brief The sequences' default camera: TUM freiburg 1's RGB intrinsics
+/// without its lens distortion, 640 x 480, depth factor 5000.
+io::PinholeCamera syntheticRgbdCamera();
 
+/// @brief What to render: length, camera, scene variants and sensor model.
 struct SyntheticRgbdOptions {
   /// Drives the textures, the camera path's phases, the moving object's
   /// texture and all noise. Options other than the seed do not change what
@@ -37,7 +36,7 @@ struct SyntheticRgbdOptions {
   std::size_t frames = 150;
   double fps = 30.0;  // timestamps are frame / fps seconds
   /// Must have no distortion: the renderer casts undistorted rays.
-  PinholeCamera camera = syntheticRgbdCamera();
+  io::PinholeCamera camera = syntheticRgbdCamera();
 
   /// A textured box carried across the view now and then, covering up to
   /// about a fifth of the image while it passes.
@@ -59,13 +58,14 @@ struct SyntheticRgbdOptions {
   double max_incidence_deg = 75.0;
 };
 
-/// An axis-aligned box turned by `yaw` about the vertical axis through its centre.
+/// @brief An axis-aligned box turned by `yaw` about the vertical axis through its centre.
 struct SceneBox {
   Eigen::Vector3d center = Eigen::Vector3d::Zero();
   Eigen::Vector3d size = Eigen::Vector3d::Ones();  // metres along its own x, y, z
   double yaw = 0.0;                                // radians
 };
 
+/// @brief One rendered frame with its true pose.
 struct SyntheticRgbdFrame {
   double timestamp = 0.0;
   cv::Mat color;  // CV_8UC3, BGR
@@ -74,29 +74,34 @@ struct SyntheticRgbdFrame {
   cv::Mat moving_object_mask;  // CV_8UC1, 255 where the moving object is seen
 };
 
+/// @brief The sequence: a scene drawn once from the seed, frames rendered on demand.
 class SyntheticRgbdSequence {
  public:
-  /// Draws the scene's textures (some 0.3 s of CPU). Throws std::invalid_argument
-  /// naming the first option out of range.
+  /// @brief Draws the scene's textures (some 0.3 s of CPU).
+  /// @param options checked: std::invalid_argument names the first one out of range
   explicit SyntheticRgbdSequence(const SyntheticRgbdOptions& options);
   ~SyntheticRgbdSequence();
   SyntheticRgbdSequence(SyntheticRgbdSequence&&) noexcept;
   SyntheticRgbdSequence& operator=(SyntheticRgbdSequence&&) noexcept;
 
+  /// @brief The number of frames (options().frames).
   std::size_t size() const;
+  /// @brief The options it was made with.
   const SyntheticRgbdOptions& options() const;
 
-  /// Renders frame i (0 <= i < size(), else std::out_of_range).
+  /// @brief Renders frame i.
+  /// @param i 0 <= i < size(), else std::out_of_range
   SyntheticRgbdFrame frame(std::size_t i) const;
-  /// The true camera-to-world pose and timestamp of frame i, without rendering.
+  /// @brief The true camera-to-world pose of frame i, without rendering.
   Eigen::Isometry3d cameraToWorld(std::size_t i) const;
+  /// @brief The timestamp of frame i: i / fps seconds.
   double timestamp(std::size_t i) const;
 
-  /// The scene: the room spans [-x/2, x/2] x [-y/2, y/2] x [0, z] of this
-  /// size; the furniture stands in it; the moving object, when on and
-  /// present in frame i, is one more box.
+  /// @brief The room's size: it spans [-x/2, x/2] x [-y/2, y/2] x [0, z].
   Eigen::Vector3d roomSize() const;
+  /// @brief The furniture standing in the room.
   const std::vector<SceneBox>& furniture() const;
+  /// @brief The moving object in frame i: one more box, when on and present.
   std::optional<SceneBox> movingObject(std::size_t i) const;
 
  private:
@@ -105,14 +110,4 @@ class SyntheticRgbdSequence {
   std::unique_ptr<const Scene> scene_;
 };
 
-/// Writes the sequence in the TUM RGB-D layout: rgb/ and depth/ (PNG, named
-/// by timestamp), rgb.txt and depth.txt (the same timestamps), groundtruth.txt
-/// (`timestamp tx ty tz qx qy qz qw`, camera-to-world, digits enough to read
-/// back the exact doubles). The folder appears complete or not at all: it is
-/// written beside `dir` under a temporary name and renamed at the end. An
-/// existing non-empty `dir` is refused (std::runtime_error) unless
-/// `overwrite`. `frame_written(i)` is called after each frame, for progress.
-void writeTumSequence(const SyntheticRgbdSequence& sequence, const std::string& dir, bool overwrite = false,
-                      const std::function<void(std::size_t)>& frame_written = {});
-
-}  // namespace weighted_icp::io
+}  // namespace weighted_icp::simulation

@@ -1,74 +1,27 @@
-#include "weighted_icp/io/synthetic_session.h"
+// The synthetic SLAM session (see session.h): landmarks placed on the room's
+// surfaces, a camera arc, the observations a feature tracker would make (ray
+// cast against the furniture for occlusion) and the map a drifting odometry
+// builds from them.
+
+#include "weighted_icp/simulation/session.h"
 
 #include <algorithm>
 #include <cmath>
-#include <random>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 #include <string>
 
-namespace weighted_icp::io {
+#include "random_source.h"
+#include "raycasting.h"
+
+namespace weighted_icp::simulation {
 
 namespace {
 
 constexpr double kDegree = M_PI / 180.0;
 
-/// Draws from std::mt19937_64 with our own transforms: the standard
-/// distributions are implementation-defined, and the session must be the same
-/// on every toolchain for a seed.
-class RandomSource {
- public:
-  /// Independent streams per purpose, so that changing, say, the drift leaves
-  /// the landmark layout of a seed as it was.
-  RandomSource(std::uint64_t seed, std::uint32_t stream) {
-    std::seed_seq sequence{static_cast<std::uint32_t>(seed), static_cast<std::uint32_t>(seed >> 32), stream};
-    engine_.seed(sequence);
-  }
-  /// Uniform in the open interval (0, 1): 53 random bits, centred in their cell.
-  double uniform() { return (static_cast<double>(engine_() >> 11) + 0.5) * 0x1.0p-53; }
-  double uniform(double low, double high) { return low + (high - low) * uniform(); }
-  /// Standard normal by Box-Muller.
-  double normal() {
-    const double radius = std::sqrt(-2.0 * std::log(uniform()));
-    return radius * std::cos(2.0 * M_PI * uniform());
-  }
-  Eigen::Vector3d normal3() {
-    const double x = normal(), y = normal(), z = normal();
-    return {x, y, z};
-  }
-
- private:
-  std::mt19937_64 engine_;
-};
-
 enum Stream : std::uint32_t { kLayoutStream = 1, kDriftStream = 2, kObservationStream = 3 };
-
-/// Furniture: an axis-aligned box standing in the room.
-struct Block {
-  Eigen::Vector3d min, max;
-
-  bool contains(const Eigen::Vector3d& point) const {
-    return (point.array() >= min.array()).all() && (point.array() <= max.array()).all();
-  }
-  /// Whether the segment from `from` to just before `to` passes through the
-  /// block (slab test): `to` may lie on the block's own face.
-  bool blocks(const Eigen::Vector3d& from, const Eigen::Vector3d& to) const {
-    const Eigen::Vector3d direction = to - from;
-    double enter = 0.0, leave = 1.0 - 1e-9;
-    for (int axis = 0; axis < 3; ++axis) {
-      if (std::abs(direction[axis]) < 1e-15) {
-        if (from[axis] < min[axis] || from[axis] > max[axis]) return false;
-        continue;
-      }
-      const double t1 = (min[axis] - from[axis]) / direction[axis];
-      const double t2 = (max[axis] - from[axis]) / direction[axis];
-      enter = std::max(enter, std::min(t1, t2));
-      leave = std::min(leave, std::max(t1, t2));
-      if (enter > leave) return false;
-    }
-    return true;
-  }
-};
 
 /// A textured planar patch: corner + s * edge_a + t * edge_b, s, t in [0, 1].
 struct Rectangle {
@@ -80,14 +33,15 @@ struct Rectangle {
 
 struct Room {
   std::vector<Rectangle> surfaces;
-  std::vector<Block> blocks;
+  /// Furniture: axis-aligned boxes standing in the room.
+  std::vector<RayBox> blocks;
 
   /// The five upper faces of a block standing on the floor or on another
   /// block. Faces turned to a wall are kept: no camera ever faces them, so
   /// their landmarks go unobserved and are dropped.
   void addBlock(const Eigen::Vector3d& min, const Eigen::Vector3d& max) {
     const int index = static_cast<int>(blocks.size());
-    blocks.push_back({min, max});
+    blocks.push_back(RayBox::fromCorners(min, max));
     const Eigen::Vector3d size = max - min;
     const Eigen::Vector3d dx(size.x(), 0, 0), dy(0, size.y(), 0), dz(0, 0, size.z());
     surfaces.push_back({Eigen::Vector3d(min.x(), min.y(), max.z()), dx, dy, Eigen::Vector3d::UnitZ(), index});
@@ -104,8 +58,8 @@ struct Room {
     return false;
   }
   bool occluded(const Eigen::Vector3d& camera_centre, const Eigen::Vector3d& point) const {
-    for (const Block& block : blocks)
-      if (block.blocks(camera_centre, point)) return true;
+    for (const RayBox& block : blocks)
+      if (block.blocksSegment(camera_centre, point)) return true;
     return false;
   }
 };
@@ -142,11 +96,11 @@ std::vector<SurfacePoint> placeLandmarks(const Room& room, std::size_t count, Ra
   std::vector<SurfacePoint> points;
   points.reserve(count);
   while (points.size() < count) {
-    const double pick = random.uniform(0.0, total);
+    const double pick = random.openUniform(0.0, total);
     std::size_t index = 0;
     while (index + 1 < room.surfaces.size() && cumulative_area[index] < pick) ++index;
     const Rectangle& surface = room.surfaces[index];
-    const double s = random.uniform(), t = random.uniform();
+    const double s = random.openUnit(), t = random.openUnit();
     const Eigen::Vector3d position = surface.corner + s * surface.edge_a + t * surface.edge_b;
     if (!room.covered(position, surface)) points.push_back({position, surface.normal});
   }
@@ -249,7 +203,7 @@ void validate(const SyntheticSessionOptions& o) {
 
 /// Covariance, in camera coordinates, of the back-projection of pixel (u, v)
 /// at `depth`: first-order propagation of independent pixel and depth noise.
-Eigen::Matrix3d backProjectionCovariance(const PinholeCamera& camera, double u, double v, double depth,
+Eigen::Matrix3d backProjectionCovariance(const io::PinholeCamera& camera, double u, double v, double depth,
                                          double pixel_sigma, double depth_sigma) {
   Eigen::Matrix3d jacobian;  // d(x, y, z) / d(u, v, depth)
   jacobian << depth / camera.fx, 0.0, (u - camera.cx) / camera.fx,  //
@@ -258,6 +212,109 @@ Eigen::Matrix3d backProjectionCovariance(const PinholeCamera& camera, double u, 
   const Eigen::Vector3d variances(pixel_sigma * pixel_sigma, pixel_sigma * pixel_sigma, depth_sigma * depth_sigma);
   return jacobian * variances.asDiagonal() * jacobian.transpose();
 }
+
+/// What frame k's sensor reports of a landmark: a noisy pixel and depth.
+struct Measurement {
+  double u, v, depth;
+};
+
+/// The observations of the landmarks along the camera path: visibility, the
+/// tracker's misses and the sensor's noise, in one fixed draw order.
+class Observer {
+ public:
+  Observer(const SyntheticSessionOptions& options, const Room& room, const std::vector<Eigen::Isometry3d>& truth_poses,
+           RandomSource& random)
+      : options_(options),
+        camera_(options.camera),
+        room_(room),
+        truth_poses_(truth_poses),
+        min_facing_cosine_(std::cos(options.max_viewing_angle_deg * kDegree)),
+        random_(random) {
+    world_to_camera_.reserve(truth_poses.size());
+    for (const Eigen::Isometry3d& pose : truth_poses) world_to_camera_.push_back(pose.inverse());
+  }
+
+  /// The measurement of `point` in frame k, if it is seen and detected there.
+  std::optional<Measurement> measure(const SurfacePoint& point, std::size_t k) {
+    // Cheapest rejections first: range, facing, image, then occlusion.
+    const Eigen::Vector3d in_camera = world_to_camera_[k] * point.position;
+    if (in_camera.z() < options_.min_depth || in_camera.z() > options_.max_depth) return std::nullopt;
+    const Eigen::Vector3d to_camera = truth_poses_[k].translation() - point.position;
+    if (point.normal.dot(to_camera) < min_facing_cosine_ * to_camera.norm()) return std::nullopt;
+    const Eigen::Vector2d pixel = camera_.project(in_camera);
+    if (!camera_.inImage(pixel)) return std::nullopt;
+    if (room_.occluded(truth_poses_[k].translation(), point.position)) return std::nullopt;
+    if (random_.openUnit() >= options_.detection_probability) return std::nullopt;
+
+    const double u_noise = random_.normal();  // sequenced: draw order fixes the session
+    const double v_noise = random_.normal();
+    const Eigen::Vector2d noisy_pixel = pixel + options_.pixel_noise_sigma * Eigen::Vector2d(u_noise, v_noise);
+    const double depth_sigma = options_.depth_noise_coefficient * in_camera.z() * in_camera.z();
+    const double depth = in_camera.z() + depth_sigma * random_.normal();
+    // A feature detector cannot report a pixel off the sensor, and a depth
+    // camera reports no depth <= 0.
+    if (!camera_.inImage(noisy_pixel) || !(depth > 0.0)) return std::nullopt;
+    return Measurement{noisy_pixel.x(), noisy_pixel.y(), depth};
+  }
+
+ private:
+  const SyntheticSessionOptions& options_;
+  const io::PinholeCamera& camera_;
+  const Room& room_;
+  const std::vector<Eigen::Isometry3d>& truth_poses_;
+  std::vector<Eigen::Isometry3d> world_to_camera_;
+  const double min_facing_cosine_;
+  RandomSource& random_;
+};
+
+/// One landmark as the odometry estimates it and as it truly is, summed over
+/// its observations until finish() averages them.
+class LandmarkAccumulator {
+ public:
+  LandmarkAccumulator(const SyntheticSessionOptions& options, const std::vector<Eigen::Isometry3d>& truth_poses,
+                      const std::vector<Eigen::Isometry3d>& odometry_poses)
+      : options_(options), truth_poses_(truth_poses), odometry_poses_(odometry_poses) {}
+
+  void add(std::size_t k, const Measurement& measurement) {
+    const io::PinholeCamera& camera = options_.camera;
+    const double u = measurement.u, v = measurement.v, depth = measurement.depth;
+    const Observation observation{k, u, v};
+    estimated_.observations.push_back(observation);
+    truth_.observations.push_back(observation);
+    position_sum_ += odometry_poses_[k] * camera.backProject(u, v, depth);
+    // The SLAM knows only the measured depth, so it derives its sigma from it.
+    const Eigen::Matrix3d in_camera_covariance = backProjectionCovariance(
+        camera, u, v, depth, options_.pixel_noise_sigma, options_.depth_noise_coefficient * depth * depth);
+    const Eigen::Matrix3d estimated_rotation = odometry_poses_[k].linear();
+    const Eigen::Matrix3d truth_rotation = truth_poses_[k].linear();
+    estimated_covariance_sum_ += estimated_rotation * in_camera_covariance * estimated_rotation.transpose();
+    truth_covariance_sum_ += truth_rotation * in_camera_covariance * truth_rotation.transpose();
+  }
+
+  bool observed() const { return !estimated_.observations.empty(); }
+
+  /// Appends the landmark, with the next id, to both maps of `session`.
+  void finish(const Eigen::Vector3d& true_position, SyntheticSession& session) {
+    const double n = static_cast<double>(estimated_.observations.size());
+    estimated_.id = truth_.id = session.estimated.landmarks.size();
+    estimated_.position = position_sum_ / n;
+    truth_.position = true_position;
+    // Covariance of the mean of n independent estimates: their mean covariance / n.
+    estimated_.covariance = estimated_covariance_sum_ / (n * n);
+    truth_.covariance = truth_covariance_sum_ / (n * n);
+    session.estimated.landmarks.push_back(std::move(estimated_));
+    session.truth.landmarks.push_back(std::move(truth_));
+  }
+
+ private:
+  const SyntheticSessionOptions& options_;
+  const std::vector<Eigen::Isometry3d>& truth_poses_;
+  const std::vector<Eigen::Isometry3d>& odometry_poses_;
+  Landmark estimated_, truth_;
+  Eigen::Vector3d position_sum_ = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d estimated_covariance_sum_ = Eigen::Matrix3d::Zero();
+  Eigen::Matrix3d truth_covariance_sum_ = Eigen::Matrix3d::Zero();
+};
 
 }  // namespace
 
@@ -273,64 +330,17 @@ SyntheticSession generateSyntheticSession(const SyntheticSessionOptions& options
   session.true_camera_poses = trueTrajectory(options);
   const std::vector<Eigen::Isometry3d>& truth_poses = session.true_camera_poses;
   const std::vector<Eigen::Isometry3d> odometry_poses = odometryTrajectory(options, truth_poses, drift_random);
-  std::vector<Eigen::Isometry3d> world_to_camera;
-  world_to_camera.reserve(truth_poses.size());
   for (std::size_t k = 0; k < truth_poses.size(); ++k) {
     session.truth.frames.emplace(k, truth_poses[k]);
     session.estimated.frames.emplace(k, odometry_poses[k]);
-    world_to_camera.push_back(truth_poses[k].inverse());
   }
 
-  const PinholeCamera& camera = options.camera;
-  const double min_facing_cosine = std::cos(options.max_viewing_angle_deg * kDegree);
+  Observer observer(options, room, truth_poses, observation_random);
   for (const SurfacePoint& point : points) {
-    Landmark estimated, truth;
-    Eigen::Vector3d position_sum = Eigen::Vector3d::Zero();
-    Eigen::Matrix3d estimated_covariance_sum = Eigen::Matrix3d::Zero();
-    Eigen::Matrix3d truth_covariance_sum = Eigen::Matrix3d::Zero();
-    for (std::size_t k = 0; k < truth_poses.size(); ++k) {
-      // Cheapest rejections first: range, facing, image, then occlusion.
-      const Eigen::Vector3d in_camera = world_to_camera[k] * point.position;
-      if (in_camera.z() < options.min_depth || in_camera.z() > options.max_depth) continue;
-      const Eigen::Vector3d to_camera = truth_poses[k].translation() - point.position;
-      if (point.normal.dot(to_camera) < min_facing_cosine * to_camera.norm()) continue;
-      const Eigen::Vector2d pixel = camera.project(in_camera);
-      if (!camera.inImage(pixel)) continue;
-      if (room.occluded(truth_poses[k].translation(), point.position)) continue;
-      if (observation_random.uniform() >= options.detection_probability) continue;
-
-      const double u_noise = observation_random.normal();  // sequenced: draw order fixes the session
-      const double v_noise = observation_random.normal();
-      const Eigen::Vector2d noisy_pixel = pixel + options.pixel_noise_sigma * Eigen::Vector2d(u_noise, v_noise);
-      const double depth_sigma = options.depth_noise_coefficient * in_camera.z() * in_camera.z();
-      const double depth = in_camera.z() + depth_sigma * observation_random.normal();
-      // A feature detector cannot report a pixel off the sensor, and a depth
-      // camera reports no depth <= 0.
-      if (!camera.inImage(noisy_pixel) || !(depth > 0.0)) continue;
-
-      const double u = noisy_pixel.x(), v = noisy_pixel.y();
-      const Observation observation{k, u, v};
-      estimated.observations.push_back(observation);
-      truth.observations.push_back(observation);
-      position_sum += odometry_poses[k] * camera.backProject(u, v, depth);
-      // The SLAM knows only the measured depth, so it derives its sigma from it.
-      const Eigen::Matrix3d in_camera_covariance = backProjectionCovariance(
-          camera, u, v, depth, options.pixel_noise_sigma, options.depth_noise_coefficient * depth * depth);
-      const Eigen::Matrix3d estimated_rotation = odometry_poses[k].linear();
-      const Eigen::Matrix3d truth_rotation = truth_poses[k].linear();
-      estimated_covariance_sum += estimated_rotation * in_camera_covariance * estimated_rotation.transpose();
-      truth_covariance_sum += truth_rotation * in_camera_covariance * truth_rotation.transpose();
-    }
-    if (estimated.observations.empty()) continue;
-    const double n = static_cast<double>(estimated.observations.size());
-    estimated.id = truth.id = session.estimated.landmarks.size();
-    estimated.position = position_sum / n;
-    truth.position = point.position;
-    // Covariance of the mean of n independent estimates: their mean covariance / n.
-    estimated.covariance = estimated_covariance_sum / (n * n);
-    truth.covariance = truth_covariance_sum / (n * n);
-    session.estimated.landmarks.push_back(std::move(estimated));
-    session.truth.landmarks.push_back(std::move(truth));
+    LandmarkAccumulator landmark(options, truth_poses, odometry_poses);
+    for (std::size_t k = 0; k < truth_poses.size(); ++k)
+      if (const std::optional<Measurement> measurement = observer.measure(point, k)) landmark.add(k, *measurement);
+    if (landmark.observed()) landmark.finish(point.position, session);
   }
   if (session.estimated.landmarks.empty())
     throw std::runtime_error("synthetic session: no landmark is observed from the camera path (check the room, path, "
@@ -338,4 +348,4 @@ SyntheticSession generateSyntheticSession(const SyntheticSessionOptions& options
   return session;
 }
 
-}  // namespace weighted_icp::io
+}  // namespace weighted_icp::simulation
