@@ -66,10 +66,8 @@ Sequence makeSynthetic(std::size_t frames, bool moving_object) {
   Sequence sequence{moving_object ? "synthetic, moving object" : "synthetic", options.camera, {}, {}};
   for (std::size_t i = 0; i < synthetic.size(); ++i) {
     simulation::SyntheticRgbdFrame frame = synthetic.frame(i);
-    cv::Mat depth;
-    frame.depth.convertTo(depth, CV_32F, 1.0 / options.camera.depth_factor);
-    sequence.frames.push_back({frame.timestamp, frame.color, depth});
-    sequence.truth.push_back({frame.timestamp, frame.camera_to_world});
+    sequence.truth.push_back({frame.rgbd.timestamp, frame.camera_to_world});
+    sequence.frames.push_back(std::move(frame.rgbd));
   }
   return sequence;
 }

@@ -67,12 +67,7 @@ class SyntheticSource : public FrameSource {
  public:
   explicit SyntheticSource(const simulation::SyntheticRgbdOptions& options) : sequence_(options) {}
   std::size_t size() const override { return sequence_.size(); }
-  RgbdFrame load(std::size_t i) const override {
-    simulation::SyntheticRgbdFrame frame = sequence_.frame(i);
-    cv::Mat depth;
-    frame.depth.convertTo(depth, CV_32F, 1.0 / sequence_.options().camera.depth_factor);
-    return {frame.timestamp, frame.color, depth};
-  }
+  RgbdFrame load(std::size_t i) const override { return sequence_.frame(i).rgbd; }
   io::Trajectory groundTruth() const override {
     io::Trajectory truth;
     for (std::size_t i = 0; i < sequence_.size(); ++i) truth.push_back({sequence_.timestamp(i), sequence_.cameraToWorld(i)});

@@ -26,16 +26,10 @@ frontend::RgbdSlamOptions deterministic() {
   return options;
 }
 
-RgbdFrame toImage(const simulation::SyntheticRgbdFrame& frame, const PinholeCamera& camera) {
-  cv::Mat depth;
-  frame.depth.convertTo(depth, CV_32F, 1.0 / camera.depth_factor);
-  return {frame.timestamp, frame.color, depth};
-}
-
 double syntheticAte(const simulation::SyntheticRgbdSequence& sequence, frontend::RgbdSlam& slam) {
   io::Trajectory truth;
   for (std::size_t i = 0; i < sequence.size(); ++i) {
-    slam.process(toImage(sequence.frame(i), sequence.options().camera));
+    slam.process(sequence.frame(i).rgbd);
     truth.push_back({sequence.timestamp(i), sequence.cameraToWorld(i)});
   }
   slam.finish();
@@ -137,7 +131,7 @@ TEST(RgbdSlam, AnUntrackableFrameStartsANewSegmentAndKeepsTheMap) {
   frontend::RgbdSlam slam(sequence.options().camera, slam_options);
   std::size_t keyframes_before = 0;
   for (std::size_t i = 0; i < sequence.size(); ++i) {
-    RgbdFrame image = toImage(sequence.frame(i), sequence.options().camera);
+    RgbdFrame image = sequence.frame(i).rgbd;
     if (i == 30) {
       keyframes_before = slam.map().keyframeCount();
       image.color.setTo(cv::Scalar::all(0));  // no features: cannot be tracked
@@ -170,7 +164,7 @@ TEST(RgbdSlam, FramesWithoutDepthAreTrackedTwoDimensionally) {
   io::Trajectory truth;
   std::size_t relative = 0;
   for (std::size_t i = 0; i < sequence.size(); ++i) {
-    RgbdFrame image = toImage(sequence.frame(i), sequence.options().camera);
+    RgbdFrame image = sequence.frame(i).rgbd;
     // The depth sensor drops out: no new landmarks, and once the old ones are
     // out of view (about frame 75) only 2D-2D geometry is left.
     if (i >= 5) image.depth.setTo(0.0f);

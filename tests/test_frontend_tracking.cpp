@@ -10,7 +10,7 @@
 #include "weighted_icp/frontend/slam/backend.h"
 #include "weighted_icp/frontend/slam/frontend.h"
 #include "weighted_icp/frontend/slam/map.h"
-#include "weighted_icp/io/synthetic_rgbd.h"
+#include "weighted_icp/simulation/rgbd_sequence.h"
 
 namespace {
 
@@ -45,14 +45,11 @@ class FrontendTracking : public ::testing::Test {
 
   /// Renders the frames once for every test (the renderer is the slow part).
   static void SetUpTestSuite() {
-    io::SyntheticRgbdOptions options;
+    simulation::SyntheticRgbdOptions options;
     options.frames = kFrames;
-    sequence_ = std::make_unique<io::SyntheticRgbdSequence>(options);
+    sequence_ = std::make_unique<simulation::SyntheticRgbdSequence>(options);
     for (std::size_t i = 0; i < kFrames; ++i) {
-      const io::SyntheticRgbdFrame frame = sequence_->frame(i);
-      cv::Mat depth;
-      frame.depth.convertTo(depth, CV_32F, 1.0 / sequence_->options().camera.depth_factor);
-      images_.push_back({frame.timestamp, frame.color, depth});
+      images_.push_back(sequence_->frame(i).rgbd);
     }
   }
   static void TearDownTestSuite() {
@@ -76,11 +73,11 @@ class FrontendTracking : public ::testing::Test {
     return sequence_->cameraToWorld(0).inverse() * sequence_->cameraToWorld(i);
   }
 
-  static std::unique_ptr<io::SyntheticRgbdSequence> sequence_;
+  static std::unique_ptr<simulation::SyntheticRgbdSequence> sequence_;
   static std::vector<RgbdFrame> images_;
 };
 
-std::unique_ptr<io::SyntheticRgbdSequence> FrontendTracking::sequence_;
+std::unique_ptr<simulation::SyntheticRgbdSequence> FrontendTracking::sequence_;
 std::vector<RgbdFrame> FrontendTracking::images_;
 
 TEST_F(FrontendTracking, TheFirstFrameStartsTheFirstSegmentAsAKeyframe) {

@@ -33,6 +33,13 @@ namespace fs = std::filesystem;
 using weighted_icp::testing::binaryDir;
 using weighted_icp::testing::scratchDir;
 
+/// The frame's depth as the simulated sensor stored it (16-bit, depth_factor
+/// units): the metric depth converts back exactly, and the quantisation the
+/// tests check is clearest there.
+cv::Mat rawDepth(const simulation::SyntheticRgbdFrame& frame) {
+  return depthToRaw(frame.rgbd.depth, simulation::syntheticRgbdCamera().depth_factor);
+}
+
 constexpr std::uint64_t kSeed = 7;
 
 simulation::SyntheticRgbdOptions exactOptions(bool moving_object) {
@@ -136,10 +143,10 @@ TEST(SyntheticRgbd, SameSeedGivesIdenticalFramesAndPoses) {
   const simulation::SyntheticRgbdSequence again(exactOptions(false));
   for (const std::size_t i : {0, 77}) {
     const simulation::SyntheticRgbdFrame first = exactStatic().frame(i), second = again.frame(i);
-    EXPECT_EQ(cv::norm(first.color, second.color, cv::NORM_INF), 0.0) << "frame " << i;
-    EXPECT_EQ(cv::norm(first.depth, second.depth, cv::NORM_INF), 0.0) << "frame " << i;
+    EXPECT_EQ(cv::norm(first.rgbd.color, second.rgbd.color, cv::NORM_INF), 0.0) << "frame " << i;
+    EXPECT_EQ(cv::norm(rawDepth(first), rawDepth(second), cv::NORM_INF), 0.0) << "frame " << i;
     EXPECT_TRUE(first.camera_to_world.matrix() == second.camera_to_world.matrix()) << "frame " << i;
-    EXPECT_EQ(first.timestamp, second.timestamp);
+    EXPECT_EQ(first.rgbd.timestamp, second.rgbd.timestamp);
   }
 }
 
@@ -150,8 +157,8 @@ TEST(SyntheticRgbd, RenderingDoesNotDependOnTheThreadCount) {
   const simulation::SyntheticRgbdFrame single = single_threaded.frame(12);
   cv::setNumThreads(threads);
   const simulation::SyntheticRgbdFrame parallel = exactStatic().frame(12);
-  EXPECT_EQ(cv::norm(single.color, parallel.color, cv::NORM_INF), 0.0);
-  EXPECT_EQ(cv::norm(single.depth, parallel.depth, cv::NORM_INF), 0.0);
+  EXPECT_EQ(cv::norm(single.rgbd.color, parallel.rgbd.color, cv::NORM_INF), 0.0);
+  EXPECT_EQ(cv::norm(rawDepth(single), rawDepth(parallel), cv::NORM_INF), 0.0);
 }
 
 TEST(SyntheticRgbd, DifferentSeedGivesDifferentTexture) {
@@ -159,17 +166,17 @@ TEST(SyntheticRgbd, DifferentSeedGivesDifferentTexture) {
   options.seed = kSeed + 1;
   const simulation::SyntheticRgbdSequence other(options);
   // Grey levels of two unrelated textures differ by tens on average; noise alone by about 1.
-  EXPECT_GT(meanAbsoluteDifference(exactStatic().frame(0).color, other.frame(0).color), 15.0);
+  EXPECT_GT(meanAbsoluteDifference(exactStatic().frame(0).rgbd.color, other.frame(0).rgbd.color), 15.0);
 }
 
 TEST(SyntheticRgbd, DepthNoiseIsDeterministicAndUnbiased) {
   const simulation::SyntheticRgbdSequence noisy(simulation::SyntheticRgbdOptions{});
   const simulation::SyntheticRgbdSequence noisy_again(simulation::SyntheticRgbdOptions{});
-  EXPECT_EQ(cv::norm(noisy.frame(3).depth, noisy_again.frame(3).depth, cv::NORM_INF), 0.0);
+  EXPECT_EQ(cv::norm(rawDepth(noisy.frame(3)), rawDepth(noisy_again.frame(3)), cv::NORM_INF), 0.0);
   simulation::SyntheticRgbdOptions exact;
   exact.depth_noise = false;
   const simulation::SyntheticRgbdSequence clean(exact);
-  const cv::Mat noisy_depth = noisy.frame(3).depth, clean_depth = clean.frame(3).depth;
+  const cv::Mat noisy_depth = rawDepth(noisy.frame(3)), clean_depth = rawDepth(clean.frame(3));
   cv::Mat noisy_metres, clean_metres;
   noisy_depth.convertTo(noisy_metres, CV_64F, 1.0 / 5000.0);
   clean_depth.convertTo(clean_metres, CV_64F, 1.0 / 5000.0);
@@ -226,6 +233,7 @@ TEST(SyntheticRgbd, DepthEqualsTheDistanceAlongTheRayToTheScene) {
   frames.push_back(with_object.front());
   for (const std::size_t i : frames) {
     const simulation::SyntheticRgbdFrame frame = sequence.frame(i);
+    const cv::Mat raw = rawDepth(frame);
     const Eigen::Vector3d origin = frame.camera_to_world.translation();
     std::size_t checked = 0, measurable = 0, wrong = 0;
     for (int v = 0; v < camera.height; v += 4) {
@@ -235,7 +243,7 @@ TEST(SyntheticRgbd, DepthEqualsTheDistanceAlongTheRayToTheScene) {
         const RayHit hit = castRay(sequence, i, origin, direction);
         const bool in_range = hit.t >= sequence.options().min_depth && hit.t <= sequence.options().max_depth;
         const bool facing = std::abs(hit.normal.dot(direction)) / direction.norm() >= cos_max_incidence;
-        const std::uint16_t stored = frame.depth.at<std::uint16_t>(v, u);
+        const std::uint16_t stored = raw.at<std::uint16_t>(v, u);
         ++checked;
         measurable += in_range && facing;
         // Exact up to the depth image's resolution; 0 where the sensor could not measure.
@@ -258,9 +266,10 @@ TEST(SyntheticRgbd, BackProjectedPixelsLieOnTheRoomsSurfaces) {
   std::size_t on_furniture = 0;
   for (const std::size_t i : {20, 60, 140}) {
     const simulation::SyntheticRgbdFrame frame = sequence.frame(i);
+    const cv::Mat raw = rawDepth(frame);
     for (int v = 3; v < camera.height; v += 12) {
       for (int u = 5; u < camera.width; u += 12) {
-        const std::uint16_t stored = frame.depth.at<std::uint16_t>(v, u);
+        const std::uint16_t stored = raw.at<std::uint16_t>(v, u);
         if (stored == 0) continue;
         const Eigen::Vector3d point = frame.camera_to_world * camera.backProject(u, v, stored / camera.depth_factor);
         // On a wall, the floor or the ceiling, or on a box: within the depth resolution (and its slant).
@@ -287,15 +296,16 @@ TEST(SyntheticRgbd, TexturedPointsLookTheSameFromTwoViews) {
   const io::PinholeCamera& camera = sequence.options().camera;
   const std::size_t first_index = 30, second_index = 42;  // 12 frames: some 10 cm and 7 deg apart
   const simulation::SyntheticRgbdFrame first = sequence.frame(first_index), second = sequence.frame(second_index);
+  const cv::Mat first_raw = rawDepth(first), second_raw = rawDepth(second);
   cv::Mat first_gray, second_gray;
-  gray(first.color).convertTo(first_gray, CV_32F);
-  gray(second.color).convertTo(second_gray, CV_32F);
+  gray(first.rgbd.color).convertTo(first_gray, CV_32F);
+  gray(second.rgbd.color).convertTo(second_gray, CV_32F);
   const Eigen::Isometry3d second_from_first = second.camera_to_world.inverse() * first.camera_to_world;
   const cv::Size patch(11, 11);
   std::vector<double> matched, shifted;
   for (int v = 20; v < camera.height - 20; v += 16) {
     for (int u = 20; u < camera.width - 20; u += 16) {
-      const std::uint16_t stored = first.depth.at<std::uint16_t>(v, u);
+      const std::uint16_t stored = first_raw.at<std::uint16_t>(v, u);
       if (stored == 0) continue;
       const cv::Mat first_patch = first_gray(cv::Rect(u - 5, v - 5, 11, 11));
       cv::Scalar mean, deviation;
@@ -305,7 +315,7 @@ TEST(SyntheticRgbd, TexturedPointsLookTheSameFromTwoViews) {
       const Eigen::Vector2d pixel = camera.project(in_second);
       if (pixel.x() < 20 || pixel.y() < 20 || pixel.x() > camera.width - 20 || pixel.y() > camera.height - 20) continue;
       // Skip points hidden in the second view.
-      const double seen_depth = second.depth.at<std::uint16_t>(cvRound(pixel.y()), cvRound(pixel.x())) / camera.depth_factor;
+      const double seen_depth = second_raw.at<std::uint16_t>(cvRound(pixel.y()), cvRound(pixel.x())) / camera.depth_factor;
       if (std::abs(seen_depth - in_second.z()) > 0.01) continue;
       cv::Mat second_patch, wrong_patch;
       cv::getRectSubPix(second_gray, patch, cv::Point2f(pixel.x(), pixel.y()), second_patch);
@@ -342,12 +352,13 @@ TEST(SyntheticRgbd, MovingObjectComesAndGoesAndIsNearerThanTheRoom) {
     EXPECT_EQ(cv::countNonZero(without.moving_object_mask), 0);
     // Where the object is not, nothing changed; where it is, it hides a farther surface.
     const cv::Mat elsewhere = with.moving_object_mask == 0;
-    EXPECT_EQ(cv::norm(with.depth, without.depth, cv::NORM_INF, elsewhere), 0.0) << "frame " << i;
-    EXPECT_EQ(cv::norm(with.color, without.color, cv::NORM_INF, elsewhere), 0.0) << "frame " << i;
+    const cv::Mat with_raw = rawDepth(with), without_raw = rawDepth(without);
+    EXPECT_EQ(cv::norm(with_raw, without_raw, cv::NORM_INF, elsewhere), 0.0) << "frame " << i;
+    EXPECT_EQ(cv::norm(with.rgbd.color, without.rgbd.color, cv::NORM_INF, elsewhere), 0.0) << "frame " << i;
     std::size_t nearer = 0, compared = 0;  // hides means nearer, by the object's own depth
-    for (int v = 0; v < with.depth.rows; ++v)
-      for (int u = 0; u < with.depth.cols; ++u) {
-        const std::uint16_t object_depth = with.depth.at<std::uint16_t>(v, u), room_depth = without.depth.at<std::uint16_t>(v, u);
+    for (int v = 0; v < with_raw.rows; ++v)
+      for (int u = 0; u < with_raw.cols; ++u) {
+        const std::uint16_t object_depth = with_raw.at<std::uint16_t>(v, u), room_depth = without_raw.at<std::uint16_t>(v, u);
         if (with.moving_object_mask.at<std::uint8_t>(v, u) == 0 || object_depth == 0 || room_depth == 0) continue;
         ++compared;
         if (object_depth < room_depth) ++nearer;
@@ -369,7 +380,7 @@ TEST(SyntheticRgbd, NormalFramesHavePlentyOfCorners) {
   const simulation::SyntheticRgbdSequence sequence(simulation::SyntheticRgbdOptions{});
   for (const std::size_t i : {0, 50, 100, 149}) {
     std::vector<cv::Point2f> corners;
-    cv::goodFeaturesToTrack(gray(sequence.frame(i).color), corners, 500, 0.01, 10);
+    cv::goodFeaturesToTrack(gray(sequence.frame(i).rgbd.color), corners, 500, 0.01, 10);
     EXPECT_GE(corners.size(), 300u) << "frame " << i;
   }
 }
@@ -379,7 +390,7 @@ TEST(SyntheticRgbd, DimLightingIsDarkerFlatterAndDefeatsFixedThresholds) {
   dim_options.dim_lighting = true;
   const simulation::SyntheticRgbdSequence dim_sequence(dim_options);
   for (const std::size_t i : {10, 110}) {
-    const cv::Mat normal = gray(exactStatic().frame(i).color), dim = gray(dim_sequence.frame(i).color);
+    const cv::Mat normal = gray(exactStatic().frame(i).rgbd.color), dim = gray(dim_sequence.frame(i).rgbd.color);
     cv::Scalar normal_mean, normal_contrast, dim_mean, dim_contrast;
     cv::meanStdDev(normal, normal_mean, normal_contrast);
     cv::meanStdDev(dim, dim_mean, dim_contrast);
@@ -451,8 +462,8 @@ TEST(SyntheticRgbd, WritesTheTumLayout) {
     ASSERT_EQ(depth_image.type(), CV_16UC1);
     EXPECT_EQ(color.size(), cv::Size(640, 480));
     EXPECT_EQ(depth_image.size(), cv::Size(640, 480));
-    EXPECT_EQ(cv::norm(color, frame.color, cv::NORM_INF), 0.0);  // PNG is lossless
-    EXPECT_EQ(cv::norm(depth_image, frame.depth, cv::NORM_INF), 0.0);
+    EXPECT_EQ(cv::norm(color, frame.rgbd.color, cv::NORM_INF), 0.0);  // PNG is lossless
+    EXPECT_EQ(cv::norm(depth_image, rawDepth(frame), cv::NORM_INF), 0.0);
 
     const Eigen::Vector3d translation(std::stod(truth[i][1]), std::stod(truth[i][2]), std::stod(truth[i][3]));
     const Eigen::Quaterniond rotation(std::stod(truth[i][7]), std::stod(truth[i][4]), std::stod(truth[i][5]),

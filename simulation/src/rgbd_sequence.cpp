@@ -290,14 +290,16 @@ class FrameRenderer {
         normal_deviates_(hashedNormalTable()),
         disparity_scale_(camera_.fx * kDisparityBaseline * kDisparitySubpixel) {}  // subpixel units * metres
 
-  void renderRow(int v, SyntheticRgbdFrame& frame, std::vector<const BoxInFrame*>& row_boxes) const {
+  /// Row v of the colour image, the raw 16-bit depth (as the sensor stores
+  /// it) and the moving-object mask.
+  void renderRow(int v, SyntheticRgbdFrame& frame, cv::Mat& raw_depth, std::vector<const BoxInFrame*>& row_boxes) const {
     row_boxes.clear();
     for (const BoxInFrame& box : boxes_)
       if (v >= box.pixels.y && v < box.pixels.y + box.pixels.height) row_boxes.push_back(&box);
     const Eigen::Vector3d row_direction =
         rotation_ * Eigen::Vector3d(-camera_.cx / camera_.fx, (v - camera_.cy) / camera_.fy, 1.0);
-    cv::Vec3b* color_row = frame.color.ptr<cv::Vec3b>(v);
-    std::uint16_t* depth_row = frame.depth.ptr<std::uint16_t>(v);
+    cv::Vec3b* color_row = frame.rgbd.color.ptr<cv::Vec3b>(v);
+    std::uint16_t* depth_row = raw_depth.ptr<std::uint16_t>(v);
     std::uint8_t* mask_row = frame.moving_object_mask.ptr<std::uint8_t>(v);
     for (int u = 0; u < camera_.width; ++u) {
       const Eigen::Vector3d direction = row_direction + u * direction_step_;
@@ -399,10 +401,10 @@ SyntheticRgbdFrame SyntheticRgbdSequence::frame(std::size_t i) const {
     throw std::out_of_range("synthetic RGB-D: frame " + std::to_string(i) + " of " + std::to_string(size()));
   const io::PinholeCamera& camera = options_.camera;
   SyntheticRgbdFrame frame;
-  frame.timestamp = timestamp(i);
+  frame.rgbd.timestamp = timestamp(i);
   frame.camera_to_world = cameraToWorld(i);
-  frame.color.create(camera.height, camera.width, CV_8UC3);
-  frame.depth.create(camera.height, camera.width, CV_16UC1);
+  frame.rgbd.color.create(camera.height, camera.width, CV_8UC3);
+  cv::Mat raw_depth(camera.height, camera.width, CV_16UC1);
   frame.moving_object_mask.create(camera.height, camera.width, CV_8UC1);
 
   const TexturedBox room{RayBox::centred(Eigen::Vector3d(0.0, 0.0, kRoomSize.z() / 2.0), kRoomSize, 0.0),
@@ -423,8 +425,9 @@ SyntheticRgbdFrame SyntheticRgbdSequence::frame(std::size_t i) const {
                                mixBits(scene_->noise_seed ^ mixBits(i)));
   cv::parallel_for_(cv::Range(0, camera.height), [&](const cv::Range& rows) {
     std::vector<const BoxInFrame*> row_boxes;
-    for (int v = rows.start; v < rows.end; ++v) renderer.renderRow(v, frame, row_boxes);
+    for (int v = rows.start; v < rows.end; ++v) renderer.renderRow(v, frame, raw_depth, row_boxes);
   });
+  frame.rgbd.depth = depthFromRaw(raw_depth, camera.depth_factor);
   return frame;
 }
 

@@ -15,6 +15,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <unistd.h>
 
+#include "weighted_icp/core/rgbd_frame.h"
 #include "weighted_icp/io/trajectory.h"
 
 namespace weighted_icp::simulation {
@@ -84,9 +85,9 @@ void writeFrames(const SyntheticRgbdSequence& sequence, const fs::path& folder,
   io::Trajectory groundtruth;
   for (std::size_t i = 0; i < sequence.size(); ++i) {
     const SyntheticRgbdFrame frame = sequence.frame(i);
-    const std::string stamp = timestampText(frame.timestamp);
-    writeImage(folder / "rgb" / (stamp + ".png"), frame.color);
-    writeImage(folder / "depth" / (stamp + ".png"), frame.depth);
+    const std::string stamp = timestampText(frame.rgbd.timestamp);
+    writeImage(folder / "rgb" / (stamp + ".png"), frame.rgbd.color);
+    writeImage(folder / "depth" / (stamp + ".png"), depthToRaw(frame.rgbd.depth, sequence.options().camera.depth_factor));
     rgb_list << stamp << " rgb/" << stamp << ".png\n";
     depth_list << stamp << " depth/" << stamp << ".png\n";
     groundtruth.push_back({listedTimestamp(stamp), frame.camera_to_world});

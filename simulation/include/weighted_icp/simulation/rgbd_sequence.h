@@ -19,6 +19,7 @@
 #include <Eigen/Geometry>
 #include <opencv2/core.hpp>
 
+#include "weighted_icp/core/rgbd_frame.h"
 #include "weighted_icp/io/camera.h"
 
 namespace weighted_icp::simulation {
@@ -67,9 +68,10 @@ struct SceneBox {
 
 /// @brief One rendered frame with its true pose.
 struct SyntheticRgbdFrame {
-  double timestamp = 0.0;
-  cv::Mat color;  // CV_8UC3, BGR
-  cv::Mat depth;  // CV_16UC1, metres * camera.depth_factor, 0 = invalid
+  /// What a sensor gives: timestamp, colour (CV_8UC3, BGR) and metric depth
+  /// (CV_32F; the 16-bit image the sensor model quantises to, divided by
+  /// camera.depth_factor, so core's depthToRaw gives it back exactly).
+  RgbdFrame rgbd;
   Eigen::Isometry3d camera_to_world = Eigen::Isometry3d::Identity();
   cv::Mat moving_object_mask;  // CV_8UC1, 255 where the moving object is seen
 };
