@@ -35,9 +35,9 @@ namespace {
 
 struct Sequence {
   std::string name;
-  io::PinholeCamera camera;
+  PinholeCamera camera;
   std::vector<RgbdFrame> frames;
-  io::Trajectory truth;
+  Trajectory truth;
 };
 
 struct Run {
@@ -51,7 +51,7 @@ double medianMs(const std::vector<double>& values) { return values.empty() ? 0.0
 
 Sequence loadTum(const std::string& dir, const std::string& name, int freiburg) {
   const io::TumSequence tum = io::TumSequence::open(dir);
-  Sequence sequence{name, io::tumCamera(freiburg), {}, tum.groundTruth()};
+  Sequence sequence{name, tumCamera(freiburg), {}, tum.groundTruth()};
   for (std::size_t i = 0; i < tum.size(); ++i) {
     sequence.frames.push_back(tum.loadFrame(i, sequence.camera));
   }
@@ -77,7 +77,7 @@ Run runFrontend(const Sequence& sequence) {
   std::vector<double> ms;
   for (const auto& frame : sequence.frames) ms.push_back(slam.process(frame).tracking_ms);
   slam.finish();
-  const io::Trajectory estimate = slam.trajectory();
+  const Trajectory estimate = slam.trajectory();
   return {metrics::computeAte(sequence.truth, estimate).translation.rmse, medianMs(ms), estimate.size()};
 }
 
@@ -86,7 +86,7 @@ Run runOpenCvOdometry(const Sequence& sequence) {
   cv::Ptr<cv::rgbd::RgbdOdometry> odometry = cv::rgbd::RgbdOdometry::create(camera_matrix);
   cv::Ptr<cv::rgbd::OdometryFrame> previous, current;
   Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-  io::Trajectory estimate;
+  Trajectory estimate;
   std::vector<double> ms;
   for (const auto& frame : sequence.frames) {
     const auto start = std::chrono::steady_clock::now();

@@ -66,8 +66,8 @@ int main(int argc, char** argv) {
     const metrics::DeltaUnit rpe_unit =
         rpe_unit_name == "s" ? metrics::DeltaUnit::Seconds : metrics::DeltaUnit::Frames;
 
-    const io::Trajectory groundtruth = io::readTrajectory(groundtruth_path);
-    const io::Trajectory estimate = io::readTrajectory(estimate_path);
+    const Trajectory groundtruth = io::readTrajectory(groundtruth_path);
+    const Trajectory estimate = io::readTrajectory(estimate_path);
     const metrics::AbsoluteTrajectoryError ate = metrics::computeAte(groundtruth, estimate, max_difference);
     const metrics::RelativePoseError rpe = metrics::computeRpe(groundtruth, estimate, rpe_delta, rpe_unit);
 

@@ -38,14 +38,14 @@ class FrameSource {
   virtual ~FrameSource() = default;
   virtual std::size_t size() const = 0;
   virtual RgbdFrame load(std::size_t i) const = 0;
-  virtual io::Trajectory groundTruth() const = 0;
-  virtual const io::PinholeCamera& camera() const = 0;
+  virtual Trajectory groundTruth() const = 0;
+  virtual const PinholeCamera& camera() const = 0;
   virtual std::string describe() const = 0;
 };
 
 class TumSource : public FrameSource {
  public:
-  TumSource(const std::string& dir, io::PinholeCamera camera) : sequence_(io::TumSequence::open(dir)), camera_(camera) {}
+  TumSource(const std::string& dir, PinholeCamera camera) : sequence_(io::TumSequence::open(dir)), camera_(camera) {}
   std::size_t size() const override { return sequence_.size(); }
   RgbdFrame load(std::size_t i) const override {
     RgbdFrame images = sequence_.loadFrame(i, camera_);
@@ -54,13 +54,13 @@ class TumSource : public FrameSource {
                 << " has no valid depth; frame " << i << " is tracked without it\n";
     return images;
   }
-  io::Trajectory groundTruth() const override { return sequence_.groundTruth(); }
-  const io::PinholeCamera& camera() const override { return camera_; }
+  Trajectory groundTruth() const override { return sequence_.groundTruth(); }
+  const PinholeCamera& camera() const override { return camera_; }
   std::string describe() const override { return "TUM sequence " + sequence_.directory(); }
 
  private:
   io::TumSequence sequence_;
-  io::PinholeCamera camera_;
+  PinholeCamera camera_;
 };
 
 class SyntheticSource : public FrameSource {
@@ -68,12 +68,12 @@ class SyntheticSource : public FrameSource {
   explicit SyntheticSource(const simulation::SyntheticRgbdOptions& options) : sequence_(options) {}
   std::size_t size() const override { return sequence_.size(); }
   RgbdFrame load(std::size_t i) const override { return sequence_.frame(i).rgbd; }
-  io::Trajectory groundTruth() const override {
-    io::Trajectory truth;
+  Trajectory groundTruth() const override {
+    Trajectory truth;
     for (std::size_t i = 0; i < sequence_.size(); ++i) truth.push_back({sequence_.timestamp(i), sequence_.cameraToWorld(i)});
     return truth;
   }
-  const io::PinholeCamera& camera() const override { return sequence_.options().camera; }
+  const PinholeCamera& camera() const override { return sequence_.options().camera; }
   std::string describe() const override {
     std::ostringstream out;
     out << "synthetic sequence (seed " << sequence_.options().seed
@@ -167,7 +167,7 @@ int main(int argc, char** argv) {
     slam.finish();
 
     // Outputs, each written atomically.
-    const io::Trajectory trajectory = slam.trajectory();
+    const Trajectory trajectory = slam.trajectory();
     io::writeTrajectory(trajectory, (fs::path(out_dir) / "trajectory.txt").string());
     const LandmarkMap session = slam.sessionMap();
     io::writeLandmarkMap(session, (fs::path(out_dir) / "session.txt").string());
@@ -205,7 +205,7 @@ int main(int argc, char** argv) {
         .add("clahe_frames", clahe)
         .add("dynamic_matches", dynamic)
         .add("bundle_adjustments", slam.optimizationsRun());
-    const io::Trajectory truth = source->groundTruth();
+    const Trajectory truth = source->groundTruth();
     std::optional<metrics::AbsoluteTrajectoryError> ate;
     if (!truth.empty() && trajectory.size() >= 3) {
       ate = metrics::computeAte(truth, trajectory);

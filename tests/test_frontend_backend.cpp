@@ -22,7 +22,7 @@ using weighted_icp::testing::makePose;
 using weighted_icp::testing::projectWorld;
 
 struct Scene {
-  io::PinholeCamera camera = weighted_icp::testing::syntheticCamera();
+  PinholeCamera camera = weighted_icp::testing::syntheticCamera();
   std::vector<Eigen::Isometry3d> true_poses_wc;
   std::vector<Eigen::Vector3d> true_points;
   MapPointId outlier_point = 0;  // its observation from the last keyframe is 40 px off

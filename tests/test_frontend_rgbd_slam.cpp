@@ -27,7 +27,7 @@ frontend::RgbdSlamOptions deterministic() {
 }
 
 double syntheticAte(const simulation::SyntheticRgbdSequence& sequence, frontend::RgbdSlam& slam) {
-  io::Trajectory truth;
+  Trajectory truth;
   for (std::size_t i = 0; i < sequence.size(); ++i) {
     slam.process(sequence.frame(i).rgbd);
     truth.push_back({sequence.timestamp(i), sequence.cameraToWorld(i)});
@@ -44,7 +44,7 @@ simulation::SyntheticRgbdOptions syntheticOptions(bool moving_object) {
 }
 
 /// Mean reprojection error of every landmark into the keyframes that observed it.
-double meanReprojectionErrorPx(const LandmarkMap& map, const io::PinholeCamera& camera) {
+double meanReprojectionErrorPx(const LandmarkMap& map, const PinholeCamera& camera) {
   double sum = 0.0;
   std::size_t count = 0;
   for (const auto& landmark : map.landmarks)
@@ -101,7 +101,7 @@ TEST(RgbdSlam, DeterministicModeRepeatsExactly) {
   simulation::SyntheticRgbdOptions options = syntheticOptions(false);
   options.frames = 40;
   const simulation::SyntheticRgbdSequence sequence(options);
-  io::Trajectory runs[2];
+  Trajectory runs[2];
   for (auto& run : runs) {
     frontend::RgbdSlam slam(sequence.options().camera, deterministic());
     syntheticAte(sequence, slam);
@@ -161,7 +161,7 @@ TEST(RgbdSlam, FramesWithoutDepthAreTrackedTwoDimensionally) {
   options.frames = 100;
   const simulation::SyntheticRgbdSequence sequence(options);
   frontend::RgbdSlam slam(sequence.options().camera, deterministic());
-  io::Trajectory truth;
+  Trajectory truth;
   std::size_t relative = 0;
   for (std::size_t i = 0; i < sequence.size(); ++i) {
     RgbdFrame image = sequence.frame(i).rgbd;
@@ -182,7 +182,7 @@ TEST(RgbdSlam, FramesWithoutDepthAreTrackedTwoDimensionally) {
 }
 
 TEST(RgbdSlam, BadImagesAreRefusedClearly) {
-  frontend::RgbdSlam slam(io::tumCamera(1), deterministic());
+  frontend::RgbdSlam slam(tumCamera(1), deterministic());
   EXPECT_THROW(slam.process({0.0, cv::Mat(), cv::Mat()}), std::invalid_argument);
   EXPECT_THROW(slam.process({0.0, cv::Mat(480, 640, CV_8UC3, cv::Scalar::all(0)), cv::Mat(240, 320, CV_32F)}),
                std::invalid_argument);
@@ -197,7 +197,7 @@ struct TumRun {
 
 TumRun runTum(const std::string& folder, int freiburg) {
   const io::TumSequence tum = io::TumSequence::open((weighted_icp::testing::dataDir() / folder).string());
-  const io::PinholeCamera camera = io::tumCamera(freiburg);
+  const PinholeCamera camera = tumCamera(freiburg);
   TumRun run{std::make_unique<frontend::RgbdSlam>(camera, deterministic())};
   for (std::size_t i = 0; i < tum.size(); ++i) {
     run.slam->process(tum.loadFrame(i, camera));
@@ -212,7 +212,7 @@ TEST(RgbdSlam, RealFreiburg1SequenceIsTrackedAccurately) {
   const TumRun run = runTum("tum_fr1_xyz_head", 1);
   EXPECT_LT(run.ate_rmse_m, 0.0056);  // OpenCV's RgbdOdometry on the same frames: 0.56 cm
   for (const LandmarkMap& minimap : run.slam->miniMaps())
-    EXPECT_LT(meanReprojectionErrorPx(minimap, io::tumCamera(1)), 1.5);
+    EXPECT_LT(meanReprojectionErrorPx(minimap, tumCamera(1)), 1.5);
 }
 
 TEST(RgbdSlam, RealFreiburg3SequenceBeatsTheIssueTarget) {
@@ -221,7 +221,7 @@ TEST(RgbdSlam, RealFreiburg3SequenceBeatsTheIssueTarget) {
   EXPECT_LT(run.ate_rmse_m, 0.021);  // OpenCV's RgbdOdometry, as measured for the issue: 2.1 cm
   EXPECT_GE(run.slam->miniMaps().size(), 2u);
   for (const LandmarkMap& minimap : run.slam->miniMaps())
-    EXPECT_LT(meanReprojectionErrorPx(minimap, io::tumCamera(3)), 1.5);
+    EXPECT_LT(meanReprojectionErrorPx(minimap, tumCamera(3)), 1.5);
 }
 
 }  // namespace

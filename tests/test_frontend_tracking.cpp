@@ -20,7 +20,7 @@ using frontend::TrackingStatus;
 
 /// Map, inline backend and front end, declared in the order they depend on each other.
 struct Tracker {
-  explicit Tracker(const io::PinholeCamera& camera)
+  explicit Tracker(const PinholeCamera& camera)
       : backend(map, camera, backendOptions()), frontend(map, backend, camera, frontendOptions()) {}
 
   static frontend::BackendOptions backendOptions() {
@@ -57,7 +57,7 @@ class FrontendTracking : public ::testing::Test {
     sequence_.reset();
   }
 
-  static const io::PinholeCamera& camera() { return sequence_->options().camera; }
+  static const PinholeCamera& camera() { return sequence_->options().camera; }
   static RgbdFrame image(std::size_t i) {
     const RgbdFrame& stored = images_.at(i);
     return {stored.timestamp, stored.color.clone(), stored.depth.clone()};

@@ -214,7 +214,7 @@ TEST(LocalBundleAdjustment, LeavesUnobservedPosesAndPointsAloneAndFlagsPointsBeh
 TEST(LocalBundleAdjustment, ReportsInvalidProblems) {
   const Window valid = makeWindow(3, 20, 46);
   const auto expectFailure = [](BundleAdjustmentProblem problem, const std::string& reason,
-                                const io::PinholeCamera& camera = syntheticCamera()) {
+                                const PinholeCamera& camera = syntheticCamera()) {
     const BundleAdjustmentProblem before = problem;
     const BundleAdjustmentSummary summary = solveLocalBundleAdjustment(problem, camera);
     EXPECT_FALSE(summary.ok);
@@ -234,7 +234,7 @@ TEST(LocalBundleAdjustment, ReportsInvalidProblems) {
   BundleAdjustmentProblem nan_point = valid.problem;
   nan_point.points_world[5].y() = std::nan("");
   expectFailure(nan_point, "point 5");
-  expectFailure(valid.problem, "intrinsics", io::PinholeCamera{});
+  expectFailure(valid.problem, "intrinsics", PinholeCamera{});
   BundleAdjustmentProblem empty = valid.problem;
   empty.observations.clear();
   expectFailure(empty, "no observation");

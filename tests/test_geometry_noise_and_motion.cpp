@@ -59,7 +59,7 @@ TEST(DepthNoise, RejectsInvalidDepth) {
   const auto camera = syntheticCamera();
   EXPECT_THROW(pointCovarianceCamera(camera, 10, 10, 0.0, {}), std::invalid_argument);
   EXPECT_THROW(pointCovarianceCamera(camera, 10, 10, std::nan(""), {}), std::invalid_argument);
-  EXPECT_THROW(pointCovarianceCamera(io::PinholeCamera{}, 10, 10, 1.0, {}), std::invalid_argument);
+  EXPECT_THROW(pointCovarianceCamera(PinholeCamera{}, 10, 10, 1.0, {}), std::invalid_argument);
 }
 
 TEST(PointFusion, TwoEqualCovariancesHalveIt) {

@@ -33,7 +33,7 @@ struct PnpScene {
   std::set<int> outliers;
 };
 
-PnpScene makePnpScene(const io::PinholeCamera& camera, const Eigen::Isometry3d& truth_wc, int n, double pixel_sigma,
+PnpScene makePnpScene(const PinholeCamera& camera, const Eigen::Isometry3d& truth_wc, int n, double pixel_sigma,
                       double outlier_fraction, unsigned seed) {
   std::mt19937 rng(seed);
   PnpScene scene;
@@ -49,7 +49,7 @@ PnpScene makePnpScene(const io::PinholeCamera& camera, const Eigen::Isometry3d& 
   return scene;
 }
 
-double rms(const io::PinholeCamera& camera, const Eigen::Isometry3d& pose_wc, const PnpScene& scene,
+double rms(const PinholeCamera& camera, const Eigen::Isometry3d& pose_wc, const PnpScene& scene,
            const std::vector<int>& use) {
   double sum = 0;
   for (const int i : use) sum += (projectWorld(camera, pose_wc, scene.points[i]) - scene.pixels[i]).squaredNorm();
@@ -139,7 +139,7 @@ TEST(PosePnp, ReportsTooFewOrInvalidMatches) {
   EXPECT_FALSE(sizes.ok);
   EXPECT_NE(sizes.failure.find("mismatched"), std::string::npos) << sizes.failure;
 
-  const PoseEstimate bad_camera = estimatePosePnp(scene.points, scene.pixels, io::PinholeCamera{}, std::nullopt);
+  const PoseEstimate bad_camera = estimatePosePnp(scene.points, scene.pixels, PinholeCamera{}, std::nullopt);
   EXPECT_FALSE(bad_camera.ok);
   EXPECT_NE(bad_camera.failure.find("intrinsics"), std::string::npos) << bad_camera.failure;
 }
@@ -198,7 +198,7 @@ struct TwoViewScene {
   std::vector<Eigen::Vector2d> pixels1, pixels2;
 };
 
-TwoViewScene observeTwice(const io::PinholeCamera& camera, const std::vector<Eigen::Vector3d>& points,
+TwoViewScene observeTwice(const PinholeCamera& camera, const std::vector<Eigen::Vector3d>& points,
                           const Eigen::Isometry3d& pose_2_in_1, double pixel_sigma, std::mt19937& rng) {
   TwoViewScene scene;
   for (const auto& point : points) {
@@ -212,7 +212,7 @@ TwoViewScene observeTwice(const io::PinholeCamera& camera, const std::vector<Eig
 }
 
 /// A general scene (depths 1.5-5 m, 40 cm baseline), 1 px noise, 10 % outliers.
-TwoViewScene generalScene(const io::PinholeCamera& camera, const Eigen::Isometry3d& truth, unsigned seed) {
+TwoViewScene generalScene(const PinholeCamera& camera, const Eigen::Isometry3d& truth, unsigned seed) {
   std::mt19937 rng(seed);
   const auto points = pointsInView(camera, Eigen::Isometry3d::Identity(), 300, 1.5, 5.0, rng);
   TwoViewScene scene = observeTwice(camera, points, truth, 1.0, rng);
@@ -223,7 +223,7 @@ TwoViewScene generalScene(const io::PinholeCamera& camera, const Eigen::Isometry
 }
 
 /// A wall 2 m away, tilted 20 degrees about the vertical.
-TwoViewScene planarScene(const io::PinholeCamera& camera, const Eigen::Isometry3d& truth, double pixel_sigma,
+TwoViewScene planarScene(const PinholeCamera& camera, const Eigen::Isometry3d& truth, double pixel_sigma,
                          unsigned seed) {
   std::mt19937 rng(seed);
   const Eigen::Isometry3d wall = makePose({0, 20, 0}, {0, 0, 2.0});

@@ -11,8 +11,8 @@
 
 namespace weighted_icp::testing {
 
-inline io::PinholeCamera syntheticCamera() {
-  io::PinholeCamera camera;
+inline PinholeCamera syntheticCamera() {
+  PinholeCamera camera;
   camera.fx = 525.0;
   camera.fy = 525.0;
   camera.cx = 319.5;
@@ -41,7 +41,7 @@ inline Eigen::Isometry3d perturbPose(const Eigen::Isometry3d& pose, double trans
 }
 
 /// `n` world points seen by the camera at `pose_wc`: uniform pixels, depths uniform in [z_min, z_max].
-inline std::vector<Eigen::Vector3d> pointsInView(const io::PinholeCamera& camera, const Eigen::Isometry3d& pose_wc,
+inline std::vector<Eigen::Vector3d> pointsInView(const PinholeCamera& camera, const Eigen::Isometry3d& pose_wc,
                                                  int n, double z_min, double z_max, std::mt19937& rng) {
   std::uniform_real_distribution<double> u(20.0, camera.width - 20.0), v(20.0, camera.height - 20.0), z(z_min, z_max);
   std::vector<Eigen::Vector3d> points;
@@ -52,7 +52,7 @@ inline std::vector<Eigen::Vector3d> pointsInView(const io::PinholeCamera& camera
   return points;
 }
 
-inline Eigen::Vector2d projectWorld(const io::PinholeCamera& camera, const Eigen::Isometry3d& pose_wc,
+inline Eigen::Vector2d projectWorld(const PinholeCamera& camera, const Eigen::Isometry3d& pose_wc,
                                     const Eigen::Vector3d& point_world) {
   return camera.project(pose_wc.inverse() * point_world);
 }

@@ -36,8 +36,8 @@ const char* const kCompleteYaml =
 
 TEST(Camera, PresetNamesLoadThePresets) {
   for (int freiburg = 1; freiburg <= 3; ++freiburg) {
-    const io::PinholeCamera preset = io::tumCamera(freiburg);
-    const io::PinholeCamera loaded = io::loadCamera("fr" + std::to_string(freiburg));
+    const PinholeCamera preset = tumCamera(freiburg);
+    const PinholeCamera loaded = io::loadCamera("fr" + std::to_string(freiburg));
     EXPECT_EQ(loaded.fx, preset.fx);
     EXPECT_EQ(loaded.cy, preset.cy);
     EXPECT_EQ(loaded.distortion, preset.distortion);
@@ -46,14 +46,14 @@ TEST(Camera, PresetNamesLoadThePresets) {
 
 TEST(Camera, YamlRoundTripKeepsEveryValue) {
   const auto dir = weighted_icp::testing::scratchDir("camera_round_trip");
-  io::PinholeCamera camera = io::tumCamera(1);
+  PinholeCamera camera = tumCamera(1);
   camera.fx = 1.0 / 3.0 + 500.0;  // not exactly representable in decimal
   camera.width = 1280;
   camera.height = 720;
   camera.depth_factor = 1000.0;
   const std::string path = (dir / "camera.yaml").string();
   io::saveCamera(camera, path);
-  const io::PinholeCamera loaded = io::loadCamera(path);
+  const PinholeCamera loaded = io::loadCamera(path);
   EXPECT_EQ(loaded.fx, camera.fx);
   EXPECT_EQ(loaded.fy, camera.fy);
   EXPECT_EQ(loaded.cx, camera.cx);
@@ -69,7 +69,7 @@ TEST(Camera, YamlRoundTripKeepsEveryValue) {
 TEST(Camera, HandWrittenYamlLoads) {
   const auto dir = weighted_icp::testing::scratchDir("camera_hand_written");
   writeFile(dir / "camera.yaml", kCompleteYaml);
-  const io::PinholeCamera camera = io::loadCamera((dir / "camera.yaml").string());
+  const PinholeCamera camera = io::loadCamera((dir / "camera.yaml").string());
   EXPECT_EQ(camera.fx, 500.5);
   EXPECT_EQ(camera.fy, 501.25);
   EXPECT_EQ(camera.distortion[1], -0.2);
@@ -119,12 +119,12 @@ TEST(Camera, UnreadableFilesAreNamed) {
 
 TEST(Camera, InvalidCamerasAreNotSaved) {
   const auto dir = weighted_icp::testing::scratchDir("camera_save_invalid");
-  io::PinholeCamera camera = io::tumCamera(3);
+  PinholeCamera camera = tumCamera(3);
   camera.depth_factor = 0.0;
   const std::string path = (dir / "camera.yaml").string();
   EXPECT_THROW(io::saveCamera(camera, path), std::runtime_error);
   EXPECT_FALSE(fs::exists(path));
-  camera = io::tumCamera(3);
+  camera = tumCamera(3);
   camera.fy = std::numeric_limits<double>::quiet_NaN();
   EXPECT_THROW(io::saveCamera(camera, path), std::runtime_error);
   EXPECT_FALSE(fs::exists(path));

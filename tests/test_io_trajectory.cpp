@@ -60,10 +60,10 @@ Pairs bruteForceAssociate(const std::vector<double>& first, const std::vector<do
 
 TEST(Trajectory, RoundTripKeepsTimestampsAndPoses) {
   const auto dir = weighted_icp::testing::scratchDir("trajectory_round_trip");
-  const io::Trajectory trajectory = curvedTrajectory(50);
+  const Trajectory trajectory = curvedTrajectory(50);
   const std::string path = (dir / "trajectory.txt").string();
   io::writeTrajectory(trajectory, path);
-  const io::Trajectory read = io::readTrajectory(path);
+  const Trajectory read = io::readTrajectory(path);
   ASSERT_EQ(read.size(), trajectory.size());
   for (std::size_t k = 0; k < read.size(); ++k) {
     EXPECT_EQ(read[k].timestamp, trajectory[k].timestamp);
@@ -78,7 +78,7 @@ TEST(Trajectory, ReadsQuaternionsScalarLast) {
   // 90 degrees about z: qz = qw = sqrt(1/2).
   const std::string path = writeText(dir / "t.txt", "# timestamp tx ty tz qx qy qz qw\n\n"
                                                     "10.5 1 2 3 0 0 0.70710678 0.70710678\n");
-  const io::Trajectory trajectory = io::readTrajectory(path);
+  const Trajectory trajectory = io::readTrajectory(path);
   ASSERT_EQ(trajectory.size(), 1u);
   EXPECT_EQ(trajectory[0].timestamp, 10.5);
   EXPECT_TRUE(trajectory[0].pose.translation().isApprox(Eigen::Vector3d(1, 2, 3)));
@@ -93,7 +93,7 @@ TEST(Trajectory, ReadsTheRealGroundTruth) {
   std::string line, first_data_line;
   while (std::getline(in, line))
     if (!line.empty() && line[0] != '#' && data_lines++ == 0) first_data_line = line;
-  const io::Trajectory trajectory = io::readTrajectory(path.string());
+  const Trajectory trajectory = io::readTrajectory(path.string());
   ASSERT_EQ(trajectory.size(), data_lines);
   std::istringstream fields(first_data_line);
   double timestamp, tx, ty, tz;
@@ -125,7 +125,7 @@ TEST(Trajectory, MalformedLinesNameFileAndLine) {
 
 TEST(Trajectory, NonRigidPosesAreNotWritten) {
   const auto dir = weighted_icp::testing::scratchDir("trajectory_write_invalid");
-  io::Trajectory trajectory = curvedTrajectory(3);
+  Trajectory trajectory = curvedTrajectory(3);
   trajectory[1].pose.translation().x() = std::numeric_limits<double>::quiet_NaN();
   const std::string path = (dir / "t.txt").string();
   EXPECT_THROW(io::writeTrajectory(trajectory, path), std::runtime_error);
@@ -173,11 +173,11 @@ TEST(TrajectoryAssociate, RefusesBadInput) {
 }
 
 TEST(TrajectoryNearestInTime, FindsTheClosestPose) {
-  io::Trajectory trajectory;
+  Trajectory trajectory;
   for (int i = 0; i < 5; ++i) trajectory.push_back({50.0 + 0.1 * i, Eigen::Isometry3d::Identity()});
   EXPECT_EQ(io::nearestInTime(trajectory, 0.0), 0u);
   EXPECT_EQ(io::nearestInTime(trajectory, 50.13), 1u);
   EXPECT_EQ(io::nearestInTime(trajectory, 50.17), 2u);
   EXPECT_EQ(io::nearestInTime(trajectory, 99.0), 4u);
-  EXPECT_THROW(io::nearestInTime(io::Trajectory{}, 1.0), std::invalid_argument);
+  EXPECT_THROW(io::nearestInTime(Trajectory{}, 1.0), std::invalid_argument);
 }

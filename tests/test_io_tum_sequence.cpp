@@ -152,7 +152,7 @@ TEST(TumSequence, GroundTruthIsFoundForEveryFrame) {
   WEIGHTED_ICP_REQUIRE_FILE(dir / "groundtruth.txt");
   const io::TumSequence sequence = io::TumSequence::open(dir.string());
   ASSERT_TRUE(sequence.hasGroundTruth());
-  const io::Trajectory groundtruth = io::readTrajectory((dir / "groundtruth.txt").string());
+  const Trajectory groundtruth = io::readTrajectory((dir / "groundtruth.txt").string());
   for (std::size_t i = 0; i < sequence.size(); ++i) {
     const double t = sequence.frame(i).rgb_timestamp;
     const auto pose = sequence.groundTruthAt(t);

@@ -15,7 +15,7 @@ using namespace weighted_icp;
 using namespace weighted_icp::testing;
 
 TEST(TrajectoryAte, RigidlyMovedTrajectoryHasNoErrorAndTheAlignmentUndoesTheMotion) {
-  const io::Trajectory truth = curvedTrajectory(60);
+  const Trajectory truth = curvedTrajectory(60);
   const Eigen::Isometry3d motion = rigidMotion(0.5, -2.0, 1.0, 0.3, -0.2, 1.1);
   const metrics::AbsoluteTrajectoryError ate = metrics::computeAte(truth, moved(truth, motion));
   EXPECT_EQ(ate.pairs, truth.size());
@@ -25,8 +25,8 @@ TEST(TrajectoryAte, RigidlyMovedTrajectoryHasNoErrorAndTheAlignmentUndoesTheMoti
 }
 
 TEST(TrajectoryAte, ErrorOfAddedNoiseIsTheNoiseRms) {
-  const io::Trajectory truth = curvedTrajectory(2000);
-  io::Trajectory estimate = truth;
+  const Trajectory truth = curvedTrajectory(2000);
+  Trajectory estimate = truth;
   std::mt19937 random(3);
   std::normal_distribution<double> noise(0.0, 0.01);
   double sum_squares = 0.0;
@@ -48,8 +48,8 @@ TEST(TrajectoryAte, ErrorOfAddedNoiseIsTheNoiseRms) {
 }
 
 TEST(TrajectoryAte, AlignmentHasNoScale) {
-  const io::Trajectory truth = curvedTrajectory(100);
-  io::Trajectory estimate = truth;
+  const Trajectory truth = curvedTrajectory(100);
+  Trajectory estimate = truth;
   for (auto& stamped : estimate) stamped.pose.translation() *= 2.0;
   const metrics::AbsoluteTrajectoryError ate = metrics::computeAte(truth, estimate);
   const Eigen::Matrix3d rotation = ate.alignment.linear();
@@ -59,8 +59,8 @@ TEST(TrajectoryAte, AlignmentHasNoScale) {
 }
 
 TEST(TrajectoryAte, AssociatesByTimestamp) {
-  const io::Trajectory truth = curvedTrajectory(40);
-  io::Trajectory estimate = truth;
+  const Trajectory truth = curvedTrajectory(40);
+  Trajectory estimate = truth;
   for (auto& stamped : estimate) stamped.timestamp += 0.005;
   EXPECT_EQ(metrics::computeAte(truth, estimate).pairs, truth.size());
   EXPECT_EQ(metrics::computeAte(truth, estimate, 0.006).pairs, truth.size());
@@ -68,28 +68,28 @@ TEST(TrajectoryAte, AssociatesByTimestamp) {
 }
 
 TEST(TrajectoryAte, FewerThanThreePairsThrow) {
-  const io::Trajectory truth = curvedTrajectory(40);
-  const io::Trajectory two(truth.begin(), truth.begin() + 2);
+  const Trajectory truth = curvedTrajectory(40);
+  const Trajectory two(truth.begin(), truth.begin() + 2);
   try {
     metrics::computeAte(truth, two);
     FAIL() << "two pairs accepted";
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("at least 3"), std::string::npos) << e.what();
   }
-  const io::Trajectory three(truth.begin(), truth.begin() + 3);
+  const Trajectory three(truth.begin(), truth.begin() + 3);
   EXPECT_EQ(metrics::computeAte(truth, three).pairs, 3u);
 }
 
 TEST(TrajectoryAte, NonFinitePosesAreRefused) {
-  const io::Trajectory truth = curvedTrajectory(10);
-  io::Trajectory estimate = truth;
+  const Trajectory truth = curvedTrajectory(10);
+  Trajectory estimate = truth;
   estimate[4].pose.translation().y() = std::numeric_limits<double>::quiet_NaN();
   EXPECT_THROW(metrics::computeAte(truth, estimate), std::invalid_argument);
   EXPECT_THROW(metrics::computeRpe(truth, estimate), std::invalid_argument);
 }
 
 TEST(TrajectoryRpe, ConstantWorldOffsetHasNoError) {
-  const io::Trajectory truth = curvedTrajectory(100);
+  const Trajectory truth = curvedTrajectory(100);
   const metrics::RelativePoseError rpe = metrics::computeRpe(truth, moved(truth, rigidMotion(1.0, 2.0, 3.0, 0.5, 0.1, -0.3)));
   EXPECT_GT(rpe.pairs, 0u);
   EXPECT_LT(rpe.translation.rmse, 1e-9);
@@ -98,8 +98,8 @@ TEST(TrajectoryRpe, ConstantWorldOffsetHasNoError) {
 
 namespace {
 /// Ground truth moving along x at `speed` m/s and turning about z at `turn_rate` rad/s, sampled at 10 Hz.
-io::Trajectory straightRun(std::size_t n, double speed, double turn_rate) {
-  io::Trajectory trajectory;
+Trajectory straightRun(std::size_t n, double speed, double turn_rate) {
+  Trajectory trajectory;
   for (std::size_t k = 0; k < n; ++k) {
     const double t = 0.1 * static_cast<double>(k);
     trajectory.push_back({50.0 + t, rigidMotion(speed * t, 0.0, 0.0, 0.0, 0.0, turn_rate * t)});
@@ -110,8 +110,8 @@ io::Trajectory straightRun(std::size_t n, double speed, double turn_rate) {
 
 TEST(TrajectoryRpe, ScaleDriftGivesItsTranslationPerDelta) {
   // The estimate runs 5 % too far: over 1 s at 0.4 m/s that is 0.02 m, on every pair.
-  const io::Trajectory truth = straightRun(50, 0.4, 0.0);
-  const io::Trajectory estimate = straightRun(50, 0.42, 0.0);
+  const Trajectory truth = straightRun(50, 0.4, 0.0);
+  const Trajectory estimate = straightRun(50, 0.42, 0.0);
   for (const auto& [delta, unit] : {std::pair{1.0, metrics::DeltaUnit::Seconds}, std::pair{10.0, metrics::DeltaUnit::Frames}}) {
     const metrics::RelativePoseError rpe = metrics::computeRpe(truth, estimate, delta, unit);
     // Pairs (i, i + 10) whose partner is not the last pose: i = 0 .. 38.
@@ -126,8 +126,8 @@ TEST(TrajectoryRpe, ScaleDriftGivesItsTranslationPerDelta) {
 TEST(TrajectoryRpe, TurnRateErrorGivesItsAnglePerDelta) {
   // Turning 2 degrees per second too fast: 4 degrees over 2 s.
   const double degree = EIGEN_PI / 180.0;
-  const io::Trajectory truth = straightRun(60, 0.0, 10.0 * degree);
-  const io::Trajectory estimate = straightRun(60, 0.0, 12.0 * degree);
+  const Trajectory truth = straightRun(60, 0.0, 10.0 * degree);
+  const Trajectory estimate = straightRun(60, 0.0, 12.0 * degree);
   const metrics::RelativePoseError rpe = metrics::computeRpe(truth, estimate, 2.0);
   EXPECT_EQ(rpe.pairs, 60u - 20u - 1u);
   EXPECT_NEAR(rpe.rotation_deg.rmse, 4.0, 1e-9);
@@ -136,8 +136,8 @@ TEST(TrajectoryRpe, TurnRateErrorGivesItsAnglePerDelta) {
 }
 
 TEST(TrajectoryRpe, PosesWithoutNearbyGroundTruthAreNotCompared) {
-  const io::Trajectory truth = straightRun(50, 0.4, 0.0);  // 50.0 .. 54.9 s
-  io::Trajectory estimate = truth;
+  const Trajectory truth = straightRun(50, 0.4, 0.0);  // 50.0 .. 54.9 s
+  Trajectory estimate = truth;
   for (auto& stamped : estimate) stamped.timestamp += 2.55;  // 52.55 .. 57.45 s
   // Ground truth is near (within twice its 0.1 s interval) for poses up to
   // 55.05 s, k <= 25; pairs (k, k + 10) need both: k = 0 .. 15.
@@ -147,7 +147,7 @@ TEST(TrajectoryRpe, PosesWithoutNearbyGroundTruthAreNotCompared) {
 }
 
 TEST(TrajectoryRpe, RefusesBadDeltas) {
-  const io::Trajectory truth = straightRun(50, 0.4, 0.0);
+  const Trajectory truth = straightRun(50, 0.4, 0.0);
   EXPECT_THROW(metrics::computeRpe(truth, truth, 0.0), std::invalid_argument);
   EXPECT_THROW(metrics::computeRpe(truth, truth, -1.0), std::invalid_argument);
   EXPECT_THROW(metrics::computeRpe(truth, truth, 2.5, metrics::DeltaUnit::Frames), std::invalid_argument);

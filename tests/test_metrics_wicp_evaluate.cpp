@@ -76,13 +76,13 @@ Eigen::Isometry3d knownMotion() {
 /// Every third pose of the ground truth (about the camera's rate), seen from
 /// another world frame, with `noise` metres of Gaussian noise on each
 /// coordinate; returns the RMS of the added position noise.
-double writePerturbedCopy(const io::Trajectory& groundtruth, double noise, const fs::path& path) {
+double writePerturbedCopy(const Trajectory& groundtruth, double noise, const fs::path& path) {
   std::mt19937 random(11);
   std::normal_distribution<double> gaussian(0.0, noise);
-  io::Trajectory estimate;
+  Trajectory estimate;
   double sum_squares = 0.0;
   for (std::size_t k = 0; k < groundtruth.size(); k += 3) {
-    io::StampedPose stamped = groundtruth[k];
+    StampedPose stamped = groundtruth[k];
     const Eigen::Vector3d offset(gaussian(random), gaussian(random), gaussian(random));
     stamped.pose.translation() += offset;
     stamped.pose = knownMotion() * stamped.pose;
@@ -100,7 +100,7 @@ const fs::path kGroundTruth = weighted_icp::testing::dataDir() / "tum_fr1_xyz_he
 TEST(WicpEvaluate, RigidlyMovedGroundTruthHasNoError) {
   WEIGHTED_ICP_REQUIRE_FILE(kGroundTruth);
   const fs::path dir = weighted_icp::testing::scratchDir("evaluate_exact");
-  const io::Trajectory groundtruth = io::readTrajectory(kGroundTruth.string());
+  const Trajectory groundtruth = io::readTrajectory(kGroundTruth.string());
   writePerturbedCopy(groundtruth, 0.0, dir / "estimate.txt");
   const ToolRun run = runEvaluate(quoted(kGroundTruth) + " " + quoted(dir / "estimate.txt") + " --json", dir);
   ASSERT_EQ(run.exit_code, 0) << run.err;
@@ -131,7 +131,7 @@ TEST(WicpEvaluate, RigidlyMovedGroundTruthHasNoError) {
 TEST(WicpEvaluate, NoisyCopyHasTheNoiseAsError) {
   WEIGHTED_ICP_REQUIRE_FILE(kGroundTruth);
   const fs::path dir = weighted_icp::testing::scratchDir("evaluate_noisy");
-  const io::Trajectory groundtruth = io::readTrajectory(kGroundTruth.string());
+  const Trajectory groundtruth = io::readTrajectory(kGroundTruth.string());
   const double noise_rms = writePerturbedCopy(groundtruth, 0.01, dir / "estimate.txt");
   const ToolRun run = runEvaluate(quoted(kGroundTruth) + " " + quoted(dir / "estimate.txt") + " --json", dir);
   ASSERT_EQ(run.exit_code, 0) << run.err;
@@ -151,7 +151,7 @@ TEST(WicpEvaluate, NoisyCopyHasTheNoiseAsError) {
 TEST(WicpEvaluate, RpeDeltaInFramesIsAccepted) {
   WEIGHTED_ICP_REQUIRE_FILE(kGroundTruth);
   const fs::path dir = weighted_icp::testing::scratchDir("evaluate_frames");
-  const io::Trajectory groundtruth = io::readTrajectory(kGroundTruth.string());
+  const Trajectory groundtruth = io::readTrajectory(kGroundTruth.string());
   writePerturbedCopy(groundtruth, 0.0, dir / "estimate.txt");
   const ToolRun run = runEvaluate(
       quoted(kGroundTruth) + " " + quoted(dir / "estimate.txt") + " --rpe-delta 5 --rpe-unit f --json", dir);

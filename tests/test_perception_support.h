@@ -21,10 +21,10 @@ namespace weighted_icp::testing {
 
 struct RealSequence {
   io::TumSequence sequence;
-  io::PinholeCamera camera;
+  PinholeCamera camera;
 
   static RealSequence open(const std::filesystem::path& directory, int freiburg) {
-    return {io::TumSequence::open(directory.string()), io::tumCamera(freiburg)};
+    return {io::TumSequence::open(directory.string()), tumCamera(freiburg)};
   }
   RgbdFrame frame(std::size_t index) const { return sequence.loadFrame(index, camera); }
   Eigen::Isometry3d groundTruth(std::size_t index) const {

@@ -225,7 +225,7 @@ TEST(SyntheticRgbd, CameraMovesLikeAHandHeldCamera) {
 
 TEST(SyntheticRgbd, DepthEqualsTheDistanceAlongTheRayToTheScene) {
   const simulation::SyntheticRgbdSequence& sequence = exactWithObject();
-  const io::PinholeCamera& camera = sequence.options().camera;
+  const PinholeCamera& camera = sequence.options().camera;
   const double cos_max_incidence = std::cos(sequence.options().max_incidence_deg * M_PI / 180.0);
   std::vector<std::size_t> frames = {0, 100};
   const std::vector<std::size_t> with_object = framesWithObject(10);
@@ -261,7 +261,7 @@ TEST(SyntheticRgbd, DepthEqualsTheDistanceAlongTheRayToTheScene) {
 
 TEST(SyntheticRgbd, BackProjectedPixelsLieOnTheRoomsSurfaces) {
   const simulation::SyntheticRgbdSequence& sequence = exactWithObject();
-  const io::PinholeCamera& camera = sequence.options().camera;
+  const PinholeCamera& camera = sequence.options().camera;
   const Eigen::Vector3d room = sequence.roomSize();
   std::size_t on_furniture = 0;
   for (const std::size_t i : {20, 60, 140}) {
@@ -293,7 +293,7 @@ double normalisedCrossCorrelation(const cv::Mat& a, const cv::Mat& b) {
 
 TEST(SyntheticRgbd, TexturedPointsLookTheSameFromTwoViews) {
   const simulation::SyntheticRgbdSequence& sequence = exactStatic();
-  const io::PinholeCamera& camera = sequence.options().camera;
+  const PinholeCamera& camera = sequence.options().camera;
   const std::size_t first_index = 30, second_index = 42;  // 12 frames: some 10 cm and 7 deg apart
   const simulation::SyntheticRgbdFrame first = sequence.frame(first_index), second = sequence.frame(second_index);
   const cv::Mat first_raw = rawDepth(first), second_raw = rawDepth(second);

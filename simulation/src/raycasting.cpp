@@ -5,7 +5,7 @@
 
 namespace weighted_icp::simulation {
 
-cv::Rect pixelBounds(const RayBox& box, const Eigen::Isometry3d& camera_to_world, const io::PinholeCamera& camera) {
+cv::Rect pixelBounds(const RayBox& box, const Eigen::Isometry3d& camera_to_world, const PinholeCamera& camera) {
   const cv::Rect image(0, 0, camera.width, camera.height);
   const Eigen::Isometry3d world_to_camera = camera_to_world.inverse();
   double min_u = std::numeric_limits<double>::infinity(), min_v = min_u, max_u = -min_u, max_v = -min_u;

@@ -14,7 +14,7 @@
 #include <Eigen/Geometry>
 #include <opencv2/core.hpp>
 
-#include "weighted_icp/io/camera.h"
+#include "weighted_icp/core/camera.h"
 
 namespace weighted_icp::simulation {
 
@@ -129,6 +129,6 @@ class RayBox {
 /// corner is behind the camera, none when all are.
 /// @param camera_to_world the camera's pose
 /// @param camera pinhole model without distortion
-cv::Rect pixelBounds(const RayBox& box, const Eigen::Isometry3d& camera_to_world, const io::PinholeCamera& camera);
+cv::Rect pixelBounds(const RayBox& box, const Eigen::Isometry3d& camera_to_world, const PinholeCamera& camera);
 
 }  // namespace weighted_icp::simulation

@@ -107,8 +107,8 @@ struct SyntheticRgbdSequence::Scene {
   std::uint64_t noise_seed = 0;
 };
 
-io::PinholeCamera syntheticRgbdCamera() {
-  io::PinholeCamera camera = io::tumCamera(1);
+PinholeCamera syntheticRgbdCamera() {
+  PinholeCamera camera = tumCamera(1);
   camera.distortion = {};
   camera.width = 640;
   camera.height = 480;
@@ -122,7 +122,7 @@ void validate(const SyntheticRgbdOptions& options) {
   const auto require = [](bool ok, const std::string& message) {
     if (!ok) throw std::invalid_argument("synthetic RGB-D: " + message);
   };
-  const io::PinholeCamera& camera = options.camera;
+  const PinholeCamera& camera = options.camera;
   require(options.frames > 0, "frames must be at least 1");
   // Timestamps are written with microseconds: faster frames would share names.
   require(options.fps > 0.0 && options.fps <= 1000.0, "fps must be in (0, 1000]");
@@ -254,7 +254,7 @@ struct BoxInFrame {
   cv::Rect pixels;
 };
 
-BoxInFrame prepare(const TexturedBox& box, const Eigen::Isometry3d& camera_to_world, const io::PinholeCamera& camera) {
+BoxInFrame prepare(const TexturedBox& box, const Eigen::Isometry3d& camera_to_world, const PinholeCamera& camera) {
   return {&box, box.shape.pointInBox(camera_to_world.translation()),
           box.seen_from_inside ? cv::Rect(0, 0, camera.width, camera.height)
                                : pixelBounds(box.shape, camera_to_world, camera)};
@@ -383,7 +383,7 @@ class FrameRenderer {
   }
 
   const SyntheticRgbdOptions& options_;
-  const io::PinholeCamera& camera_;
+  const PinholeCamera& camera_;
   const std::vector<BoxInFrame>& boxes_;
   const BoxInFrame& room_;
   const Eigen::Matrix3d rotation_;
@@ -399,7 +399,7 @@ class FrameRenderer {
 SyntheticRgbdFrame SyntheticRgbdSequence::frame(std::size_t i) const {
   if (i >= size())
     throw std::out_of_range("synthetic RGB-D: frame " + std::to_string(i) + " of " + std::to_string(size()));
-  const io::PinholeCamera& camera = options_.camera;
+  const PinholeCamera& camera = options_.camera;
   SyntheticRgbdFrame frame;
   frame.rgbd.timestamp = timestamp(i);
   frame.camera_to_world = cameraToWorld(i);

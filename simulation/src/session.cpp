@@ -203,7 +203,7 @@ void validate(const SyntheticSessionOptions& o) {
 
 /// Covariance, in camera coordinates, of the back-projection of pixel (u, v)
 /// at `depth`: first-order propagation of independent pixel and depth noise.
-Eigen::Matrix3d backProjectionCovariance(const io::PinholeCamera& camera, double u, double v, double depth,
+Eigen::Matrix3d backProjectionCovariance(const PinholeCamera& camera, double u, double v, double depth,
                                          double pixel_sigma, double depth_sigma) {
   Eigen::Matrix3d jacobian;  // d(x, y, z) / d(u, v, depth)
   jacobian << depth / camera.fx, 0.0, (u - camera.cx) / camera.fx,  //
@@ -259,7 +259,7 @@ class Observer {
 
  private:
   const SyntheticSessionOptions& options_;
-  const io::PinholeCamera& camera_;
+  const PinholeCamera& camera_;
   const Room& room_;
   const std::vector<Eigen::Isometry3d>& truth_poses_;
   std::vector<Eigen::Isometry3d> world_to_camera_;
@@ -276,7 +276,7 @@ class LandmarkAccumulator {
       : options_(options), truth_poses_(truth_poses), odometry_poses_(odometry_poses) {}
 
   void add(std::size_t k, const Measurement& measurement) {
-    const io::PinholeCamera& camera = options_.camera;
+    const PinholeCamera& camera = options_.camera;
     const double u = measurement.u, v = measurement.v, depth = measurement.depth;
     const Observation observation{k, u, v};
     estimated_.observations.push_back(observation);

@@ -82,7 +82,7 @@ void writeFrames(const SyntheticRgbdSequence& sequence, const fs::path& folder,
            << "\n# timestamp filename\n";
   depth_list << "# depth maps\n# synthetic RGB-D sequence, seed " << sequence.options().seed
              << "\n# timestamp filename\n";
-  io::Trajectory groundtruth;
+  Trajectory groundtruth;
   for (std::size_t i = 0; i < sequence.size(); ++i) {
     const SyntheticRgbdFrame frame = sequence.frame(i);
     const std::string stamp = timestampText(frame.rgbd.timestamp);

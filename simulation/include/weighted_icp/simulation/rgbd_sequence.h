@@ -20,13 +20,13 @@
 #include <opencv2/core.hpp>
 
 #include "weighted_icp/core/rgbd_frame.h"
-#include "weighted_icp/io/camera.h"
+#include "weighted_icp/core/camera.h"
 
 namespace weighted_icp::simulation {
 
 /// @brief The sequences' default camera: TUM freiburg 1's RGB intrinsics
 /// without its lens distortion, 640 x 480, depth factor 5000.
-io::PinholeCamera syntheticRgbdCamera();
+PinholeCamera syntheticRgbdCamera();
 
 /// @brief What to render: length, camera, scene variants and sensor model.
 struct SyntheticRgbdOptions {
@@ -37,7 +37,7 @@ struct SyntheticRgbdOptions {
   std::size_t frames = 150;
   double fps = 30.0;  // timestamps are frame / fps seconds
   /// Must have no distortion: the renderer casts undistorted rays.
-  io::PinholeCamera camera = syntheticRgbdCamera();
+  PinholeCamera camera = syntheticRgbdCamera();
 
   /// A textured box carried across the view now and then, covering up to
   /// about a fifth of the image while it passes.

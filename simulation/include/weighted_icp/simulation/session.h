@@ -17,7 +17,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
-#include "weighted_icp/io/camera.h"
+#include "weighted_icp/core/camera.h"
 #include "weighted_icp/registration/landmark_map.h"
 #include "weighted_icp/simulation/rgbd_sequence.h"
 
@@ -49,7 +49,7 @@ struct SyntheticSessionOptions {
   Eigen::Vector3d look_at{-1.4, 1.6, 0.8};
 
   /// Must have no distortion: observations are ideal pinhole projections.
-  io::PinholeCamera camera = syntheticRgbdCamera();
+  PinholeCamera camera = syntheticRgbdCamera();
   double min_depth = 0.5;  // metres along the optical axis
   double max_depth = 4.0;
   /// A surface seen more obliquely than this (from its normal) yields no feature.
