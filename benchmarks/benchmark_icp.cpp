@@ -144,10 +144,19 @@ void BM_WeightedCorrespondences(benchmark::State& state) {
 
 BENCHMARK(BM_StockPclIcp)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_WeightedDropInPclIcp)->ArgName("threads")->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_LandmarkAligner)->ArgNames({"k", "threads"})->Args({5, 1})->Args({5, 2})->Args({1, 1})->Args({1, 2})
+BENCHMARK(BM_LandmarkAligner)
+    ->ArgNames({"k", "threads"})
+    ->Args({5, 1})
+    ->Args({5, 2})
+    ->Args({1, 1})
+    ->Args({1, 2})
     ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_StockPclCorrespondences)->Unit(benchmark::kMicrosecond);
-BENCHMARK(BM_WeightedCorrespondences)->ArgNames({"k", "threads"})->Args({1, 1})->Args({5, 1})->Args({5, 2})
+BENCHMARK(BM_WeightedCorrespondences)
+    ->ArgNames({"k", "threads"})
+    ->Args({1, 1})
+    ->Args({5, 1})
+    ->Args({5, 2})
     ->Unit(benchmark::kMicrosecond);
 
 }  // namespace

@@ -18,8 +18,8 @@
 
 #include <benchmark/benchmark.h>
 
-#include "test_perception_support.h"
 #include "benchmark_arguments.h"
+#include "test_perception_support.h"
 #include "weighted_icp/frontend/perception/descriptor_matcher.h"
 #include "weighted_icp/frontend/perception/feature_extractor.h"
 
@@ -73,9 +73,9 @@ Pair loadPair(const Sequence& s, std::size_t reference_frame, std::size_t query_
 }
 
 void reportMatches(benchmark::State& state, const Pair& p, const std::vector<cv::DMatch>& matches) {
-  const auto check = weighted_icp::testing::checkAgainstGroundTruth(
-      openSequence(*p.sequence), p.reference_frame, p.query_frame, p.reference.keypoints, p.query.keypoints, matches,
-      5.0);
+  const auto check =
+      weighted_icp::testing::checkAgainstGroundTruth(openSequence(*p.sequence), p.reference_frame, p.query_frame,
+                                                     p.reference.keypoints, p.query.keypoints, matches, 5.0);
   state.counters["reference"] = p.reference.descriptors.rows;
   state.counters["query"] = p.query.descriptors.rows;
   state.counters["matches"] = static_cast<double>(matches.size());
@@ -131,22 +131,26 @@ void registerBenchmarks() {
       const std::string kind_name = frontend::matcherKindName(kind);
       benchmark::RegisterBenchmark(("BM_Match/" + kind_name + "/with_build/" + pair_name).c_str(),
                                    BM_MatchWithIndexBuild, std::cref(p), options)
-          ->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime();
+          ->Unit(benchmark::kMillisecond)
+          ->MeasureProcessCPUTime();
       benchmark::RegisterBenchmark(("BM_Match/" + kind_name + "/without_build/" + pair_name).c_str(),
                                    BM_MatchWithoutIndexBuild, std::cref(p), options)
-          ->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime();
+          ->Unit(benchmark::kMillisecond)
+          ->MeasureProcessCPUTime();
     }
   }
   for (const Sequence& s : kSequences) {
     const cv::Mat gray = openSequence(s).frame(s.freiburg == 1 ? 0 : 10).gray();
     benchmark::RegisterBenchmark((std::string("BM_Extract/") + s.name).c_str(), BM_Extract, gray)
-        ->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime();
+        ->Unit(benchmark::kMillisecond)
+        ->MeasureProcessCPUTime();
     // A dark, low-contrast copy (gray * 0.2 + 20): too few corners, so the
     // extractor equalises (CLAHE) and detects a second time.
     cv::Mat dark;
     gray.convertTo(dark, CV_8U, 0.2, 20.0);
     benchmark::RegisterBenchmark((std::string("BM_Extract/") + s.name + "_dark").c_str(), BM_Extract, dark)
-        ->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime();
+        ->Unit(benchmark::kMillisecond)
+        ->MeasureProcessCPUTime();
   }
 }
 

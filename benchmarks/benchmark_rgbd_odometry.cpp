@@ -117,7 +117,7 @@ int main(int argc, char** argv) {
     std::size_t synthetic_frames = 150;
     po::options_description options("wicp_benchmark_rgbd_odometry options");
     options.add_options()("help,h", "print this help")("data", po::value(&data)->default_value(data),
-                                                           "folder with tum_fr1_xyz_head and tum_fr3_teddy_head")(
+                                                       "folder with tum_fr1_xyz_head and tum_fr3_teddy_head")(
         "synthetic-frames", po::value(&synthetic_frames)->default_value(synthetic_frames), "synthetic sequence length");
     po::variables_map vm;
     po::store(po::parse_command_line(argc, argv, options), vm);
@@ -128,15 +128,19 @@ int main(int argc, char** argv) {
     po::notify(vm);
 
     std::vector<std::function<Sequence()>> sequences;
-    for (const auto& [folder, freiburg] : {std::pair<const char*, int>{"tum_fr1_xyz_head", 1}, {"tum_fr3_teddy_head", 3}}) {
+    for (const auto& [folder, freiburg] :
+         {std::pair<const char*, int>{"tum_fr1_xyz_head", 1}, {"tum_fr3_teddy_head", 3}}) {
       const std::string dir = data + "/" + folder;
-      if (std::filesystem::exists(dir)) sequences.push_back([=] { return loadTum(dir, folder, freiburg); });
-      else std::cerr << "skipping " << dir << ": not found\n";
+      if (std::filesystem::exists(dir))
+        sequences.push_back([=] { return loadTum(dir, folder, freiburg); });
+      else
+        std::cerr << "skipping " << dir << ": not found\n";
     }
     sequences.push_back([=] { return makeSynthetic(synthetic_frames, false); });
     sequences.push_back([=] { return makeSynthetic(synthetic_frames, true); });
 
-    std::cout << "| sequence | frames | ATE RMSE, ours (cm) | ATE RMSE, cv::rgbd::RgbdOdometry (cm) | median ms/frame, ours | "
+    std::cout << "| sequence | frames | ATE RMSE, ours (cm) | ATE RMSE, cv::rgbd::RgbdOdometry (cm) | median ms/frame, "
+                 "ours | "
                  "median ms/frame, RgbdOdometry |\n|---|---|---|---|---|---|\n"
               << std::fixed;
     for (const auto& make : sequences) {

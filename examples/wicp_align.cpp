@@ -26,6 +26,8 @@ int main(int argc, char** argv) {
     po::options_description options(
         "wicp_align --source A.txt --target B.txt [options]\n"
         "Aligns landmark map A onto B (paper map format). Options");
+    // One option per line reads as a table: not reflowed.
+    // clang-format off
     options.add_options()
         ("help,h", "print this help")
         ("source", po::value(&source_path)->required(), "source map (moved onto the target)")
@@ -44,6 +46,7 @@ int main(int argc, char** argv) {
         ("refine", po::bool_switch(&settings.refine), "finish with nearest-neighbour ICP after the weighted stage")
         ("threads", po::value(&settings.threads)->default_value(settings.threads), "search threads, 0 = all")
         ("json", "print the result as one JSON object on the last line of stdout");
+    // clang-format on
     po::variables_map vm;
     if (!tools::parseCommandLine(argc, argv, options, vm)) return 0;
 
@@ -69,11 +72,10 @@ int main(int argc, char** argv) {
 
     std::cout << "source " << source.landmarks.size() << " landmarks, target " << target.landmarks.size()
               << " landmarks, strategy " << toString(strategy) << ", k " << settings.k << '\n'
-              << "converged " << (result.converged ? "yes" : "no") << " after " << result.iterations
-              << " iterations";
+              << "converged " << (result.converged ? "yes" : "no") << " after " << result.iterations << " iterations";
     if (settings.refine) std::cout << " + " << result.refine_iterations << " refinement";
-    std::cout << ", fitness score " << result.fitness_score << ", " << result.correspondences
-              << " correspondences, " << std::fixed << std::setprecision(1) << result.time_ms << " ms\n"
+    std::cout << ", fitness score " << result.fitness_score << ", " << result.correspondences << " correspondences, "
+              << std::fixed << std::setprecision(1) << result.time_ms << " ms\n"
               << std::defaultfloat << "transformation (source -> target):\n"
               << result.transformation << '\n';
     if (vm.count("json")) {

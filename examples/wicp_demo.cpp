@@ -53,8 +53,8 @@ struct AlignmentRecord {
 /// wrapped around into a huge unsigned value.
 std::size_t requireInRange(long long value, const char* option, long long minimum, long long maximum) {
   if (value < minimum || value > maximum)
-    throw std::invalid_argument(std::string("--") + option + " must be between " + std::to_string(minimum) +
-                                " and " + std::to_string(maximum) + " (got " + std::to_string(value) + ")");
+    throw std::invalid_argument(std::string("--") + option + " must be between " + std::to_string(minimum) + " and " +
+                                std::to_string(maximum) + " (got " + std::to_string(value) + ")");
   return static_cast<std::size_t>(value);
 }
 
@@ -73,23 +73,23 @@ std::string resultsCsv(const std::vector<AlignmentRecord>& records) {
          "translation_error_cm,fitness_score,iterations,refine_iterations,converged,correspondences,time_ms\n";
   for (const auto& r : records)
     csv << r.target_minimap + 1 << ',' << r.target_minimap << ',' << toString(r.strategy) << ',' << r.k << ','
-        << (r.refine ? 1 : 0) << ',' << r.source_landmarks << ',' << r.target_landmarks << ','
-        << r.rotation_error_deg << ',' << r.translation_error_m * 100.0 << ',' << r.result.fitness_score << ','
-        << r.result.iterations << ',' << r.result.refine_iterations << ',' << (r.result.converged ? 1 : 0) << ','
-        << r.result.correspondences << ',' << r.result.time_ms << '\n';
+        << (r.refine ? 1 : 0) << ',' << r.source_landmarks << ',' << r.target_landmarks << ',' << r.rotation_error_deg
+        << ',' << r.translation_error_m * 100.0 << ',' << r.result.fitness_score << ',' << r.result.iterations << ','
+        << r.result.refine_iterations << ',' << (r.result.converged ? 1 : 0) << ',' << r.result.correspondences << ','
+        << r.result.time_ms << '\n';
   return csv.str();
 }
 
 /// One row per strategy and refinement: medians and maxima over the pairs.
 void printSummaryTable(const std::vector<AlignmentRecord>& records, std::size_t pairs) {
   std::cout << '\n'
-            << std::left << std::setw(15) << "strategy" << std::right << std::setw(3) << "k" << std::setw(8)
-            << "refine" << std::setw(11) << "rot med" << std::setw(10) << "rot max" << std::setw(11) << "trans med"
-            << std::setw(11) << "trans max" << std::setw(13) << "fitness med" << std::setw(10) << "iter med"
-            << std::setw(11) << "time med" << std::setw(11) << "converged" << '\n'
-            << std::left << std::setw(26) << "" << std::right << std::setw(11) << "[deg]" << std::setw(10)
-            << "[deg]" << std::setw(11) << "[cm]" << std::setw(11) << "[cm]" << std::setw(13) << "[m^2]"
-            << std::setw(10) << "" << std::setw(11) << "[ms]" << '\n';
+            << std::left << std::setw(15) << "strategy" << std::right << std::setw(3) << "k" << std::setw(8) << "refine"
+            << std::setw(11) << "rot med" << std::setw(10) << "rot max" << std::setw(11) << "trans med" << std::setw(11)
+            << "trans max" << std::setw(13) << "fitness med" << std::setw(10) << "iter med" << std::setw(11)
+            << "time med" << std::setw(11) << "converged" << '\n'
+            << std::left << std::setw(26) << "" << std::right << std::setw(11) << "[deg]" << std::setw(10) << "[deg]"
+            << std::setw(11) << "[cm]" << std::setw(11) << "[cm]" << std::setw(13) << "[m^2]" << std::setw(10) << ""
+            << std::setw(11) << "[ms]" << '\n';
   for (const WeightStrategy strategy : allWeightStrategies()) {
     for (const bool refine : {false, true}) {
       std::vector<double> rotation, translation, fitness, iterations, time;
@@ -107,13 +107,12 @@ void printSummaryTable(const std::vector<AlignmentRecord>& records, std::size_t 
       }
       std::ostringstream converged_text;
       converged_text << converged << '/' << pairs;
-      std::cout << std::left << std::setw(15) << toString(strategy) << std::right << std::setw(3) << k
-                << std::setw(8) << (refine ? "yes" : "no") << std::fixed << std::setprecision(3) << std::setw(11)
-                << median(rotation) << std::setw(10) << maximum(rotation) << std::setprecision(2) << std::setw(11)
-                << median(translation) << std::setw(11) << maximum(translation) << std::scientific
-                << std::setprecision(2) << std::setw(13) << median(fitness) << std::fixed << std::setprecision(1)
-                << std::setw(10) << median(iterations) << std::setw(11) << median(time) << std::setw(11)
-                << converged_text.str() << std::defaultfloat << '\n';
+      std::cout << std::left << std::setw(15) << toString(strategy) << std::right << std::setw(3) << k << std::setw(8)
+                << (refine ? "yes" : "no") << std::fixed << std::setprecision(3) << std::setw(11) << median(rotation)
+                << std::setw(10) << maximum(rotation) << std::setprecision(2) << std::setw(11) << median(translation)
+                << std::setw(11) << maximum(translation) << std::scientific << std::setprecision(2) << std::setw(13)
+                << median(fitness) << std::fixed << std::setprecision(1) << std::setw(10) << median(iterations)
+                << std::setw(11) << median(time) << std::setw(11) << converged_text.str() << std::defaultfloat << '\n';
     }
   }
   std::cout << "errors against the true alignment; iterations of both stages; time of the alignment alone\n";
@@ -137,6 +136,8 @@ int main(int argc, char** argv) {
         "wicp_demo [options]\n"
         "Aligns consecutive mini-maps of a synthetic RGB-D SLAM session with exact ground truth,\n"
         "with every weight strategy, and reports the errors. Options");
+    // One option per line reads as a table: not reflowed.
+    // clang-format off
     options.add_options()
         ("help,h", "print this help")
         ("seed", po::value(&seed)->default_value(seed), "session random seed (>= 0)")
@@ -153,6 +154,7 @@ int main(int argc, char** argv) {
          "align only landmarks observed this often within the mini-map (the paper uses 2)")
         ("threads", po::value(&threads)->default_value(threads), "search threads, 0 = all")
         ("out", po::value(&out_dir)->default_value(out_dir), "output folder");
+    // clang-format on
     po::variables_map vm;
     if (!tools::parseCommandLine(argc, argv, options, vm)) return 0;
 
@@ -176,10 +178,10 @@ int main(int argc, char** argv) {
     const FrameId last_frame = session.estimated.frames.rbegin()->first;
     const Eigen::Isometry3d& last_estimated = session.estimated.frames.at(last_frame);
     const Eigen::Isometry3d& last_true = session.truth.frames.at(last_frame);
-    std::cout << "session (seed " << session_options.seed << "): " << session.estimated.frames.size()
-              << " frames, " << session.estimated.landmarks.size() << " landmarks observed of "
-              << session_options.num_landmarks << " placed, " << observations << " observations; generated in "
-              << std::fixed << std::setprecision(0) << generation_s * 1000.0 << " ms\n"
+    std::cout << "session (seed " << session_options.seed << "): " << session.estimated.frames.size() << " frames, "
+              << session.estimated.landmarks.size() << " landmarks observed of " << session_options.num_landmarks
+              << " placed, " << observations << " observations; generated in " << std::fixed << std::setprecision(0)
+              << generation_s * 1000.0 << " ms\n"
               << "odometry drift at the last frame: " << std::setprecision(1)
               << translationError(last_estimated, last_true) * 100.0 << " cm, " << std::setprecision(2)
               << rotationErrorDeg(last_estimated, last_true) << " deg\n"
@@ -194,8 +196,8 @@ int main(int argc, char** argv) {
                                  std::to_string(min_observation_count) +
                                  " observations (lower --min-observations or raise --frames-per-minimap)");
     }
-    std::cout << minimaps.size() << " mini-maps of " << minimap_frames << " frames (landmarks with >= "
-              << min_observation_count << " observations:";
+    std::cout << minimaps.size() << " mini-maps of " << minimap_frames
+              << " frames (landmarks with >= " << min_observation_count << " observations:";
     for (const auto& minimap : aligned_minimaps) std::cout << ' ' << minimap.landmarks.size();
     std::cout << ")\naligning mini-map i+1 onto mini-map i, source displaced by " << displacement.toString()
               << "; truth: its inverse\n";

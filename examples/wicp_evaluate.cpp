@@ -47,6 +47,8 @@ int main(int argc, char** argv) {
     po::options_description options(
         "wicp_evaluate GROUNDTRUTH.txt ESTIMATE.txt [options]\n"
         "Absolute trajectory error and relative pose error of ESTIMATE against GROUNDTRUTH (TUM format). Options");
+    // One option per line reads as a table: not reflowed.
+    // clang-format off
     options.add_options()
         ("help,h", "print this help")
         ("groundtruth", po::value(&groundtruth_path)->required(), "ground-truth trajectory")
@@ -57,14 +59,14 @@ int main(int argc, char** argv) {
         ("rpe-unit", po::value(&rpe_unit_name)->default_value(rpe_unit_name),
          "unit of --rpe-delta: s (seconds) or f (frames)")
         ("json", "print the result as one JSON object on the last line of stdout");
+    // clang-format on
     po::positional_options_description positional;
     positional.add("groundtruth", 1).add("estimate", 1);
     po::variables_map vm;
     if (!tools::parseCommandLine(argc, argv, options, vm, &positional)) return 0;
     if (rpe_unit_name != "s" && rpe_unit_name != "f")
       throw po::validation_error(po::validation_error::invalid_option_value, "rpe-unit", rpe_unit_name);
-    const metrics::DeltaUnit rpe_unit =
-        rpe_unit_name == "s" ? metrics::DeltaUnit::Seconds : metrics::DeltaUnit::Frames;
+    const metrics::DeltaUnit rpe_unit = rpe_unit_name == "s" ? metrics::DeltaUnit::Seconds : metrics::DeltaUnit::Frames;
 
     const Trajectory groundtruth = io::readTrajectory(groundtruth_path);
     const Trajectory estimate = io::readTrajectory(estimate_path);

@@ -32,8 +32,7 @@ using namespace weighted_icp;
 
 namespace {
 
-const char* const kUsage =
-    "usage: wicp_map stats|cut|convert MAP [options]   (wicp_map COMMAND --help for each)";
+const char* const kUsage = "usage: wicp_map stats|cut|convert MAP [options]   (wicp_map COMMAND --help for each)";
 
 /// boost::program_options reads "-1" into an unsigned option as 2^64 - 1, so
 /// counts are read signed and checked here.
@@ -185,6 +184,8 @@ int cut(int argc, char** argv) {
       "wicp_map cut MAP --out DIR (--frames-per-minimap N | --ranges \"0-119,120-239\") [--min-observations N]\n"
       "Writes DIR/minimap_000.txt, ... in the map format: the frames of each mini-map and every landmark\n"
       "they saw, with only their observations (LandmarkMap::miniMap). Options");
+  // One option per line reads as a table: not reflowed.
+  // clang-format off
   visible.add_options()
       ("out", po::value(&out_dir)->required(), "output folder (created if missing)")
       ("frames-per-minimap", po::value(&frames_per_minimap),
@@ -193,6 +194,7 @@ int cut(int argc, char** argv) {
       ("min-observations", po::value(&min_observations)->default_value(min_observations),
        "drop landmarks observed fewer times within the mini-map; 1 keeps every landmark it saw "
        "(0 is the same: a mini-map has no landmark it did not see)");
+  // clang-format on
   po::options_description positional_options;
   positional_options.add_options()("map", po::value(&map_path)->required(), "landmark map");
   po::positional_options_description positional;
@@ -246,15 +248,21 @@ int convert(int argc, char** argv) {
       "Saves the landmarks as a weighted LandmarkCloud (x y z weight covariance_norm\n"
       "mean_observation_distance num_observations). A map without landmarks gives an empty\n"
       "cloud, which only PCD can hold. Options");
+  // One option per line reads as a table: not reflowed.
+  // clang-format off
   visible.add_options()
       ("strategy", po::value(&strategy_name)->default_value(strategy_name),
        "weight: base, covariance, observations, mean-distance")
       ("min-observations", po::value(&min_observations)->default_value(min_observations),
        "drop landmarks observed fewer times (the paper uses 2)");
+  // clang-format on
   po::options_description positional_options;
+  // One option per line reads as a table: not reflowed.
+  // clang-format off
   positional_options.add_options()
       ("map", po::value(&map_path)->required(), "landmark map")
       ("output", po::value(&output_path)->required(), "output cloud");
+  // clang-format on
   po::positional_options_description positional;
   positional.add("map", 1).add("output", 1);
   po::variables_map vm;
@@ -270,8 +278,8 @@ int convert(int argc, char** argv) {
   const LandmarkMap map = io::readLandmarkMap(map_path).withMinObservations(min_count);
   const LandmarkCloud::Ptr cloud = toLandmarkCloud(map, weightFunction(strategy));
   io::saveLandmarkCloud(*cloud, output_path);
-  std::cout << output_path << ": " << cloud->size() << " landmarks with >= " << min_count
-            << " observations, weight " << toString(strategy) << '\n';
+  std::cout << output_path << ": " << cloud->size() << " landmarks with >= " << min_count << " observations, weight "
+            << toString(strategy) << '\n';
   return 0;
 }
 

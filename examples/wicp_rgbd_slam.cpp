@@ -50,8 +50,8 @@ class TumSource : public FrameSource {
   RgbdFrame load(std::size_t i) const override {
     RgbdFrame images = sequence_.loadFrame(i, camera_);
     if (images.validDepthPixels() == 0)
-      std::cerr << "wicp_rgbd_slam: warning: " << sequence_.frame(i).depth_path
-                << " has no valid depth; frame " << i << " is tracked without it\n";
+      std::cerr << "wicp_rgbd_slam: warning: " << sequence_.frame(i).depth_path << " has no valid depth; frame " << i
+                << " is tracked without it\n";
     return images;
   }
   Trajectory groundTruth() const override { return sequence_.groundTruth(); }
@@ -70,7 +70,8 @@ class SyntheticSource : public FrameSource {
   RgbdFrame load(std::size_t i) const override { return sequence_.frame(i).rgbd; }
   Trajectory groundTruth() const override {
     Trajectory truth;
-    for (std::size_t i = 0; i < sequence_.size(); ++i) truth.push_back({sequence_.timestamp(i), sequence_.cameraToWorld(i)});
+    for (std::size_t i = 0; i < sequence_.size(); ++i)
+      truth.push_back({sequence_.timestamp(i), sequence_.cameraToWorld(i)});
     return truth;
   }
   const PinholeCamera& camera() const override { return sequence_.options().camera; }
@@ -112,6 +113,8 @@ int main(int argc, char** argv) {
         "wicp_rgbd_slam [--dataset DIR] [--camera fr1|fr2|fr3|FILE.yaml] [--max-frames N]\n"
         "               [--minimap-keyframes N] --out DIR\n"
         "Feature-based RGB-D SLAM producing weighted landmark maps. Options");
+    // One option per line reads as a table: not reflowed.
+    // clang-format off
     description.add_options()
         ("help,h", "print this help")
         ("dataset", po::value(&dataset), "TUM RGB-D folder (rgb.txt, depth.txt, optional groundtruth.txt); "
@@ -128,6 +131,7 @@ int main(int argc, char** argv) {
         ("seed", po::value(&synthetic.seed)->default_value(synthetic.seed), "synthetic: seed")
         ("moving-object", po::bool_switch(&synthetic.moving_object), "synthetic: a box moves through the view")
         ("dim", po::bool_switch(&synthetic.dim_lighting), "synthetic: dim, low-contrast, noisy images");
+    // clang-format on
     po::variables_map vm;
     if (!tools::parseCommandLine(argc, argv, description, vm)) return 0;
     options.frontend.matcher.kind = frontend::parseMatcherKind(matcher_name);
@@ -217,7 +221,9 @@ int main(int argc, char** argv) {
               << slam.map().keyframeCount() << " keyframes, " << slam.map().mapPointCount() << " landmarks, "
               << minimaps.size() << " mini-maps; median " << percentile(tracking_ms, 0.5) << " ms/frame (p90 "
               << percentile(tracking_ms, 0.9) << "); skipped " << skipped << ", lost " << lost << '\n';
-    if (ate) std::cout << std::setprecision(2) << "ATE RMSE " << ate->translation.rmse * 100 << " cm over " << ate->pairs << " poses\n";
+    if (ate)
+      std::cout << std::setprecision(2) << "ATE RMSE " << ate->translation.rmse * 100 << " cm over " << ate->pairs
+                << " poses\n";
     std::cout << "wrote " << out_dir << "/{trajectory.txt, session.txt, minimaps/, map.ply, report.json}\n";
     return tracked > 0 ? 0 : 1;
   });

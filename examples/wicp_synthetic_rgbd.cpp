@@ -27,6 +27,8 @@ int main(int argc, char** argv) {
     po::options_description description(
         "wicp_synthetic_rgbd --out DIR [options]\n"
         "Renders a synthetic RGB-D sequence (TUM layout, exact ground truth). Options");
+    // One option per line reads as a table: not reflowed.
+    // clang-format off
     description.add_options()
         ("help,h", "print this help")
         ("out", po::value(&out_dir)->required(), "output folder (written complete or not at all)")
@@ -39,6 +41,7 @@ int main(int argc, char** argv) {
         ("depth-noise-coefficient", po::value(&options.depth_noise_coefficient)->default_value(options.depth_noise_coefficient),
          "depth noise sigma = coefficient * z^2 (metres)")
         ("overwrite", po::bool_switch(&overwrite), "replace DIR if it exists and is not empty");
+    // clang-format on
     po::variables_map vm;
     if (!tools::parseCommandLine(argc, argv, description, vm)) return 0;
     if (frames < 1) throw std::invalid_argument("--frames must be at least 1");

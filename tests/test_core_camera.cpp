@@ -47,7 +47,6 @@ TEST(Camera, TumPresetsHaveThePublishedCalibration) {
   EXPECT_THROW(tumCamera(0), std::invalid_argument);
 }
 
-
 TEST(Camera, MatricesHoldTheIntrinsics) {
   const PinholeCamera camera = tumCamera(1);
   const cv::Matx33d k = camera.cameraMatrix();
@@ -65,11 +64,10 @@ TEST(Camera, MatricesHoldTheIntrinsics) {
   for (int i = 0; i < 5; ++i) EXPECT_EQ(d.at<double>(i), camera.distortion[static_cast<std::size_t>(i)]);
 }
 
-
 TEST(Camera, ProjectAndBackProjectAreInverse) {
   const PinholeCamera camera = tumCamera(1);
-  for (const Eigen::Vector3d& point : {Eigen::Vector3d(0.3, -0.2, 1.5), Eigen::Vector3d(-1.0, 0.7, 4.0),
-                                      Eigen::Vector3d(0.0, 0.0, 0.6)}) {
+  for (const Eigen::Vector3d& point :
+       {Eigen::Vector3d(0.3, -0.2, 1.5), Eigen::Vector3d(-1.0, 0.7, 4.0), Eigen::Vector3d(0.0, 0.0, 0.6)}) {
     const Eigen::Vector2d pixel = camera.project(point);
     EXPECT_TRUE(camera.backProject(pixel.x(), pixel.y(), point.z()).isApprox(point, 1e-12));
   }
@@ -82,13 +80,11 @@ TEST(Camera, ProjectAndBackProjectAreInverse) {
   EXPECT_TRUE(camera.project(Eigen::Vector3d(0.0, 0.0, 2.0)).isApprox(Eigen::Vector2d(camera.cx, camera.cy)));
 }
 
-
 TEST(Camera, PointsBehindTheCameraAreNotInTheImage) {
   const PinholeCamera camera = tumCamera(3);
   EXPECT_FALSE(camera.inImage(camera.project(Eigen::Vector3d(0.0, 0.0, -1.0))));
   EXPECT_FALSE(camera.inImage(camera.project(Eigen::Vector3d(0.1, 0.1, 0.0))));
 }
-
 
 TEST(Camera, InImageCoversExactlyThePixelCentres) {
   const PinholeCamera camera = tumCamera(3);
@@ -100,4 +96,3 @@ TEST(Camera, InImageCoversExactlyThePixelCentres) {
   EXPECT_FALSE(camera.inImage({10.0, camera.height - 0.99}));
   EXPECT_FALSE(camera.inImage({std::numeric_limits<double>::quiet_NaN(), 10.0}));
 }
-

@@ -44,8 +44,8 @@ void fillMap(Map& map, const Scene& scene) {
   std::mt19937 rng(11);
   for (std::size_t k = 0; k < scene.true_poses_wc.size(); ++k) {
     Keyframe keyframe;
-    keyframe.pose_wc = k == 0 ? scene.true_poses_wc[k]
-                              : weighted_icp::testing::perturbPose(scene.true_poses_wc[k], 0.02, 1.0, rng);
+    keyframe.pose_wc =
+        k == 0 ? scene.true_poses_wc[k] : weighted_icp::testing::perturbPose(scene.true_poses_wc[k], 0.02, 1.0, rng);
     map.addKeyframe(keyframe);
   }
   std::normal_distribution<double> offset(0.0, 0.02);

@@ -87,7 +87,8 @@ TEST(RgbdSlam, AMovingObjectIsRejectedAndDoesNotHurtTheTrajectory) {
     const auto box = moving.movingObject(frame);
     if (!box) continue;
     ++checked;
-    const Eigen::Vector3d local = Eigen::AngleAxisd(-box->yaw, Eigen::Vector3d::UnitZ()) * (point.position - box->center);
+    const Eigen::Vector3d local =
+        Eigen::AngleAxisd(-box->yaw, Eigen::Vector3d::UnitZ()) * (point.position - box->center);
     if ((local.cwiseAbs().array() <= box->size.array() / 2 + 0.02).all()) ++on_object;
   }
   EXPECT_GT(checked, 100u);

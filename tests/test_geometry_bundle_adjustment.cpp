@@ -5,9 +5,9 @@
 #include <ctime>
 #include <random>
 
-#include <Eigen/Eigenvalues>
 #include <ceres/gradient_checker.h>
 #include <gtest/gtest.h>
+#include <Eigen/Eigenvalues>
 
 #include "test_geometry_scene.h"
 #include "weighted_icp/frontend/geometry/local_bundle_adjustment.h"

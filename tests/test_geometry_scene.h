@@ -41,8 +41,8 @@ inline Eigen::Isometry3d perturbPose(const Eigen::Isometry3d& pose, double trans
 }
 
 /// `n` world points seen by the camera at `pose_wc`: uniform pixels, depths uniform in [z_min, z_max].
-inline std::vector<Eigen::Vector3d> pointsInView(const PinholeCamera& camera, const Eigen::Isometry3d& pose_wc,
-                                                 int n, double z_min, double z_max, std::mt19937& rng) {
+inline std::vector<Eigen::Vector3d> pointsInView(const PinholeCamera& camera, const Eigen::Isometry3d& pose_wc, int n,
+                                                 double z_min, double z_max, std::mt19937& rng) {
   std::uniform_real_distribution<double> u(20.0, camera.width - 20.0), v(20.0, camera.height - 20.0), z(z_min, z_max);
   std::vector<Eigen::Vector3d> points;
   for (int i = 0; i < n; ++i) {

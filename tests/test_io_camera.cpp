@@ -25,7 +25,6 @@ std::string errorOf(const std::string& preset_or_path) {
   return {};
 }
 
-
 const char* const kCompleteYaml =
     "%YAML:1.0\n"
     "fx: 500.5\nfy: 501.25\ncx: 320.0\ncy: 240.0\n"

@@ -16,10 +16,8 @@ namespace {
 using namespace weighted_icp;
 namespace fs = std::filesystem;
 using weighted_icp::testing::readFile;
-using weighted_icp::testing::writeFile;
 using weighted_icp::testing::scratchDir;
-
-
+using weighted_icp::testing::writeFile;
 
 /// Three landmarks that differ in every field the cloud carries.
 LandmarkMap threeLandmarks() {

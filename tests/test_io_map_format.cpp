@@ -18,11 +18,9 @@ namespace {
 using namespace weighted_icp;
 namespace fs = std::filesystem;
 using weighted_icp::testing::readFile;
-using weighted_icp::testing::writeFile;
 using weighted_icp::testing::realMapPath;
 using weighted_icp::testing::scratchDir;
-
-
+using weighted_icp::testing::writeFile;
 
 std::size_t filesIn(const fs::path& folder) {
   return static_cast<std::size_t>(std::distance(fs::directory_iterator(folder), fs::directory_iterator()));

@@ -76,8 +76,9 @@ TEST(Trajectory, RoundTripKeepsTimestampsAndPoses) {
 TEST(Trajectory, ReadsQuaternionsScalarLast) {
   const auto dir = weighted_icp::testing::scratchDir("trajectory_scalar_last");
   // 90 degrees about z: qz = qw = sqrt(1/2).
-  const std::string path = writeText(dir / "t.txt", "# timestamp tx ty tz qx qy qz qw\n\n"
-                                                    "10.5 1 2 3 0 0 0.70710678 0.70710678\n");
+  const std::string path = writeText(dir / "t.txt",
+                                     "# timestamp tx ty tz qx qy qz qw\n\n"
+                                     "10.5 1 2 3 0 0 0.70710678 0.70710678\n");
   const Trajectory trajectory = io::readTrajectory(path);
   ASSERT_EQ(trajectory.size(), 1u);
   EXPECT_EQ(trajectory[0].timestamp, 10.5);
@@ -106,12 +107,12 @@ TEST(Trajectory, MalformedLinesNameFileAndLine) {
   const auto dir = weighted_icp::testing::scratchDir("trajectory_malformed");
   const std::string good = "# header\n1.0 0 0 0 0 0 0 1\n";
   const std::vector<std::pair<std::string, std::string>> cases = {
-      {"1.1 0 0 0 0 0 1\n", "field"},                  // qw missing
-      {"1.1 0 0 zero 0 0 0 1\n", "tz 'zero'"},         // not a number
-      {"1.1 0 nan 0 0 0 0 1\n", "ty"},                 // not finite
-      {"1.1 0 0 0 0 0 0 0\n", "quaternion"},           // no rotation
+      {"1.1 0 0 0 0 0 1\n", "field"},                        // qw missing
+      {"1.1 0 0 zero 0 0 0 1\n", "tz 'zero'"},               // not a number
+      {"1.1 0 nan 0 0 0 0 1\n", "ty"},                       // not finite
+      {"1.1 0 0 0 0 0 0 0\n", "quaternion"},                 // no rotation
       {"1.0 0 0 0 0 0 0 1\n", "already appears on line 2"},  // repeated timestamp
-      {"1.1 0 0 0 0 0 0 1 7\n", "field"},              // one field too many
+      {"1.1 0 0 0 0 0 0 1 7\n", "field"},                    // one field too many
   };
   for (std::size_t c = 0; c < cases.size(); ++c) {
     const std::string path = writeText(dir / ("case" + std::to_string(c) + ".txt"), good + cases[c].first);

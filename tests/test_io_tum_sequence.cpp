@@ -45,7 +45,6 @@ std::string errorOf(const std::function<void()>& action) {
   return {};
 }
 
-
 /// A small camera for the synthetic sequences.
 PinholeCamera smallCamera() {
   PinholeCamera camera = tumCamera(3);

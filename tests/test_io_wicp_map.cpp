@@ -20,18 +20,16 @@ namespace {
 
 using namespace weighted_icp;
 namespace fs = std::filesystem;
-using weighted_icp::testing::readFile;
-using weighted_icp::testing::writeFile;
 using weighted_icp::testing::binaryDir;
+using weighted_icp::testing::readFile;
 using weighted_icp::testing::scratchDir;
+using weighted_icp::testing::writeFile;
 
 struct ToolRun {
   int exit_code = -1;
   std::string out;
   std::string err;
 };
-
-
 
 /// Runs wicp_map with `arguments` (shell syntax); stderr goes through a file in `scratch`.
 ToolRun wicpMap(const std::string& arguments, const fs::path& scratch) {

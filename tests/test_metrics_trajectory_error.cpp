@@ -90,7 +90,8 @@ TEST(TrajectoryAte, NonFinitePosesAreRefused) {
 
 TEST(TrajectoryRpe, ConstantWorldOffsetHasNoError) {
   const Trajectory truth = curvedTrajectory(100);
-  const metrics::RelativePoseError rpe = metrics::computeRpe(truth, moved(truth, rigidMotion(1.0, 2.0, 3.0, 0.5, 0.1, -0.3)));
+  const metrics::RelativePoseError rpe =
+      metrics::computeRpe(truth, moved(truth, rigidMotion(1.0, 2.0, 3.0, 0.5, 0.1, -0.3)));
   EXPECT_GT(rpe.pairs, 0u);
   EXPECT_LT(rpe.translation.rmse, 1e-9);
   EXPECT_LT(rpe.rotation_deg.rmse, 1e-6);
@@ -112,7 +113,8 @@ TEST(TrajectoryRpe, ScaleDriftGivesItsTranslationPerDelta) {
   // The estimate runs 5 % too far: over 1 s at 0.4 m/s that is 0.02 m, on every pair.
   const Trajectory truth = straightRun(50, 0.4, 0.0);
   const Trajectory estimate = straightRun(50, 0.42, 0.0);
-  for (const auto& [delta, unit] : {std::pair{1.0, metrics::DeltaUnit::Seconds}, std::pair{10.0, metrics::DeltaUnit::Frames}}) {
+  for (const auto& [delta, unit] :
+       {std::pair{1.0, metrics::DeltaUnit::Seconds}, std::pair{10.0, metrics::DeltaUnit::Frames}}) {
     const metrics::RelativePoseError rpe = metrics::computeRpe(truth, estimate, delta, unit);
     // Pairs (i, i + 10) whose partner is not the last pose: i = 0 .. 38.
     EXPECT_EQ(rpe.pairs, 39u);

@@ -46,8 +46,8 @@ std::string readAll(const fs::path& path) {
 ToolRun runEvaluate(const std::string& arguments, const fs::path& scratch) {
   const fs::path tool = weighted_icp::testing::binaryDir() / "examples" / "wicp_evaluate";
   const fs::path out = scratch / "stdout.txt", err = scratch / "stderr.txt";
-  const std::string command = "'" + tool.string() + "' " + arguments + " > '" + out.string() + "' 2> '" +
-                              err.string() + "'";
+  const std::string command =
+      "'" + tool.string() + "' " + arguments + " > '" + out.string() + "' 2> '" + err.string() + "'";
   const int status = std::system(command.c_str());
   ToolRun run;
   run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;

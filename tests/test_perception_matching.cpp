@@ -47,8 +47,10 @@ const ExtractedFeatures& features(int freiburg, std::size_t frame) {
   static std::map<std::pair<int, std::size_t>, ExtractedFeatures> cache;
   auto it = cache.find({freiburg, frame});
   if (it == cache.end())
-    it = cache.emplace(std::make_pair(freiburg, frame),
-                       frontend::FeatureExtractor().extract(sequence(freiburg).frame(frame).gray())).first;
+    it = cache
+             .emplace(std::make_pair(freiburg, frame),
+                      frontend::FeatureExtractor().extract(sequence(freiburg).frame(frame).gray()))
+             .first;
   return it->second;
 }
 
@@ -80,8 +82,9 @@ TEST_P(RealFramePair, LshFindsMostBruteForceMatches) {
   const std::vector<cv::DMatch> lsh = matchPair(GetParam(), withKind(MatcherKind::FlannLsh));
   std::set<std::pair<int, int>> found;
   for (const cv::DMatch& m : lsh) found.insert({m.queryIdx, m.trainIdx});
-  const auto shared = std::count_if(exact.begin(), exact.end(),
-                                    [&](const cv::DMatch& m) { return found.count({m.queryIdx, m.trainIdx}) > 0; });
+  const auto shared = std::count_if(exact.begin(), exact.end(), [&](const cv::DMatch& m) {
+    return found.count({m.queryIdx, m.trainIdx}) > 0;
+  });
   std::cout << pairName(GetParam()) << ": brute force " << exact.size() << " matches, LSH " << lsh.size() << ", "
             << shared << " in both\n";
   ASSERT_GE(exact.size(), 150u);

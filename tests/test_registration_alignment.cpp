@@ -83,7 +83,8 @@ TEST(LandmarkAlignment, ResultsDoNotDependOnTheNumberOfThreads) {
     settings.refine = true;
     const auto result = alignLandmarkMaps(source, realMap(), CovarianceWeight{}, settings);
     if (threads == 1) reference = result.transformation;
-    for (int i = 0; i < 16; ++i) EXPECT_EQ(reference.data()[i], result.transformation.data()[i]) << threads << " threads";
+    for (int i = 0; i < 16; ++i)
+      EXPECT_EQ(reference.data()[i], result.transformation.data()[i]) << threads << " threads";
   }
 }
 

@@ -39,7 +39,8 @@ Cloud::Ptr randomCloud(std::size_t n, unsigned seed) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<float> coordinate(-1.0f, 1.0f);
   auto cloud = std::make_shared<Cloud>();
-  for (std::size_t i = 0; i < n; ++i) cloud->push_back(pcl::PointXYZ(coordinate(rng), coordinate(rng), coordinate(rng)));
+  for (std::size_t i = 0; i < n; ++i)
+    cloud->push_back(pcl::PointXYZ(coordinate(rng), coordinate(rng), coordinate(rng)));
   for (std::size_t i = 0; i < n / 20; ++i) cloud->push_back((*cloud)[i * 7 % n]);
   return cloud;
 }
@@ -69,14 +70,16 @@ void expectSameCorrespondences(const pcl::Correspondences& a, const pcl::Corresp
   }
 }
 
-pcl::Correspondences correspondencesOf(pcl::registration::CorrespondenceEstimationBase<pcl::PointXYZ, pcl::PointXYZ>& ce,
-                                       const Cloud::Ptr& source, const Cloud::Ptr& target, double max_distance,
-                                       bool reciprocal = false) {
+pcl::Correspondences correspondencesOf(
+    pcl::registration::CorrespondenceEstimationBase<pcl::PointXYZ, pcl::PointXYZ>& ce, const Cloud::Ptr& source,
+    const Cloud::Ptr& target, double max_distance, bool reciprocal = false) {
   ce.setInputSource(source);
   ce.setInputTarget(target);
   pcl::Correspondences out;
-  if (reciprocal) ce.determineReciprocalCorrespondences(out, max_distance);
-  else ce.determineCorrespondences(out, max_distance);
+  if (reciprocal)
+    ce.determineReciprocalCorrespondences(out, max_distance);
+  else
+    ce.determineCorrespondences(out, max_distance);
   return out;
 }
 
@@ -114,7 +117,8 @@ TEST(WeightedCorrespondenceEstimation, UniformWeightsWithLargerKStillMatchPcl) {
   Stock stock;
   Weighted weighted(7);
   weighted.setTargetWeights(std::vector<double>(target->size(), 0.5));
-  expectSameCorrespondences(correspondencesOf(stock, source, target, 1.0), correspondencesOf(weighted, source, target, 1.0));
+  expectSameCorrespondences(correspondencesOf(stock, source, target, 1.0),
+                            correspondencesOf(weighted, source, target, 1.0));
 }
 
 TEST(WeightedCorrespondenceEstimation, IcpWithKEqualsOneIsBitIdenticalToPclIcp) {
@@ -137,9 +141,10 @@ TEST(WeightedCorrespondenceEstimation, IcpWithKEqualsOneIsBitIdenticalToPclIcp) 
   for (int i = 0; i < 16; ++i) EXPECT_EQ(stock_t.data()[i], ours_t.data()[i]) << "entry " << i;
   EXPECT_EQ(stock_score, ours_score);
   // And it did something: the displacement was undone.
-  EXPECT_LT(weighted_icp::rotationErrorDeg(Eigen::Isometry3d(ours_t),
-                                           weighted_icp::Displacement{0.15, -0.1, 0.05, 3, -2, 12}.toIsometry().inverse()),
-            0.01);
+  EXPECT_LT(
+      weighted_icp::rotationErrorDeg(Eigen::Isometry3d(ours_t),
+                                     weighted_icp::Displacement{0.15, -0.1, 0.05, 3, -2, 12}.toIsometry().inverse()),
+      0.01);
 }
 
 // --- The rule -----------------------------------------------------------------

@@ -36,8 +36,7 @@ inline std::string testFolderName(const ::testing::TestInfo* test) {
 /// test alone, so tests that pick the same `name` never remove or read each other's files, even in parallel.
 /// @param name  distinguishes the folders one test asks for (a test may want several)
 inline std::filesystem::path scratchDir(const std::string& name) {
-  const auto dir =
-      scratchRoot() / testFolderName(::testing::UnitTest::GetInstance()->current_test_info()) / name;
+  const auto dir = scratchRoot() / testFolderName(::testing::UnitTest::GetInstance()->current_test_info()) / name;
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir;

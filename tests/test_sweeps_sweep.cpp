@@ -44,8 +44,7 @@ LandmarkMap planesMap() {
                             : plane == 1 ? Eigen::Vector3d(u, 1.0, v)
                                          : Eigen::Vector3d(-0.1, v, u);
         landmark.covariance = Eigen::Matrix3d::Identity() * 1e-4 * (1 + (id * 7) % 5);
-        for (std::size_t n = 0; n <= id % 6; ++n)
-          landmark.observations.push_back({(id + n) % 6, 100.0 + n, 200.0});
+        for (std::size_t n = 0; n <= id % 6; ++n) landmark.observations.push_back({(id + n) % 6, 100.0 + n, 200.0});
         map.landmarks.push_back(landmark);
       }
   return map;
@@ -73,7 +72,6 @@ std::vector<std::vector<std::string>> parseCsv(const std::string& text) {
   }
   return rows;
 }
-
 
 /// Runs a sweep tool the way main() does; returns its exit status and stderr.
 std::pair<int, std::string> runTool(const SweepDefinition& sweep, std::vector<std::string> args) {
@@ -160,8 +158,8 @@ TEST(SweepRunning, CsvHasOneRowPerRunWithTheDocumentedColumns) {
   const auto rows = parseCsv(formatResultsCsv("yaw", runs));
   ASSERT_EQ(rows.size(), 61u);
   EXPECT_EQ(rows[0], (std::vector<std::string>{"sweep", "strategy", "k", "x", "y", "z", "roll", "pitch", "yaw",
-                                                "fitness_score", "iterations", "refine_iterations", "converged",
-                                                "time_ms", "rotation_error_deg", "translation_error_m"}));
+                                               "fitness_score", "iterations", "refine_iterations", "converged",
+                                               "time_ms", "rotation_error_deg", "translation_error_m"}));
   std::set<std::pair<std::string, std::string>> strategy_yaw;
   for (std::size_t i = 1; i < rows.size(); ++i) {
     ASSERT_EQ(rows[i].size(), 16u) << "row " << i;
@@ -240,9 +238,9 @@ class SweepTool : public ::testing::Test {
 };
 
 TEST_F(SweepTool, WritesTheCsvAndRunInfoFromASessionMap) {
-  const auto [status, errors] = runTool(xyYawSweep(), {"--map", map_path_, "--source-frames", "0-5",
-                                                       "--target-frames", "0-5", "--threads", "1", "--no-plot",
-                                                       "--out", (dir_ / "out").string()});
+  const auto [status, errors] =
+      runTool(xyYawSweep(), {"--map", map_path_, "--source-frames", "0-5", "--target-frames", "0-5", "--threads", "1",
+                             "--no-plot", "--out", (dir_ / "out").string()});
   ASSERT_EQ(status, 0) << errors;
   const auto rows = parseCsv(readFile(dir_ / "out" / "results.csv"));
   EXPECT_EQ(rows.size(), 1u + 64u);

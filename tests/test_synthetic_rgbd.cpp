@@ -247,8 +247,9 @@ TEST(SyntheticRgbd, DepthEqualsTheDistanceAlongTheRayToTheScene) {
         ++checked;
         measurable += in_range && facing;
         // Exact up to the depth image's resolution; 0 where the sensor could not measure.
-        const bool right = in_range && facing ? std::abs(stored / camera.depth_factor - hit.t) <= 0.5 / camera.depth_factor + 1e-9
-                                              : stored == 0;
+        const bool right = in_range && facing
+                               ? std::abs(stored / camera.depth_factor - hit.t) <= 0.5 / camera.depth_factor + 1e-9
+                               : stored == 0;
         if (!right && ++wrong <= 5)
           ADD_FAILURE() << "frame " << i << " pixel " << u << ' ' << v << ": depth " << stored / camera.depth_factor
                         << ", true " << hit.t << (in_range && facing ? "" : " (not measurable)");
@@ -273,11 +274,14 @@ TEST(SyntheticRgbd, BackProjectedPixelsLieOnTheRoomsSurfaces) {
         if (stored == 0) continue;
         const Eigen::Vector3d point = frame.camera_to_world * camera.backProject(u, v, stored / camera.depth_factor);
         // On a wall, the floor or the ceiling, or on a box: within the depth resolution (and its slant).
-        double offset = std::min({std::abs(std::abs(point.x()) - room.x() / 2), std::abs(std::abs(point.y()) - room.y() / 2),
-                                  std::abs(point.z()), std::abs(point.z() - room.z())});
+        double offset =
+            std::min({std::abs(std::abs(point.x()) - room.x() / 2), std::abs(std::abs(point.y()) - room.y() / 2),
+                      std::abs(point.z()), std::abs(point.z() - room.z())});
         const double on_room = offset;
-        for (const simulation::SceneBox& box : sequence.furniture()) offset = std::min(offset, std::abs(boxSurfaceOffset(box, point)));
-        if (const auto object = sequence.movingObject(i)) offset = std::min(offset, std::abs(boxSurfaceOffset(*object, point)));
+        for (const simulation::SceneBox& box : sequence.furniture())
+          offset = std::min(offset, std::abs(boxSurfaceOffset(box, point)));
+        if (const auto object = sequence.movingObject(i))
+          offset = std::min(offset, std::abs(boxSurfaceOffset(*object, point)));
         EXPECT_LT(offset, 0.0005) << "frame " << i << " pixel " << u << ' ' << v << " -> " << point.transpose();
         if (offset < on_room) ++on_furniture;
       }
@@ -315,7 +319,8 @@ TEST(SyntheticRgbd, TexturedPointsLookTheSameFromTwoViews) {
       const Eigen::Vector2d pixel = camera.project(in_second);
       if (pixel.x() < 20 || pixel.y() < 20 || pixel.x() > camera.width - 20 || pixel.y() > camera.height - 20) continue;
       // Skip points hidden in the second view.
-      const double seen_depth = second_raw.at<std::uint16_t>(cvRound(pixel.y()), cvRound(pixel.x())) / camera.depth_factor;
+      const double seen_depth =
+          second_raw.at<std::uint16_t>(cvRound(pixel.y()), cvRound(pixel.x())) / camera.depth_factor;
       if (std::abs(seen_depth - in_second.z()) > 0.01) continue;
       cv::Mat second_patch, wrong_patch;
       cv::getRectSubPix(second_gray, patch, cv::Point2f(pixel.x(), pixel.y()), second_patch);
@@ -358,7 +363,8 @@ TEST(SyntheticRgbd, MovingObjectComesAndGoesAndIsNearerThanTheRoom) {
     std::size_t nearer = 0, compared = 0;  // hides means nearer, by the object's own depth
     for (int v = 0; v < with_raw.rows; ++v)
       for (int u = 0; u < with_raw.cols; ++u) {
-        const std::uint16_t object_depth = with_raw.at<std::uint16_t>(v, u), room_depth = without_raw.at<std::uint16_t>(v, u);
+        const std::uint16_t object_depth = with_raw.at<std::uint16_t>(v, u),
+                            room_depth = without_raw.at<std::uint16_t>(v, u);
         if (with.moving_object_mask.at<std::uint8_t>(v, u) == 0 || object_depth == 0 || room_depth == 0) continue;
         ++compared;
         if (object_depth < room_depth) ++nearer;
@@ -543,8 +549,8 @@ TEST(SyntheticRgbdTool, WritesASequenceAndRejectsBadOptions) {
   EXPECT_EQ(readListFile(scratch / "sequence" / "rgb.txt").size(), 2u);
 
   const std::string fresh = "'" + (scratch / "fresh").string() + "'";
-  for (const std::string& bad : {std::string("--frames 0"), std::string("--frames=-3"),
-                                 std::string("--depth-noise-coefficient -0.01")}) {
+  for (const std::string& bad :
+       {std::string("--frames 0"), std::string("--frames=-3"), std::string("--depth-noise-coefficient -0.01")}) {
     run = runTool("--out " + fresh + ' ' + bad, scratch);
     EXPECT_EQ(run.exit_code, 1) << bad;
     EXPECT_NE(run.err.find("error"), std::string::npos) << bad << ": " << run.err;

@@ -109,8 +109,8 @@ TEST(SyntheticSession, EstimatedAndTrueMapsShareFramesLandmarksAndObservations) 
       EXPECT_TRUE(session.estimated.frames.count(truth.observations[j].frame_id));
       observing_frames.insert(truth.observations[j].frame_id);
     }
-    EXPECT_EQ(observing_frames.size(), truth.observations.size()) << "a frame observes landmark " << truth.id
-                                                                  << " twice";
+    EXPECT_EQ(observing_frames.size(), truth.observations.size())
+        << "a frame observes landmark " << truth.id << " twice";
     // On a surface of the room: inside its box, walls and floor included.
     EXPECT_LE(std::abs(truth.position.x()), half_room.x() + 1e-9);
     EXPECT_LE(std::abs(truth.position.y()), half_room.y() + 1e-9);
@@ -132,7 +132,8 @@ TEST(SyntheticSession, ObservationsLieInTheImageAndReprojectWithinPixelNoise) {
       const Eigen::Vector3d in_camera = session.truth.frames.at(observation.frame_id).inverse() * landmark.position;
       EXPECT_GE(in_camera.z(), options.min_depth);
       EXPECT_LE(in_camera.z(), options.max_depth);
-      const Eigen::Vector2d residual = options.camera.project(in_camera) - Eigen::Vector2d(observation.u, observation.v);
+      const Eigen::Vector2d residual =
+          options.camera.project(in_camera) - Eigen::Vector2d(observation.u, observation.v);
       // Gaussian noise beyond 6 sigma has odds ~1e-9 per draw.
       EXPECT_LE(residual.cwiseAbs().maxCoeff(), 6.0 * sigma)
           << "landmark " << landmark.id << " frame " << observation.frame_id;
@@ -286,8 +287,7 @@ TEST(SyntheticSession, PlainIcpRecoversAKnownDisplacementBetweenConsecutiveMiniM
   AlignmentSettings settings;
   settings.k = 1;
   settings.threads = 1;
-  const AlignmentResult result =
-      alignLandmarkMaps(source, target, weightFunction(WeightStrategy::Base), settings);
+  const AlignmentResult result = alignLandmarkMaps(source, target, weightFunction(WeightStrategy::Base), settings);
   const Eigen::Isometry3d estimate(result.transformation);
   const Eigen::Isometry3d truth = displacement.toIsometry().inverse();
   // The displacement itself is 15.4 degrees and 20+ cm: recovering it is no accident.

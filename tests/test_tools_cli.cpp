@@ -27,8 +27,7 @@ struct ToolRun {
 
 ToolRun run(const std::string& tool, const std::string& args, const fs::path& scratch) {
   const fs::path err_file = scratch / "stderr.txt";
-  const std::string command =
-      (binaryDir() / "examples" / tool).string() + " " + args + " 2>" + err_file.string();
+  const std::string command = (binaryDir() / "examples" / tool).string() + " " + args + " 2>" + err_file.string();
   ToolRun result;
   FILE* pipe = popen(command.c_str(), "r");
   std::array<char, 4096> buffer{};
@@ -58,9 +57,10 @@ TEST(WicpAlign, JsonLineRecoversTheDisplacementOnTheRealMap) {
   WEIGHTED_ICP_REQUIRE_FILE(weighted_icp::testing::realMapPath());
   const fs::path scratch = weighted_icp::testing::scratchDir("wicp_align_json");
   const std::string map = weighted_icp::testing::realMapPath().string();
-  const ToolRun r = run("wicp_align", "--source " + map + " --target " + map +
-                                      " --strategy observations --displace \"0.1 0.05 0 0 0 8\" --refine --json",
-                    scratch);
+  const ToolRun r = run("wicp_align",
+                        "--source " + map + " --target " + map +
+                            " --strategy observations --displace \"0.1 0.05 0 0 0 8\" --refine --json",
+                        scratch);
   ASSERT_EQ(r.status, 0) << r.err;
   const std::string json = lastLine(r.out);
   ASSERT_EQ(json.front(), '{');
@@ -99,8 +99,9 @@ TEST(WicpAlign, BadInputGivesAClearErrorAndANonZeroExit) {
 
 TEST(WicpRgbdSlam, WritesEveryOutputOnTheSyntheticSequence) {
   const fs::path out = weighted_icp::testing::scratchDir("wicp_rgbd_slam") / "out";
-  const ToolRun r = run("wicp_rgbd_slam", "--synthetic-frames 45 --deterministic --minimap-keyframes 3 --out " + out.string(),
-                    out.parent_path());
+  const ToolRun r =
+      run("wicp_rgbd_slam", "--synthetic-frames 45 --deterministic --minimap-keyframes 3 --out " + out.string(),
+          out.parent_path());
   ASSERT_EQ(r.status, 0) << r.err;
   const auto trajectory = weighted_icp::io::readTrajectory((out / "trajectory.txt").string());
   EXPECT_EQ(trajectory.size(), 45u);
@@ -126,19 +127,19 @@ TEST(WicpRgbdSlam, WritesEveryOutputOnTheSyntheticSequence) {
 
 TEST(WicpRgbdSlam, AMissingDatasetOrCameraFileFailsClearly) {
   const fs::path scratch = weighted_icp::testing::scratchDir("wicp_rgbd_slam_errors");
-  ToolRun r = run("wicp_rgbd_slam", "--dataset " + (scratch / "nothing").string() + " --camera fr1 --out " +
-                                    (scratch / "out").string(),
-              scratch);
+  ToolRun r =
+      run("wicp_rgbd_slam",
+          "--dataset " + (scratch / "nothing").string() + " --camera fr1 --out " + (scratch / "out").string(), scratch);
   EXPECT_EQ(r.status, 1);
   EXPECT_NE(r.err.find("nothing"), std::string::npos) << r.err;
   const fs::path camera = scratch / "camera.yaml";
   std::ofstream(camera) << "%YAML:1.0\n---\nfx: 500\nfy: 500\n";
-  r = run("wicp_rgbd_slam", "--camera " + camera.string() + " --dataset " + scratch.string() + " --out " +
-                                (scratch / "out").string(),
+  r = run("wicp_rgbd_slam",
+          "--camera " + camera.string() + " --dataset " + scratch.string() + " --out " + (scratch / "out").string(),
           scratch);
   EXPECT_EQ(r.status, 1);
   EXPECT_NE(r.err.find("cx"), std::string::npos) << r.err;  // names a missing key
-  r = run("wicp_rgbd_slam", "", scratch);  // --out is required
+  r = run("wicp_rgbd_slam", "", scratch);                   // --out is required
   EXPECT_EQ(r.status, 2);
 }
 

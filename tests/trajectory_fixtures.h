@@ -14,9 +14,10 @@ namespace weighted_icp::testing {
 /// t + Rz(yaw) Ry(pitch) Rx(roll), angles in radians.
 inline Eigen::Isometry3d rigidMotion(double x, double y, double z, double roll, double pitch, double yaw) {
   Eigen::Isometry3d motion = Eigen::Isometry3d::Identity();
-  motion.linear() = (Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY()) *
-                     Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitX()))
-                        .toRotationMatrix();
+  motion.linear() =
+      (Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY()) *
+       Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitX()))
+          .toRotationMatrix();
   motion.translation() = Eigen::Vector3d(x, y, z);
   return motion;
 }
@@ -26,8 +27,8 @@ inline Trajectory curvedTrajectory(std::size_t n) {
   Trajectory trajectory;
   for (std::size_t k = 0; k < n; ++k) {
     const double t = 0.0333 * static_cast<double>(k);
-    trajectory.push_back({1305031102.0 + t, rigidMotion(std::cos(t), std::sin(1.3 * t), 0.2 * t, 0.1 * t, -0.05 * t,
-                                                        0.3 * std::sin(t))});
+    trajectory.push_back({1305031102.0 + t,
+                          rigidMotion(std::cos(t), std::sin(1.3 * t), 0.2 * t, 0.1 * t, -0.05 * t, 0.3 * std::sin(t))});
   }
   return trajectory;
 }

@@ -48,9 +48,7 @@ PinholeCamera tumCamera(int freiburg) {
       camera.fx = 520.908620, camera.fy = 521.007327, camera.cx = 325.141442, camera.cy = 249.701764;
       camera.distortion = {0.231222, -0.784899, -0.003257, -0.000105, 0.917205};
       break;
-    case 3:
-      camera.fx = 535.4, camera.fy = 539.2, camera.cx = 320.1, camera.cy = 247.6;
-      break;
+    case 3: camera.fx = 535.4, camera.fy = 539.2, camera.cx = 320.1, camera.cy = 247.6; break;
     default:
       throw std::invalid_argument("no TUM RGB-D camera freiburg " + std::to_string(freiburg) + " (expected 1, 2 or 3)");
   }

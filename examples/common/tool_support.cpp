@@ -63,8 +63,10 @@ void Progress::step(const std::string& detail) {
   line << label_ << "  " << done_ << '/' << total_ << "  (" << (100 * done_ / std::max<std::size_t>(total_, 1))
        << "%)  eta " << std::fixed << std::setprecision(0) << eta << " s";
   if (!detail.empty()) line << "  " << detail;
-  if (terminal_) std::cerr << '\r' << line.str() << "\033[K" << std::flush;
-  else std::cerr << line.str() << '\n';
+  if (terminal_)
+    std::cerr << '\r' << line.str() << "\033[K" << std::flush;
+  else
+    std::cerr << line.str() << '\n';
   last_print_ = now;
 }
 

@@ -172,8 +172,7 @@ MapPair loadMapPair(const MapSelection& selection) {
   const std::string session_name = fs::path(selection.session_path).filename().string();
   pair.truth_known = true;
   if (!selection.frame_ranges) {
-    std::tie(pair.target, pair.source) =
-        filtered(session, min_observations, selection.session_path).alternateHalves();
+    std::tie(pair.target, pair.source) = filtered(session, min_observations, selection.session_path).alternateHalves();
     pair.description = session_name + " odd landmarks onto even landmarks";
     return pair;
   }
@@ -184,8 +183,7 @@ MapPair loadMapPair(const MapSelection& selection) {
   const auto& [source_frames, target_frames] = *selection.frame_ranges;
   pair.source = cutFiltered(source_frames);
   pair.target = cutFiltered(target_frames);
-  pair.description =
-      session_name + " frames " + source_frames.toString() + " onto frames " + target_frames.toString();
+  pair.description = session_name + " frames " + source_frames.toString() + " onto frames " + target_frames.toString();
   return pair;
 }
 
@@ -219,8 +217,7 @@ std::vector<PlannedRun> planRuns(const std::vector<SweepCase>& cases) {
 std::size_t countRuns(const std::vector<SweepCase>& cases) { return planRuns(cases).size(); }
 
 std::vector<SweepRun> runSweep(const std::vector<SweepCase>& cases, const MapPair& maps,
-                               const AlignmentSettings& settings,
-                               const std::function<void(const SweepRun&)>& on_run) {
+                               const AlignmentSettings& settings, const std::function<void(const SweepRun&)>& on_run) {
   if (cases.empty()) throw std::invalid_argument("the sweep has no case");
   std::vector<SweepRun> runs;
   // Per strategy: its weighted target, and one aligner per k so each builds
@@ -268,10 +265,22 @@ std::vector<SweepRun> runSweep(const std::vector<SweepCase>& cases, const MapPai
 // Output
 
 const std::vector<std::string>& csvColumns() {
-  static const std::vector<std::string> columns{
-      "sweep",   "strategy", "k",        "x",       "y",        "z",
-      "roll",    "pitch",    "yaw",      "fitness_score", "iterations", "refine_iterations",
-      "converged", "time_ms", "rotation_error_deg", "translation_error_m"};
+  static const std::vector<std::string> columns{"sweep",
+                                                "strategy",
+                                                "k",
+                                                "x",
+                                                "y",
+                                                "z",
+                                                "roll",
+                                                "pitch",
+                                                "yaw",
+                                                "fitness_score",
+                                                "iterations",
+                                                "refine_iterations",
+                                                "converged",
+                                                "time_ms",
+                                                "rotation_error_deg",
+                                                "translation_error_m"};
   return columns;
 }
 
@@ -294,11 +303,11 @@ std::string formatResultsCsv(const std::string& sweep_name, const std::vector<Sw
     const AlignmentResult& r = run.result;
     char time_ms[32];
     std::snprintf(time_ms, sizeof(time_ms), "%.3f", r.time_ms);
-    csv << sweep_name << ',' << toString(run.strategy) << ',' << run.k << ',' << number(d.x) << ','
-        << number(d.y) << ',' << number(d.z) << ',' << number(d.roll_deg) << ',' << number(d.pitch_deg) << ','
-        << number(d.yaw_deg) << ',' << number(r.fitness_score) << ',' << r.iterations << ','
-        << r.refine_iterations << ',' << (r.converged ? 1 : 0) << ',' << time_ms << ','
-        << optionalNumber(run.rotation_error_deg) << ',' << optionalNumber(run.translation_error_m) << '\n';
+    csv << sweep_name << ',' << toString(run.strategy) << ',' << run.k << ',' << number(d.x) << ',' << number(d.y)
+        << ',' << number(d.z) << ',' << number(d.roll_deg) << ',' << number(d.pitch_deg) << ',' << number(d.yaw_deg)
+        << ',' << number(r.fitness_score) << ',' << r.iterations << ',' << r.refine_iterations << ','
+        << (r.converged ? 1 : 0) << ',' << time_ms << ',' << optionalNumber(run.rotation_error_deg) << ','
+        << optionalNumber(run.translation_error_m) << '\n';
   }
   return csv.str();
 }
@@ -321,10 +330,10 @@ void runProcess(const std::vector<std::string>& argv) {
   int status = 0;
   if (waitpid(pid, &status, 0) < 0) throw std::runtime_error("lost " + argv[0] + ": " + std::strerror(errno));
   if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
-    throw std::runtime_error(argv[1] + " failed (" +
-                             (WIFEXITED(status) ? "exit status " + std::to_string(WEXITSTATUS(status))
-                                                : std::string("killed by a signal")) +
-                             ")");
+    throw std::runtime_error(
+        argv[1] + " failed (" +
+        (WIFEXITED(status) ? "exit status " + std::to_string(WEXITSTATUS(status)) : std::string("killed by a signal")) +
+        ")");
 }
 
 int atLeast(const po::variables_map& vm, const std::string& option, int minimum) {
@@ -347,6 +356,8 @@ int runSweepTool(const std::string& tool, const SweepDefinition& sweep, int argc
         "and mean-distance at each case; writes DIR/results.csv, DIR/run.json and DIR/violin.png.\n"
         "Exit status: 0 ok, 1 error, 2 bad command line, 4 results written but plotting failed.\nOptions");
     // Integers as int and checked: boost would wrap "-1" into a huge unsigned.
+    // One option per line reads as a table: not reflowed.
+    // clang-format off
     options.add_options()
         ("help,h", "print this help")
         ("map", po::value(&selection.session_path),
@@ -359,15 +370,19 @@ int runSweepTool(const std::string& tool, const SweepDefinition& sweep, int argc
         ("source", po::value(&selection.source_path), "source map file (with --target, instead of --map)")
         ("target", po::value(&selection.target_path), "target map file")
         ("min-observations", po::value<int>()->default_value(2), "drop landmarks observed fewer times");
+    // clang-format on
     if (!sweep.sweeps_k)
       options.add_options()("k", po::value<int>()->default_value(5),
                             "neighbours among which the heaviest is chosen (weighted strategies)");
+    // One option per line reads as a table: not reflowed.
+    // clang-format off
     options.add_options()
         ("max-iterations", po::value<int>()->default_value(150), "ICP iteration limit (per stage)")
         ("refine", "finish each run with nearest-neighbour ICP (k = 1)")
         ("threads", po::value<int>()->default_value(0), "search threads, 0 = all; results do not depend on it")
         ("out", po::value(&out_dir)->default_value(out_dir), "output folder")
         ("no-plot", "write the CSV only");
+    // clang-format on
     po::variables_map vm;
     if (!tools::parseCommandLine(argc, argv, options, vm)) return 0;
 
@@ -399,15 +414,14 @@ int runSweepTool(const std::string& tool, const SweepDefinition& sweep, int argc
     const MapPair maps = loadMapPair(selection);
     const std::vector<SweepCase> cases = sweep.cases(k);
     std::cout << tool << ": " << maps.description << " (" << maps.source.landmarks.size() << " onto "
-              << maps.target.landmarks.size() << " landmarks), " << cases.size() << " cases, "
-              << countRuns(cases) << " runs" << (settings.refine ? ", with refinement" : "") << std::endl;
+              << maps.target.landmarks.size() << " landmarks), " << cases.size() << " cases, " << countRuns(cases)
+              << " runs" << (settings.refine ? ", with refinement" : "") << std::endl;
     fs::create_directories(out_dir);
 
     const auto start = std::chrono::steady_clock::now();
     tools::Progress progress(tool, countRuns(cases));
     const std::vector<SweepRun> runs = runSweep(cases, maps, settings, [&](const SweepRun& run) {
-      progress.step(toString(run.strategy) + " k " + std::to_string(run.k) + " (" + run.displacement.toString() +
-                    ")");
+      progress.step(toString(run.strategy) + " k " + std::to_string(run.k) + " (" + run.displacement.toString() + ")");
     });
     progress.finish();
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -437,8 +451,7 @@ int runSweepTool(const std::string& tool, const SweepDefinition& sweep, int argc
       runProcess(plot_command);
     } catch (const std::exception& e) {
       std::cerr << tool << ": plotting failed: " << e.what() << "\n  the results are complete in " << csv_path
-                << "; plot them later with: " << plot_command[0] << ' ' << plot_command[1] << ' ' << csv_path
-                << '\n';
+                << "; plot them later with: " << plot_command[0] << ' ' << plot_command[1] << ' ' << csv_path << '\n';
       return 4;
     }
     std::cout << tool << ": wrote " << (fs::path(out_dir) / "violin.png").string() << std::endl;

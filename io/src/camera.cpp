@@ -64,15 +64,21 @@ PinholeCamera readCameraFile(const std::string& path) {
   std::vector<KeyProblem> problems;
   const auto real = [&](const char* key, double& value) {
     const cv::FileNode node = storage[key];
-    if (node.empty()) problems.push_back({key, "is missing"});
-    else if (!node.isReal() && !node.isInt()) problems.push_back({key, "is not a number"});
-    else value = static_cast<double>(node);
+    if (node.empty())
+      problems.push_back({key, "is missing"});
+    else if (!node.isReal() && !node.isInt())
+      problems.push_back({key, "is not a number"});
+    else
+      value = static_cast<double>(node);
   };
   const auto integer = [&](const char* key, int& value) {
     const cv::FileNode node = storage[key];
-    if (node.empty()) problems.push_back({key, "is missing"});
-    else if (!node.isInt()) problems.push_back({key, "is not an integer"});
-    else value = static_cast<int>(node);
+    if (node.empty())
+      problems.push_back({key, "is missing"});
+    else if (!node.isInt())
+      problems.push_back({key, "is not an integer"});
+    else
+      value = static_cast<int>(node);
   };
   PinholeCamera camera;
   real("fx", camera.fx);

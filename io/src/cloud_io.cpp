@@ -72,8 +72,8 @@ pcl::PCLPointCloud2 readPcd(const std::string& path) {
   unsigned int data_index = 0;
   // PCL's reader crashes on a file whose header has no FIELDS (any non-PCD
   // file), so the header is checked before the data is read.
-  if (reader.readHeader(path, blob, origin, orientation, version, data_type, data_index) != 0 ||
-      blob.fields.empty() || data_index == 0)
+  if (reader.readHeader(path, blob, origin, orientation, version, data_type, data_index) != 0 || blob.fields.empty() ||
+      data_index == 0)
     throw std::runtime_error(path + ": not a PCD file (no valid header)");
   if (reader.read(path, blob) != 0) throw std::runtime_error(path + ": not a readable pcd point cloud");
   return blob;
@@ -103,8 +103,8 @@ void saveLandmarkCloud(const LandmarkCloud& cloud, const std::string& path) {
   writeAtomically(path, [&](const std::string& temporary) {
     int status = -1;
     try {
-      status = ext == ".pcd" ? pcl::io::savePCDFileBinary(temporary, cloud)
-                             : pcl::io::savePLYFileBinary(temporary, cloud);
+      status =
+          ext == ".pcd" ? pcl::io::savePCDFileBinary(temporary, cloud) : pcl::io::savePLYFileBinary(temporary, cloud);
     } catch (const pcl::PCLException& e) {  // e.g. the folder does not exist; its message has no path
       throw std::runtime_error("cannot write " + path + " (" + pclMessage(e) + ")");
     }

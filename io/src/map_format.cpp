@@ -22,7 +22,6 @@ MapFormatError::MapFormatError(const std::string& source, std::size_t line, cons
 
 namespace {
 
-
 /// Parses one record's fields, throwing MapFormatError with the field's name.
 class FieldReader {
  public:
@@ -178,8 +177,8 @@ void writeLandmarkMap(const LandmarkMap& map, std::ostream& out) {
   for (const auto& [id, pose] : map.frames) {
     const Eigen::Quaterniond q(pose.linear());
     const Eigen::Vector3d& t = pose.translation();
-    out << "FRAME " << id << ' ' << exact(t.x()) << ' ' << exact(t.y()) << ' ' << exact(t.z()) << ' '
-        << exact(q.w()) << ' ' << exact(q.x()) << ' ' << exact(q.y()) << ' ' << exact(q.z()) << '\n';
+    out << "FRAME " << id << ' ' << exact(t.x()) << ' ' << exact(t.y()) << ' ' << exact(t.z()) << ' ' << exact(q.w())
+        << ' ' << exact(q.x()) << ' ' << exact(q.y()) << ' ' << exact(q.z()) << '\n';
   }
   for (const auto& landmark : map.landmarks) {
     out << "LANDMARK " << landmark.id;

@@ -68,7 +68,8 @@ std::vector<TimestampedLine> readTimestampedLines(const std::string& path, std::
     line.line = line_number;
     const auto [previous, inserted] = line_of_timestamp.emplace(line.timestamp, line_number);
     if (!inserted)
-      failAt(path, line_number, "timestamp " + fields[0] + " already appears on line " + std::to_string(previous->second));
+      failAt(path, line_number,
+             "timestamp " + fields[0] + " already appears on line " + std::to_string(previous->second));
     line.fields.assign(std::make_move_iterator(fields.begin() + 1), std::make_move_iterator(fields.end()));
     lines.push_back(std::move(line));
   }
@@ -81,7 +82,8 @@ Trajectory readTrajectory(const std::string& path) {
   Trajectory trajectory;
   for (const auto& line : readTimestampedLines(path, 7)) {
     double values[7];
-    for (int i = 0; i < 7; ++i) values[i] = finiteNumber(line.fields[static_cast<std::size_t>(i)], names[i], path, line.line);
+    for (int i = 0; i < 7; ++i)
+      values[i] = finiteNumber(line.fields[static_cast<std::size_t>(i)], names[i], path, line.line);
     const Eigen::Quaterniond q(values[6], values[3], values[4], values[5]);
     // Ground truth is written with 4 decimals, so unit to ~1e-4; far from unit
     // means a wrong line, not rounding.

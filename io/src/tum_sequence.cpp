@@ -58,9 +58,9 @@ TumSequence TumSequence::open(const std::string& directory) {
     sequence.frames_.push_back(std::move(frame));
   }
   if (sequence.frames_.empty())
-    throw std::runtime_error(directory + ": no colour and depth images less than " + std::to_string(kMaxRgbDepthDifference) +
-                             " s apart (" + std::to_string(rgb.size()) + " in rgb.txt, " + std::to_string(depth.size()) +
-                             " in depth.txt)");
+    throw std::runtime_error(directory + ": no colour and depth images less than " +
+                             std::to_string(kMaxRgbDepthDifference) + " s apart (" + std::to_string(rgb.size()) +
+                             " in rgb.txt, " + std::to_string(depth.size()) + " in depth.txt)");
 
   const fs::path groundtruth_path = folder / "groundtruth.txt";
   if (fs::exists(groundtruth_path)) {

@@ -53,7 +53,8 @@ AbsoluteTrajectoryError computeAte(const Trajectory& groundtruth, const Trajecto
   result.alignment.matrix() = Eigen::umeyama(estimated_positions, true_positions, false);
   std::vector<double> errors(matches.size());
   for (Eigen::Index k = 0; k < n; ++k)
-    errors[static_cast<std::size_t>(k)] = (result.alignment * estimated_positions.col(k) - true_positions.col(k)).norm();
+    errors[static_cast<std::size_t>(k)] =
+        (result.alignment * estimated_positions.col(k) - true_positions.col(k)).norm();
   result.translation = summarizeErrors(std::move(errors));
   return result;
 }
@@ -96,8 +97,8 @@ RelativePoseError computeRpe(const Trajectory& groundtruth, const Trajectory& es
     rotation_errors_deg.push_back(Eigen::AngleAxisd(error.linear()).angle() * 180.0 / EIGEN_PI);
   }
   if (translation_errors.size() < 2)
-    throw std::runtime_error("only " + std::to_string(translation_errors.size()) +
-                             " pose pair(s) " + exact(delta) + (unit == DeltaUnit::Seconds ? " s" : " frame(s)") +
+    throw std::runtime_error("only " + std::to_string(translation_errors.size()) + " pose pair(s) " + exact(delta) +
+                             (unit == DeltaUnit::Seconds ? " s" : " frame(s)") +
                              " apart have ground truth; the relative pose error needs at least 2");
   RelativePoseError result;
   result.pairs = translation_errors.size();

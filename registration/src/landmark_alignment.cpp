@@ -99,9 +99,8 @@ AlignmentResult LandmarkAligner::align(const LandmarkCloud::ConstPtr& source, co
   return result;
 }
 
-AlignmentResult alignLandmarkMaps(const LandmarkMap& source, const LandmarkMap& target,
-                                  const WeightFunction& weight, const AlignmentSettings& settings,
-                                  const Eigen::Matrix4d& guess) {
+AlignmentResult alignLandmarkMaps(const LandmarkMap& source, const LandmarkMap& target, const WeightFunction& weight,
+                                  const AlignmentSettings& settings, const Eigen::Matrix4d& guess) {
   LandmarkAligner aligner(settings);
   aligner.setTarget(toLandmarkCloud(target, weight));
   return aligner.align(toLandmarkCloud(source, weight), guess);

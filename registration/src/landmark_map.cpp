@@ -32,8 +32,7 @@ LandmarkMap LandmarkMap::withMinObservations(std::size_t min_observations) const
 
 LandmarkMap LandmarkMap::miniMap(FrameId first, FrameId last) const {
   LandmarkMap mini;
-  for (auto it = frames.lower_bound(first); it != frames.end() && it->first <= last; ++it)
-    mini.frames.insert(*it);
+  for (auto it = frames.lower_bound(first); it != frames.end() && it->first <= last; ++it) mini.frames.insert(*it);
   for (const auto& landmark : landmarks) {
     Landmark kept = landmark;
     kept.observations.clear();

@@ -26,16 +26,14 @@ double readScalarField(const std::uint8_t* point_bytes, const pcl::PCLPointField
     case pcl::PCLPointField::UINT32: return load<std::uint32_t>(bytes);
     case pcl::PCLPointField::FLOAT32: return load<float>(bytes);
     case pcl::PCLPointField::FLOAT64: return load<double>(bytes);
-    default:
-      throw std::invalid_argument("point field '" + field.name + "' is not a numeric scalar");
+    default: throw std::invalid_argument("point field '" + field.name + "' is not a numeric scalar");
   }
 }
 
 void checkWeights(const std::vector<double>& weights, const std::string& what) {
   for (std::size_t i = 0; i < weights.size(); ++i) {
     if (!std::isfinite(weights[i]) || weights[i] < 0.0)
-      throw std::invalid_argument(what + ": weight " + std::to_string(i) + " is " +
-                                  std::to_string(weights[i]) +
+      throw std::invalid_argument(what + ": weight " + std::to_string(i) + " is " + std::to_string(weights[i]) +
                                   "; weights must be finite and >= 0");
   }
 }

@@ -23,8 +23,7 @@ double UniformWeight::operator()(const LandmarkMetrics&) const { return 1.0; }
 
 const std::vector<WeightStrategy>& allWeightStrategies() {
   static const std::vector<WeightStrategy> all{WeightStrategy::Base, WeightStrategy::Covariance,
-                                               WeightStrategy::Observations,
-                                               WeightStrategy::MeanDistance};
+                                               WeightStrategy::Observations, WeightStrategy::MeanDistance};
   return all;
 }
 
@@ -55,9 +54,7 @@ WeightFunction weightFunction(WeightStrategy strategy) {
   throw std::invalid_argument("unknown weight strategy");
 }
 
-unsigned int neighboursFor(WeightStrategy strategy, unsigned int k) {
-  return strategy == WeightStrategy::Base ? 1 : k;
-}
+unsigned int neighboursFor(WeightStrategy strategy, unsigned int k) { return strategy == WeightStrategy::Base ? 1 : k; }
 
 std::vector<double> computeWeights(const LandmarkMap& map, const WeightFunction& weight) {
   std::vector<double> weights;
@@ -65,8 +62,8 @@ std::vector<double> computeWeights(const LandmarkMap& map, const WeightFunction&
   for (const auto& landmark : map.landmarks) {
     const double w = weight(map.metrics(landmark));
     if (!std::isfinite(w) || w < 0.0)
-      throw std::invalid_argument("weight of landmark " + std::to_string(landmark.id) + " is " +
-                                  std::to_string(w) + "; weights must be finite and >= 0");
+      throw std::invalid_argument("weight of landmark " + std::to_string(landmark.id) + " is " + std::to_string(w) +
+                                  "; weights must be finite and >= 0");
     weights.push_back(w);
   }
   return weights;

@@ -6,9 +6,9 @@
 
 #include "weighted_icp/registration/landmark_point.h"
 
-#define WEIGHTED_ICP_INSTANTIATE_FOR_SCALARS(P)                         \
+#define WEIGHTED_ICP_INSTANTIATE_FOR_SCALARS(P)                          \
   WEIGHTED_ICP_INSTANTIATE_WeightedCorrespondenceEstimation(P, P, float) \
-  WEIGHTED_ICP_INSTANTIATE_WeightedCorrespondenceEstimation(P, P, double)
+      WEIGHTED_ICP_INSTANTIATE_WeightedCorrespondenceEstimation(P, P, double)
 
 WEIGHTED_ICP_INSTANTIATE_FOR_SCALARS(pcl::PointXYZ)
 WEIGHTED_ICP_INSTANTIATE_FOR_SCALARS(pcl::PointXYZI)

@@ -21,8 +21,8 @@ namespace weighted_icp::simulation {
 /// @brief Where a ray meets a face of a box.
 struct FaceHit {
   double t = std::numeric_limits<double>::infinity();  ///< ray parameter: origin + t * direction
-  int axis = 0;                                         ///< the face's normal axis, in the box's frame
-  bool positive_side = false;                           ///< the face on the box's + side of `axis`
+  int axis = 0;                                        ///< the face's normal axis, in the box's frame
+  bool positive_side = false;                          ///< the face on the box's + side of `axis`
 };
 
 /// @brief The part of a ray inside a box, from the slab test.

@@ -132,12 +132,10 @@ void validate(const SyntheticRgbdOptions& options) {
   require(!camera.hasDistortion(), "camera distortion is not supported (the renderer casts undistorted rays)");
   require(options.depth_noise_coefficient >= 0.0 && std::isfinite(options.depth_noise_coefficient),
           "depth_noise_coefficient must be finite and not negative");
-  require(options.min_depth >= 0.0 && options.max_depth > options.min_depth,
-          "need 0 <= min_depth < max_depth");
+  require(options.min_depth >= 0.0 && options.max_depth > options.min_depth, "need 0 <= min_depth < max_depth");
   require(options.max_depth * camera.depth_factor <= 65535.0,
           "max_depth * depth_factor must fit the 16-bit depth image (65535)");
-  require(options.max_incidence_deg > 0.0 && options.max_incidence_deg <= 90.0,
-          "max_incidence_deg must be in (0, 90]");
+  require(options.max_incidence_deg > 0.0 && options.max_incidence_deg <= 90.0, "max_incidence_deg must be in (0, 90]");
 }
 
 }  // namespace
@@ -292,7 +290,8 @@ class FrameRenderer {
 
   /// Row v of the colour image, the raw 16-bit depth (as the sensor stores
   /// it) and the moving-object mask.
-  void renderRow(int v, SyntheticRgbdFrame& frame, cv::Mat& raw_depth, std::vector<const BoxInFrame*>& row_boxes) const {
+  void renderRow(int v, SyntheticRgbdFrame& frame, cv::Mat& raw_depth,
+                 std::vector<const BoxInFrame*>& row_boxes) const {
     row_boxes.clear();
     for (const BoxInFrame& box : boxes_)
       if (v >= box.pixels.y && v < box.pixels.y + box.pixels.height) row_boxes.push_back(&box);
@@ -346,10 +345,10 @@ class FrameRenderer {
     // Columns run to the viewer's right (e_v x normal), so text reads the right way round.
     const int axis = hit.face.axis, u_axis = faceU(axis), v_axis = faceV(axis);
     const double column_sign = axis == 1 ? -normalSign(hit) : normalSign(hit);
-    const cv::Vec3d albedo = sampleBilinear(
-        (*box.faces)[2 * axis + (hit.face.positive_side ? 1 : 0)],
-        (column_sign * local[u_axis] + box.shape.upper()[u_axis]) * box.texels_per_metre - 0.5,
-        (box.shape.upper()[v_axis] - local[v_axis]) * box.texels_per_metre - 0.5);
+    const cv::Vec3d albedo =
+        sampleBilinear((*box.faces)[2 * axis + (hit.face.positive_side ? 1 : 0)],
+                       (column_sign * local[u_axis] + box.shape.upper()[u_axis]) * box.texels_per_metre - 0.5,
+                       (box.shape.upper()[v_axis] - local[v_axis]) * box.texels_per_metre - 0.5);
     const double light = shading(camera_position_ + hit.face.t * direction, normal);
     cv::Vec3b pixel;
     for (int k = 0; k < 3; ++k) {

@@ -122,8 +122,10 @@ std::vector<Eigen::Isometry3d> trueTrajectory(const SyntheticSessionOptions& opt
     const Eigen::Vector3d view = options.look_at - centre;
     // Negated comparisons: NaN (look_at on the camera) must fail them too.
     if (!(view.norm() > 0.1) || !(view.normalized().cross(Eigen::Vector3d::UnitZ()).norm() > 0.1))
-      throw std::invalid_argument("SyntheticSessionOptions::look_at must not be on, or (nearly) straight above or "
-                                  "below, the camera path; it is at frame " + std::to_string(k));
+      throw std::invalid_argument(
+          "SyntheticSessionOptions::look_at must not be on, or (nearly) straight above or "
+          "below, the camera path; it is at frame " +
+          std::to_string(k));
     const Eigen::Vector3d forward = view.normalized();
     const Eigen::Vector3d right = forward.cross(Eigen::Vector3d::UnitZ());
     Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
@@ -137,8 +139,7 @@ std::vector<Eigen::Isometry3d> trueTrajectory(const SyntheticSessionOptions& opt
 /// Chains the true frame-to-frame motions, each perturbed by a small random
 /// motion: the error of every step stays in all later poses, as in odometry.
 std::vector<Eigen::Isometry3d> odometryTrajectory(const SyntheticSessionOptions& options,
-                                                  const std::vector<Eigen::Isometry3d>& truth,
-                                                  RandomSource& random) {
+                                                  const std::vector<Eigen::Isometry3d>& truth, RandomSource& random) {
   std::vector<Eigen::Isometry3d> poses{truth.front()};
   for (std::size_t k = 1; k < truth.size(); ++k) {
     const Eigen::Vector3d rotation_vector = options.drift_rotation_sigma_deg * kDegree * random.normal3();
@@ -162,10 +163,9 @@ void require(bool ok, const char* option, const std::string& rule, const T& valu
 bool finite(double value) { return std::isfinite(value); }
 
 void validate(const SyntheticSessionOptions& o) {
-  require(o.num_frames >= 1 && o.num_frames <= 100000, "num_frames", "must be between 1 and 100000",
-          o.num_frames);
-  require(o.num_landmarks >= 1 && o.num_landmarks <= 10000000, "num_landmarks",
-          "must be between 1 and 10000000", o.num_landmarks);
+  require(o.num_frames >= 1 && o.num_frames <= 100000, "num_frames", "must be between 1 and 100000", o.num_frames);
+  require(o.num_landmarks >= 1 && o.num_landmarks <= 10000000, "num_landmarks", "must be between 1 and 10000000",
+          o.num_landmarks);
   require(o.room_size.allFinite() && o.room_size.x() >= 3.0 && o.room_size.y() >= 3.0 && o.room_size.z() >= 2.0,
           "room_size", "must be at least 3 x 3 x 2 metres (the furniture needs it)", o.room_size.transpose());
   require(o.path_radius_fraction >= 0.0 && o.path_radius_fraction <= 0.9, "path_radius_fraction",
@@ -178,21 +178,20 @@ void validate(const SyntheticSessionOptions& o) {
   require(o.camera.width >= 1 && o.camera.height >= 1, "camera", "width and height must be >= 1",
           std::to_string(o.camera.width) + "x" + std::to_string(o.camera.height));
   require(finite(o.camera.fx) && finite(o.camera.fy) && o.camera.fx > 0.0 && o.camera.fy > 0.0, "camera",
-          "focal lengths fx, fy must be finite and > 0", std::to_string(o.camera.fx) + ", " +
-                                                             std::to_string(o.camera.fy));
+          "focal lengths fx, fy must be finite and > 0",
+          std::to_string(o.camera.fx) + ", " + std::to_string(o.camera.fy));
   require(finite(o.camera.cx) && finite(o.camera.cy), "camera", "principal point cx, cy must be finite",
           std::to_string(o.camera.cx) + ", " + std::to_string(o.camera.cy));
-  require(!o.camera.hasDistortion(), "camera", "must have no lens distortion", "k1 = " +
-          std::to_string(o.camera.distortion[0]) + ", ...");
+  require(!o.camera.hasDistortion(), "camera", "must have no lens distortion",
+          "k1 = " + std::to_string(o.camera.distortion[0]) + ", ...");
   require(o.min_depth > 0.0 && finite(o.min_depth), "min_depth", "must be finite and > 0", o.min_depth);
-  require(o.max_depth > o.min_depth && finite(o.max_depth), "max_depth", "must be finite and > min_depth",
-          o.max_depth);
+  require(o.max_depth > o.min_depth && finite(o.max_depth), "max_depth", "must be finite and > min_depth", o.max_depth);
   require(o.max_viewing_angle_deg > 0.0 && o.max_viewing_angle_deg <= 90.0, "max_viewing_angle_deg",
           "must be in (0, 90]", o.max_viewing_angle_deg);
-  require(o.detection_probability > 0.0 && o.detection_probability <= 1.0, "detection_probability",
-          "must be in (0, 1]", o.detection_probability);
-  require(o.pixel_noise_sigma >= 0.0 && finite(o.pixel_noise_sigma), "pixel_noise_sigma",
-          "must be finite and >= 0", o.pixel_noise_sigma);
+  require(o.detection_probability > 0.0 && o.detection_probability <= 1.0, "detection_probability", "must be in (0, 1]",
+          o.detection_probability);
+  require(o.pixel_noise_sigma >= 0.0 && finite(o.pixel_noise_sigma), "pixel_noise_sigma", "must be finite and >= 0",
+          o.pixel_noise_sigma);
   require(o.depth_noise_coefficient >= 0.0 && finite(o.depth_noise_coefficient), "depth_noise_coefficient",
           "must be finite and >= 0", o.depth_noise_coefficient);
   require(o.drift_rotation_sigma_deg >= 0.0 && finite(o.drift_rotation_sigma_deg), "drift_rotation_sigma_deg",
@@ -205,7 +204,7 @@ void validate(const SyntheticSessionOptions& o) {
 /// at `depth`: first-order propagation of independent pixel and depth noise.
 Eigen::Matrix3d backProjectionCovariance(const PinholeCamera& camera, double u, double v, double depth,
                                          double pixel_sigma, double depth_sigma) {
-  Eigen::Matrix3d jacobian;  // d(x, y, z) / d(u, v, depth)
+  Eigen::Matrix3d jacobian;                                         // d(x, y, z) / d(u, v, depth)
   jacobian << depth / camera.fx, 0.0, (u - camera.cx) / camera.fx,  //
       0.0, depth / camera.fy, (v - camera.cy) / camera.fy,          //
       0.0, 0.0, 1.0;
@@ -343,8 +342,9 @@ SyntheticSession generateSyntheticSession(const SyntheticSessionOptions& options
     if (landmark.observed()) landmark.finish(point.position, session);
   }
   if (session.estimated.landmarks.empty())
-    throw std::runtime_error("synthetic session: no landmark is observed from the camera path (check the room, path, "
-                             "camera and depth range options)");
+    throw std::runtime_error(
+        "synthetic session: no landmark is observed from the camera path (check the room, path, "
+        "camera and depth range options)");
   return session;
 }
 

@@ -12,8 +12,8 @@
 #include <stdexcept>
 #include <system_error>
 
-#include <opencv2/imgcodecs.hpp>
 #include <unistd.h>
+#include <opencv2/imgcodecs.hpp>
 
 #include "weighted_icp/core/rgbd_frame.h"
 #include "weighted_icp/io/trajectory.h"
@@ -87,7 +87,8 @@ void writeFrames(const SyntheticRgbdSequence& sequence, const fs::path& folder,
     const SyntheticRgbdFrame frame = sequence.frame(i);
     const std::string stamp = timestampText(frame.rgbd.timestamp);
     writeImage(folder / "rgb" / (stamp + ".png"), frame.rgbd.color);
-    writeImage(folder / "depth" / (stamp + ".png"), depthToRaw(frame.rgbd.depth, sequence.options().camera.depth_factor));
+    writeImage(folder / "depth" / (stamp + ".png"),
+               depthToRaw(frame.rgbd.depth, sequence.options().camera.depth_factor));
     rgb_list << stamp << " rgb/" << stamp << ".png\n";
     depth_list << stamp << " depth/" << stamp << ".png\n";
     groundtruth.push_back({listedTimestamp(stamp), frame.camera_to_world});

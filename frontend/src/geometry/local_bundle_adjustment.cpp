@@ -6,11 +6,11 @@
 #include <memory>
 #include <optional>
 
-#include <Eigen/Eigenvalues>
 #include <ceres/loss_function.h>
 #include <ceres/ordered_groups.h>
 #include <ceres/problem.h>
 #include <ceres/solver.h>
+#include <Eigen/Eigenvalues>
 
 #include "input_checks.h"
 #include "solver_options.h"
@@ -65,8 +65,8 @@ bool usesDepth(const BundleAdjustmentProblem::Observation& observation, const Bu
 }
 
 /// Reprojection error in pixels, or NaN behind the camera.
-double reprojectionError(const PinholeCamera& camera, const PoseParameters& pose,
-                         const Eigen::Vector3d& point_world, const Eigen::Vector2d& pixel) {
+double reprojectionError(const PinholeCamera& camera, const PoseParameters& pose, const Eigen::Vector3d& point_world,
+                         const Eigen::Vector2d& pixel) {
   const Eigen::Vector3d p = pose.toCamera(point_world);
   if (p.z() < kMinPointDepth) return std::numeric_limits<double>::quiet_NaN();
   return (camera.project(p) - pixel).norm();

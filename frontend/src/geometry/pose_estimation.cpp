@@ -99,10 +99,10 @@ std::pair<Eigen::Isometry3d, std::vector<int>> ransacPnp(const std::vector<Eigen
   return {pose_cw.inverse(), inliers};
 }
 
-Eigen::Isometry3d refinePose(const std::vector<Eigen::Vector3d>& points_world, const std::vector<Eigen::Vector2d>& pixels,
-                             const std::vector<int>& use, const PinholeCamera& camera,
-                             const Eigen::Isometry3d& initial_wc, double huber_px, int max_iterations,
-                             const DepthMeasurements* depth) {
+Eigen::Isometry3d refinePose(const std::vector<Eigen::Vector3d>& points_world,
+                             const std::vector<Eigen::Vector2d>& pixels, const std::vector<int>& use,
+                             const PinholeCamera& camera, const Eigen::Isometry3d& initial_wc, double huber_px,
+                             int max_iterations, const DepthMeasurements* depth) {
   if (points_world.size() != pixels.size())
     throw std::invalid_argument("refinePoseHuber: " + std::to_string(points_world.size()) + " points but " +
                                 std::to_string(pixels.size()) + " pixels");

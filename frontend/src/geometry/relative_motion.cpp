@@ -4,13 +4,13 @@
 #include <cmath>
 #include <optional>
 
-#include <Eigen/Geometry>
 #include <ceres/autodiff_cost_function.h>
 #include <ceres/loss_function.h>
 #include <ceres/manifold.h>
 #include <ceres/problem.h>
 #include <ceres/solver.h>
 #include <ceres/sphere_manifold.h>
+#include <Eigen/Geometry>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>  // after Eigen, which it needs
 

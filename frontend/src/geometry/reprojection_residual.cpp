@@ -91,8 +91,8 @@ bool ReprojectionResidual::Evaluate(double const* const* parameters, double* res
                                 residuals, jacobianOrNull(jacobians, 0), jacobianOrNull(jacobians, 1));
 }
 
-RgbdResidual::RgbdResidual(const PinholeCamera& camera, const Eigen::Vector2d& pixel, double pixel_sigma,
-                           double depth, double depth_sigma)
+RgbdResidual::RgbdResidual(const PinholeCamera& camera, const Eigen::Vector2d& pixel, double pixel_sigma, double depth,
+                           double depth_sigma)
     : measurement_(camera, pixel, pixel_sigma), depth_(depth), inverse_depth_sigma_(1.0 / depth_sigma) {}
 
 bool RgbdResidual::Evaluate(double const* const* parameters, double* residuals, double** jacobians) const {

@@ -102,8 +102,6 @@ MatcherKind parseMatcherKind(const std::string& name) {
   throw std::invalid_argument("unknown matcher \"" + name + "\": expected \"flann\" or \"brute-force\"");
 }
 
-std::string matcherKindName(MatcherKind kind) {
-  return kind == MatcherKind::FlannLsh ? "flann" : "brute-force";
-}
+std::string matcherKindName(MatcherKind kind) { return kind == MatcherKind::FlannLsh ? "flann" : "brute-force"; }
 
 }  // namespace weighted_icp::frontend

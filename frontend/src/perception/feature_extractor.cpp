@@ -43,8 +43,8 @@ void assignOrientation(const cv::Mat& image, std::vector<cv::KeyPoint>& keypoint
   }();
   cv::Mat patch;
   for (cv::KeyPoint& keypoint : keypoints) {
-    const cv::Rect around(cvRound(keypoint.pt.x) - kOrbHalfPatch, cvRound(keypoint.pt.y) - kOrbHalfPatch,
-                          kOrbPatchSize, kOrbPatchSize);
+    const cv::Rect around(cvRound(keypoint.pt.x) - kOrbHalfPatch, cvRound(keypoint.pt.y) - kOrbHalfPatch, kOrbPatchSize,
+                          kOrbPatchSize);
     cv::bitwise_and(image(around), disc, patch);
     const cv::Moments m = cv::moments(patch);
     keypoint.angle = cv::fastAtan2(static_cast<float>(m.m01 - kOrbHalfPatch * m.m00),
@@ -86,8 +86,8 @@ std::vector<cv::KeyPoint> FeatureExtractor::detectBucketed(const cv::Mat& gray) 
       cv::goodFeaturesToTrack(gray(cv::Rect(x0, y0, x1 - x0, y1 - y0)), corners, 0, options_.quality_level,
                               options_.min_distance_px, cv::noArray(), responses);
       for (std::size_t i = 0; i < corners.size() && responses[i] >= options_.min_corner_response; ++i)
-        candidates.push_back({corners[i] + cv::Point2f(static_cast<float>(x0), static_cast<float>(y0)),
-                              responses[i], row * options_.grid_cols + col});
+        candidates.push_back({corners[i] + cv::Point2f(static_cast<float>(x0), static_cast<float>(y0)), responses[i],
+                              row * options_.grid_cols + col});
     }
   }
   // Strongest first over the whole frame; ties in the order found, so the

@@ -18,8 +18,7 @@ cv::Mat equalizeClahe(const cv::Mat& gray, const ClaheOptions& options) {
     throw std::invalid_argument("equalizeClahe: tile_grid must be >= 1, got " + std::to_string(options.tile_grid));
   // A fresh CLAHE object per call: cv::CLAHE keeps scratch buffers, so a shared
   // one would not be safe to use from several threads.
-  const cv::Ptr<cv::CLAHE> clahe =
-      cv::createCLAHE(options.clip_limit, cv::Size(options.tile_grid, options.tile_grid));
+  const cv::Ptr<cv::CLAHE> clahe = cv::createCLAHE(options.clip_limit, cv::Size(options.tile_grid, options.tile_grid));
   cv::Mat equalized;
   clahe->apply(gray, equalized);
   return equalized;

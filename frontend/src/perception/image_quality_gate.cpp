@@ -26,8 +26,8 @@ ImageQualityGate::ImageQualityGate(ImageQualityGateOptions options) : options_(s
     model_ = cv::ml::SVM::load(model_path);
     range_ = cv::FileStorage(range_path, cv::FileStorage::READ)["range"].mat();
   } catch (const cv::Exception& e) {
-    throw std::runtime_error("ImageQualityGate: cannot read BRISQUE model " + model_path + " / " + range_path +
-                             ": " + e.what());
+    throw std::runtime_error("ImageQualityGate: cannot read BRISQUE model " + model_path + " / " + range_path + ": " +
+                             e.what());
   }
   if (model_.empty() || !model_->isTrained())
     throw std::runtime_error("ImageQualityGate: no trained SVM in " + model_path);

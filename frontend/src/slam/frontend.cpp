@@ -200,8 +200,8 @@ Frontend::MovingPoints Frontend::rejectMovingPoints(const Frame& frame, const Lo
     const std::size_t feature = matched.ids[m].first;
     if (!frame.hasDepth(feature)) continue;
     with_depth_world.push_back(matched.points_world[m]);
-    with_depth_measured.push_back(camera_.backProject(frame.pixels[feature].x(), frame.pixels[feature].y(),
-                                                      frame.depths[feature]));
+    with_depth_measured.push_back(
+        camera_.backProject(frame.pixels[feature].x(), frame.pixels[feature].y(), frame.depths[feature]));
     with_depth_match.push_back(m);
   }
   const std::vector<bool> moving = flagDynamicByDisplacement(with_depth_world, with_depth_measured, pose_wc,
@@ -222,9 +222,8 @@ Eigen::Isometry3d Frontend::refinePose(const Frame& frame, const LocalMatches& m
                                        const std::vector<int>& static_inliers, const Eigen::Isometry3d& pose_wc) const {
   std::vector<double> match_depths(matched.size());
   for (std::size_t m = 0; m < matched.size(); ++m) match_depths[m] = frame.depths[matched.ids[m].first];
-  return refinePoseHuber(matched.points_world, matched.pixels, static_inliers, camera_, pose_wc,
-                         options_.pnp.huber_px, options_.pnp.refine_max_iterations,
-                         DepthMeasurements{match_depths, options_.depth_noise});
+  return refinePoseHuber(matched.points_world, matched.pixels, static_inliers, camera_, pose_wc, options_.pnp.huber_px,
+                         options_.pnp.refine_max_iterations, DepthMeasurements{match_depths, options_.depth_noise});
 }
 
 void Frontend::acceptPose(Frame& frame, TrackingResult& result, TrackingStatus status,
@@ -273,8 +272,7 @@ TrackingResult Frontend::trackRelative(Frame& frame, TrackingResult result, cons
   if (!metric_velocity_) return lose(result, why_not_3d + ", and no metric motion yet to scale a 2D-2D estimate");
   // The last motion measured with depth, not the motion model's (which 2D-2D
   // frames feed): a scale error would otherwise compound frame after frame.
-  const Eigen::Isometry3d predicted_in_keyframe =
-      last_keyframe_.pose_wc.inverse() * *last_pose_wc_ * *metric_velocity_;
+  const Eigen::Isometry3d predicted_in_keyframe = last_keyframe_.pose_wc.inverse() * *last_pose_wc_ * *metric_velocity_;
   std::vector<Eigen::Vector2d> keyframe_pixels, frame_pixels;
   matchLastKeyframe(frame, keyframe_pixels, frame_pixels);
   RelativeMotion relative = estimateRelativeMotion2d2d(keyframe_pixels, frame_pixels, camera_);
@@ -288,9 +286,8 @@ TrackingResult Frontend::trackRelative(Frame& frame, TrackingResult result, cons
   };
   // Moving points by their epipolar distance under that motion; if any, the
   // motion is estimated again without them.
-  const std::vector<bool> moving = flagDynamicByEpipolarDistance(keyframe_pixels, frame_pixels,
-                                                                 scaled(relative.pose_2_in_1), camera_,
-                                                                 options_.dynamic_filter);
+  const std::vector<bool> moving = flagDynamicByEpipolarDistance(
+      keyframe_pixels, frame_pixels, scaled(relative.pose_2_in_1), camera_, options_.dynamic_filter);
   result.dynamic = static_cast<std::size_t>(std::count(moving.begin(), moving.end(), true));
   if (result.dynamic > 0) {
     std::vector<Eigen::Vector2d> static_keyframe, static_frame;
@@ -383,7 +380,8 @@ std::vector<bool> Frontend::observeTrackedPoints(KeyframeId keyframe, const Fram
           measuredPoint(camera_, options_.depth_noise, frame.pose_wc, frame.pixels[feature], frame.depths[feature]);
       fused = fusePointEstimates({point->position, measured.position}, {point->covariance, measured.covariance});
     }
-    map_.addObservation(point_id, observation, fused.position, fused.covariance, frame.descriptors.row(feature).clone());
+    map_.addObservation(point_id, observation, fused.position, fused.covariance,
+                        frame.descriptors.row(feature).clone());
   }
   return used;
 }

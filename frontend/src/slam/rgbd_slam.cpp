@@ -39,7 +39,8 @@ Trajectory RgbdSlam::trajectory() const {
     if (!frame.result.hasPose()) continue;
     // Each frame rides on its reference keyframe, as refined by the backend.
     const auto reference = map_.keyframePose(frame.result.reference_keyframe);
-    trajectory.push_back({frame.timestamp, reference ? *reference * frame.result.pose_in_reference : frame.result.pose_wc});
+    trajectory.push_back(
+        {frame.timestamp, reference ? *reference * frame.result.pose_in_reference : frame.result.pose_wc});
   }
   return trajectory;
 }

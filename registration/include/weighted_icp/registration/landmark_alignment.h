@@ -39,9 +39,9 @@ struct AlignmentResult {
   /// PCL's fitness score: mean squared distance from each transformed source
   /// point to its nearest target point, unweighted.
   double fitness_score = 0.0;
-  int iterations = 0;         // weighted stage
-  int refine_iterations = 0;  // refinement stage, 0 when not run
-  bool converged = false;     // of the last stage run
+  int iterations = 0;               // weighted stage
+  int refine_iterations = 0;        // refinement stage, 0 when not run
+  bool converged = false;           // of the last stage run
   std::size_t correspondences = 0;  // used by the last iteration
   double time_ms = 0.0;
 };
@@ -73,8 +73,8 @@ class LandmarkAligner {
 
 /// Aligns two landmark maps with one weight strategy: a one-off convenience
 /// around LandmarkAligner.
-AlignmentResult alignLandmarkMaps(const LandmarkMap& source, const LandmarkMap& target,
-                                  const WeightFunction& weight, const AlignmentSettings& settings,
+AlignmentResult alignLandmarkMaps(const LandmarkMap& source, const LandmarkMap& target, const WeightFunction& weight,
+                                  const AlignmentSettings& settings,
                                   const Eigen::Matrix4d& guess = Eigen::Matrix4d::Identity());
 
 }  // namespace weighted_icp

@@ -16,8 +16,8 @@
 namespace weighted_icp {
 
 struct EIGEN_ALIGN16 LandmarkPoint {
-  PCL_ADD_POINT4D;  // x, y, z and padding, as every PCL xyz point type
-  double weight;  // double: covariance weights differ only in the 5th digit
+  PCL_ADD_POINT4D;        // x, y, z and padding, as every PCL xyz point type
+  double weight;          // double: covariance weights differ only in the 5th digit
   float covariance_norm;  // Frobenius norm of the position covariance
   float mean_observation_distance;
   std::uint32_t num_observations;
@@ -31,9 +31,7 @@ LandmarkCloud::Ptr toLandmarkCloud(const LandmarkMap& map, const WeightFunction&
 
 }  // namespace weighted_icp
 
-POINT_CLOUD_REGISTER_POINT_STRUCT(weighted_icp::LandmarkPoint,
-                                  (float, x, x)(float, y, y)(float, z, z)(double, weight, weight)(
-                                      float, covariance_norm, covariance_norm)(
-                                      float, mean_observation_distance,
-                                      mean_observation_distance)(std::uint32_t, num_observations,
-                                                                 num_observations))
+POINT_CLOUD_REGISTER_POINT_STRUCT(
+    weighted_icp::LandmarkPoint,
+    (float, x, x)(float, y, y)(float, z, z)(double, weight, weight)(float, covariance_norm, covariance_norm)(
+        float, mean_observation_distance, mean_observation_distance)(std::uint32_t, num_observations, num_observations))

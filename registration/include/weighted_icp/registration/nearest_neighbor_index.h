@@ -26,8 +26,7 @@ class NearestNeighborIndex {
   /// Per-thread search state for k-nearest searches with k = `k`.
   class Scratch {
    public:
-    explicit Scratch(std::size_t k)
-        : result_(k), indices_(k), cloud_indices_(k), sq_distances_(k) {}
+    explicit Scratch(std::size_t k) : result_(k), indices_(k), cloud_indices_(k), sq_distances_(k) {}
     std::size_t k() const { return indices_.size(); }
     /// Cloud indices and squared distances of the last search, nearest first.
     const std::vector<pcl::index_t>& indices() const { return cloud_indices_; }

@@ -46,8 +46,7 @@ class WeightedCorrespondenceEstimation
     : public pcl::registration::CorrespondenceEstimationBase<PointSource, PointTarget, Scalar> {
  public:
   using Ptr = std::shared_ptr<WeightedCorrespondenceEstimation<PointSource, PointTarget, Scalar>>;
-  using ConstPtr =
-      std::shared_ptr<const WeightedCorrespondenceEstimation<PointSource, PointTarget, Scalar>>;
+  using ConstPtr = std::shared_ptr<const WeightedCorrespondenceEstimation<PointSource, PointTarget, Scalar>>;
   using Base = pcl::registration::CorrespondenceEstimationBase<PointSource, PointTarget, Scalar>;
 
   using Base::getClassName;
@@ -93,15 +92,13 @@ class WeightedCorrespondenceEstimation
   void setNumberOfThreads(unsigned int threads) { threads_ = threads; }
   unsigned int getNumberOfThreads() const { return threads_; }
 
-  void determineCorrespondences(
-      pcl::Correspondences& correspondences,
-      double max_distance = std::numeric_limits<double>::max()) override;
+  void determineCorrespondences(pcl::Correspondences& correspondences,
+                                double max_distance = std::numeric_limits<double>::max()) override;
 
   /// Keeps a pair (s, t) only if the same rule applied from t, among the k
   /// nearest source points weighted by the source weights, chooses s.
-  void determineReciprocalCorrespondences(
-      pcl::Correspondences& correspondences,
-      double max_distance = std::numeric_limits<double>::max()) override;
+  void determineReciprocalCorrespondences(pcl::Correspondences& correspondences,
+                                          double max_distance = std::numeric_limits<double>::max()) override;
 
   typename Base::Ptr clone() const override;
 

@@ -19,8 +19,8 @@
 #include <Eigen/Geometry>
 #include <opencv2/core.hpp>
 
-#include "weighted_icp/core/rgbd_frame.h"
 #include "weighted_icp/core/camera.h"
+#include "weighted_icp/core/rgbd_frame.h"
 
 namespace weighted_icp::simulation {
 

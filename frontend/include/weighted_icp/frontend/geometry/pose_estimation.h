@@ -9,8 +9,8 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
-#include "weighted_icp/frontend/geometry/depth_noise_model.h"
 #include "weighted_icp/core/camera.h"
+#include "weighted_icp/frontend/geometry/depth_noise_model.h"
 
 namespace weighted_icp::frontend {
 

@@ -9,11 +9,11 @@
 
 #include <array>
 
-#include <Eigen/Core>
-#include <Eigen/Geometry>
 #include <ceres/manifold.h>
 #include <ceres/product_manifold.h>
 #include <ceres/sized_cost_function.h>
+#include <Eigen/Core>
+#include <Eigen/Geometry>
 
 #include "weighted_icp/core/camera.h"
 

@@ -16,8 +16,8 @@ enum class MatcherKind { FlannLsh, BruteForce };
 
 struct DescriptorMatcherOptions {
   MatcherKind kind = MatcherKind::FlannLsh;
-  float ratio = 0.8f;  // best distance < ratio * second best
-  int max_hamming_distance = 64;  // bits, of 256 for ORB
+  float ratio = 0.8f;              // best distance < ratio * second best
+  int max_hamming_distance = 64;   // bits, of 256 for ORB
   bool cross_check_unique = true;  // keep at most one query per reference: the best
   // FLANN LSH index: hash tables, bits per hash key, neighbouring buckets
   // probed. Tuned on TUM fr1/fr3 pairs (reference 1200-1650 rows, query

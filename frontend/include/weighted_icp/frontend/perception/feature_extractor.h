@@ -14,8 +14,8 @@ namespace weighted_icp::frontend {
 
 struct FeatureExtractorOptions {
   int max_features = 1000;
-  int grid_cols = 8;  // buckets across the image ...
-  int grid_rows = 6;  // ... and down it
+  int grid_cols = 8;            // buckets across the image ...
+  int grid_rows = 6;            // ... and down it
   double quality_level = 0.01;  // GFTT: corner response relative to the frame's strongest
   double min_distance_px = 8.0;
   int min_features_before_clahe = 300;

@@ -12,9 +12,9 @@
 #include <mutex>
 #include <thread>
 
+#include "weighted_icp/core/camera.h"
 #include "weighted_icp/frontend/geometry/local_bundle_adjustment.h"
 #include "weighted_icp/frontend/slam/map.h"
-#include "weighted_icp/core/camera.h"
 
 namespace weighted_icp::frontend {
 

@@ -19,10 +19,10 @@ using RgbdImage = weighted_icp::RgbdFrame;
 struct Frame {
   std::size_t id = 0;
   double timestamp = 0.0;
-  std::vector<cv::KeyPoint> keypoints;  // as detected (distorted image)
-  cv::Mat descriptors;                  // one ORB row per keypoint
-  std::vector<Eigen::Vector2d> pixels;  // undistorted keypoint positions
-  std::vector<double> depths;           // metres at each keypoint, 0 = none
+  std::vector<cv::KeyPoint> keypoints;                        // as detected (distorted image)
+  cv::Mat descriptors;                                        // one ORB row per keypoint
+  std::vector<Eigen::Vector2d> pixels;                        // undistorted keypoint positions
+  std::vector<double> depths;                                 // metres at each keypoint, 0 = none
   Eigen::Isometry3d pose_wc = Eigen::Isometry3d::Identity();  // camera-to-world
 
   std::size_t size() const { return keypoints.size(); }

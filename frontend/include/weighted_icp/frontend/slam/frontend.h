@@ -6,22 +6,22 @@
 
 #include <cstddef>
 #include <limits>
-#include <optional>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
-#include "weighted_icp/frontend/slam/backend.h"
+#include "weighted_icp/core/camera.h"
 #include "weighted_icp/frontend/geometry/depth_noise_model.h"
-#include "weighted_icp/frontend/perception/descriptor_matcher.h"
 #include "weighted_icp/frontend/geometry/dynamic_point_filter.h"
-#include "weighted_icp/frontend/perception/feature_extractor.h"
-#include "weighted_icp/frontend/slam/frame.h"
-#include "weighted_icp/frontend/perception/image_quality_gate.h"
-#include "weighted_icp/frontend/slam/map.h"
 #include "weighted_icp/frontend/geometry/motion_model.h"
 #include "weighted_icp/frontend/geometry/pose_estimation.h"
-#include "weighted_icp/core/camera.h"
+#include "weighted_icp/frontend/perception/descriptor_matcher.h"
+#include "weighted_icp/frontend/perception/feature_extractor.h"
+#include "weighted_icp/frontend/perception/image_quality_gate.h"
+#include "weighted_icp/frontend/slam/backend.h"
+#include "weighted_icp/frontend/slam/frame.h"
+#include "weighted_icp/frontend/slam/map.h"
 
 namespace weighted_icp::frontend {
 
@@ -209,7 +209,7 @@ class Frontend {
   KeyframeId last_keyframe_id_ = 0;
   std::size_t tracked_at_last_keyframe_ = 0;
   std::map<MapPointId, int> dynamic_votes_;
-  LocalMap local_map_;  // what matcher_ is indexed on
+  LocalMap local_map_;     // what matcher_ is indexed on
   cv::Mat current_color_;  // the image being tracked, for the quality gate
 };
 

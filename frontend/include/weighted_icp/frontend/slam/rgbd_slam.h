@@ -6,12 +6,12 @@
 #include <memory>
 #include <vector>
 
+#include "weighted_icp/core/camera.h"
+#include "weighted_icp/core/trajectory.h"
 #include "weighted_icp/frontend/slam/backend.h"
 #include "weighted_icp/frontend/slam/frontend.h"
 #include "weighted_icp/frontend/slam/map.h"
 #include "weighted_icp/frontend/slam/minimap_builder.h"
-#include "weighted_icp/core/camera.h"
-#include "weighted_icp/core/trajectory.h"
 #include "weighted_icp/registration/landmark_map.h"
 
 namespace weighted_icp::frontend {

@@ -18,8 +18,8 @@ namespace detail {
 
 /// Index (into the candidates, nearest first) of the heaviest candidate within
 /// `max_dist_sqr`; ties go to the nearer one. -1 when none is within range.
-inline int heaviestCandidate(const NearestNeighborIndex::Scratch& candidates, std::size_t found,
-                             double max_dist_sqr, const std::vector<double>& weights) {
+inline int heaviestCandidate(const NearestNeighborIndex::Scratch& candidates, std::size_t found, double max_dist_sqr,
+                             const std::vector<double>& weights) {
   const auto& sq_distances = candidates.squaredDistances();
   if (found == 0 || sq_distances[0] > max_dist_sqr) return -1;
   if (weights.empty()) return 0;  // uniform: the nearest
@@ -54,8 +54,8 @@ inline int resolveThreads(unsigned int requested) {
 /// named field, else uniform (empty). False, with `error` set, when unusable.
 template <typename PointT>
 bool resolveWeights(const pcl::PointCloud<PointT>& cloud, const std::vector<double>& explicit_weights,
-                    const std::string& field_name, const char* default_field,
-                    std::vector<double>& weights, std::string& error) {
+                    const std::string& field_name, const char* default_field, std::vector<double>& weights,
+                    std::string& error) {
   if (!explicit_weights.empty()) {
     if (explicit_weights.size() != cloud.size()) {
       error = std::to_string(explicit_weights.size()) + " weights given for a cloud of " +
@@ -85,22 +85,19 @@ bool resolveWeights(const pcl::PointCloud<PointT>& cloud, const std::vector<doub
 }  // namespace detail
 
 template <typename PointSource, typename PointTarget, typename Scalar>
-WeightedCorrespondenceEstimation<PointSource, PointTarget, Scalar>::WeightedCorrespondenceEstimation(
-    unsigned int k) {
+WeightedCorrespondenceEstimation<PointSource, PointTarget, Scalar>::WeightedCorrespondenceEstimation(unsigned int k) {
   corr_name_ = "WeightedCorrespondenceEstimation";
   setNumberOfNeighbors(k);
 }
 
 template <typename PointSource, typename PointTarget, typename Scalar>
-void WeightedCorrespondenceEstimation<PointSource, PointTarget, Scalar>::setNumberOfNeighbors(
-    unsigned int k) {
+void WeightedCorrespondenceEstimation<PointSource, PointTarget, Scalar>::setNumberOfNeighbors(unsigned int k) {
   if (k == 0) throw std::invalid_argument(getClassName() + ": the number of neighbours must be >= 1");
   k_ = k;
 }
 
 template <typename PointSource, typename PointTarget, typename Scalar>
-void WeightedCorrespondenceEstimation<PointSource, PointTarget, Scalar>::setTargetWeights(
-    std::vector<double> weights) {
+void WeightedCorrespondenceEstimation<PointSource, PointTarget, Scalar>::setTargetWeights(std::vector<double> weights) {
   checkWeights(weights, getClassName() + "::setTargetWeights");
   target_weights_ = std::move(weights);
   target_cloud_updated_ = true;
@@ -114,8 +111,7 @@ void WeightedCorrespondenceEstimation<PointSource, PointTarget, Scalar>::setTarg
 }
 
 template <typename PointSource, typename PointTarget, typename Scalar>
-void WeightedCorrespondenceEstimation<PointSource, PointTarget, Scalar>::setSourceWeights(
-    std::vector<double> weights) {
+void WeightedCorrespondenceEstimation<PointSource, PointTarget, Scalar>::setSourceWeights(std::vector<double> weights) {
   checkWeights(weights, getClassName() + "::setSourceWeights");
   source_weights_ = std::move(weights);
   source_cloud_updated_ = true;
@@ -147,25 +143,22 @@ void WeightedCorrespondenceEstimation<PointSource, PointTarget, Scalar>::setSear
 template <typename PointSource, typename PointTarget, typename Scalar>
 bool WeightedCorrespondenceEstimation<PointSource, PointTarget, Scalar>::initComputeWeighted() {
   if (!target_) {
-    PCL_ERROR("[weighted_icp::%s::compute] No input target dataset was given!\n",
-              getClassName().c_str());
+    PCL_ERROR("[weighted_icp::%s::compute] No input target dataset was given!\n", getClassName().c_str());
     return false;
   }
   if (!pcl::PCLBase<PointSource>::initCompute()) return false;
   if (target_cloud_updated_) {
     target_index_.build(*target_, target_indices_.get());
     std::string error;
-    if (!detail::resolveWeights(*target_, target_weights_, target_weight_field_,
-                                kDefaultWeightField, target_weights_in_use_, error)) {
-      PCL_ERROR("[weighted_icp::%s::compute] Target weights: %s.\n", getClassName().c_str(),
-                error.c_str());
+    if (!detail::resolveWeights(*target_, target_weights_, target_weight_field_, kDefaultWeightField,
+                                target_weights_in_use_, error)) {
+      PCL_ERROR("[weighted_icp::%s::compute] Target weights: %s.\n", getClassName().c_str(), error.c_str());
       return false;
     }
     target_cloud_updated_ = false;
   }
   if (target_index_.empty()) {
-    PCL_ERROR("[weighted_icp::%s::compute] The target has no finite point to match.\n",
-              getClassName().c_str());
+    PCL_ERROR("[weighted_icp::%s::compute] The target has no finite point to match.\n", getClassName().c_str());
     return false;
   }
   return true;
@@ -176,10 +169,9 @@ bool WeightedCorrespondenceEstimation<PointSource, PointTarget, Scalar>::initCom
   if (source_cloud_updated_) {
     source_index_.build(*input_, indices_.get());
     std::string error;
-    if (!detail::resolveWeights(*input_, source_weights_, source_weight_field_,
-                                kDefaultWeightField, source_weights_in_use_, error)) {
-      PCL_ERROR("[weighted_icp::%s::compute] Source weights: %s.\n", getClassName().c_str(),
-                error.c_str());
+    if (!detail::resolveWeights(*input_, source_weights_, source_weight_field_, kDefaultWeightField,
+                                source_weights_in_use_, error)) {
+      PCL_ERROR("[weighted_icp::%s::compute] Source weights: %s.\n", getClassName().c_str(), error.c_str());
       return false;
     }
     source_cloud_updated_ = false;
