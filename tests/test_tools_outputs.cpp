@@ -184,4 +184,29 @@ TEST(WicpRgbdSlamOutputs, SigintStopsCleanlyAndWritesNothing) {
   }
 }
 
+/// wicp_demo stopped by Ctrl-C: exit 130, says so, leaves no --out folder.
+TEST(WicpDemo, SigintStopsCleanlyAndWritesNothing) {
+  const fs::path scratch = scratchDir("demo_sigint");
+  const fs::path out = scratch / "out", err = scratch / "err.txt";
+  const pid_t pid = ::fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    std::freopen(err.c_str(), "w", stderr);
+    std::freopen("/dev/null", "w", stdout);
+    const std::string path = tool("wicp_demo").string(), out_text = out.string();
+    // A session larger than the default, so that 1 s is surely mid-run.
+    ::execl(path.c_str(), path.c_str(), "--frames", "1200", "--landmarks", "20000", "--out", out_text.c_str(),
+            static_cast<char*>(nullptr));
+    std::_Exit(127);
+  }
+  std::this_thread::sleep_for(std::chrono::seconds(1));
+  ::kill(pid, SIGINT);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  ASSERT_TRUE(WIFEXITED(status)) << "killed by the signal instead of stopping";
+  EXPECT_EQ(WEXITSTATUS(status), 130);
+  EXPECT_TRUE(contains(readFile(err), "wicp_demo: interrupted by SIGINT")) << readFile(err);
+  EXPECT_EQ(entries(scratch), std::vector<std::string>{"err.txt"}) << "partial outputs left";
+}
+
 }  // namespace
