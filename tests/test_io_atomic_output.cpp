@@ -4,7 +4,10 @@
 
 #include <sys/resource.h>
 
+#include <algorithm>
+
 #include <csignal>
+#include <cstdlib>
 #include <filesystem>
 #include <limits>
 #include <stdexcept>
@@ -146,6 +149,26 @@ TEST(FullDisk, ATruncatedCloudIsNeverRenamedIntoPlace) {
     EXPECT_EQ(io::loadLandmarkCloud(path.string())->size(), cloud.size()) << name;
     fs::remove(path);
   }
+}
+
+/// A real full file system where one can be made: a small tmpfs (mounting
+/// needs root, as CI has); skipped, saying why, elsewhere.
+TEST(FullDisk, ARealFullFileSystemFailsTheWriteAndLeavesNothing) {
+  const fs::path dir = scratchDir("full_tmpfs") / "mnt";
+  fs::create_directories(dir);
+  if (std::system(("mount -t tmpfs -o size=128k tmpfs '" + dir.string() + "' 2>/dev/null").c_str()) != 0)
+    GTEST_SKIP() << "cannot mount a 128 kB tmpfs here (needs root); the RLIMIT_FSIZE tests cover the same paths";
+  struct Unmount {
+    fs::path dir;
+    ~Unmount() { (void)std::system(("umount '" + dir.string() + "'").c_str()); }
+  } unmount{dir};
+  const LandmarkCloud cloud = manyPoints(5000);  // about 200 kB
+  for (const char* name : {"map.ply", "map.pcd"}) {
+    EXPECT_THROW(io::saveLandmarkCloud(cloud, (dir / name).string()), std::runtime_error) << name;
+    EXPECT_TRUE(entries(dir).empty()) << name << ": left " << entries(dir).front();
+  }
+  io::saveLandmarkCloud(manyPoints(100), (dir / "small.ply").string());  // what fits is written
+  EXPECT_EQ(io::loadLandmarkCloud((dir / "small.ply").string())->size(), 100u);
 }
 
 TEST(FullDisk, ATruncatedMapFileKeepsTheOldOne) {
