@@ -219,6 +219,28 @@ tools::JsonObject makeReport(const FrameSource& source, std::size_t frames, cons
   return report;
 }
 
+/// A run stopped by SIGINT/SIGTERM after `processed` frames: nothing is
+/// published, and stderr says so. Returns the exit code (130/143).
+int discardInterrupted(io::AtomicFolder& folder, std::size_t processed, std::size_t frames) {
+  folder.discard();
+  const int signal = tools::interruptSignal();
+  std::cerr << "wicp_rgbd_slam: interrupted by " << tools::signalName(signal) << " after " << processed << " of "
+            << frames << " frames; no outputs written, " << folder.target().string() << " left as it was\n";
+  return tools::interruptExitCode(signal);
+}
+
+/// `--out`, refused when not empty unless --overwrite, before the long run.
+io::AtomicFolder openOutput(const std::string& out_dir, bool overwrite) {
+  try {
+    return io::AtomicFolder(out_dir, overwrite);
+  } catch (const std::runtime_error& e) {
+    const std::string what = e.what();
+    if (!overwrite && what.find("not empty") != std::string::npos)
+      throw std::runtime_error(what + " (--overwrite replaces it)");
+    throw;
+  }
+}
+
 /// Builds every output in the folder's temporary copy, then publishes it; an
 /// exception (or a signal, checked last) leaves `--out` as it was.
 int writeAndPublish(io::AtomicFolder& folder, const FrameSource& source, std::size_t frames,
@@ -233,12 +255,7 @@ int writeAndPublish(io::AtomicFolder& folder, const FrameSource& source, std::si
   std::optional<metrics::AbsoluteTrajectoryError> ate;
   addAte(source.groundTruth(), trajectory, report, ate);
   tools::writeTextFile((folder.path() / "report.json").string(), report.str() + "\n");
-  if (const int signal = tools::interruptSignal()) {
-    folder.discard();
-    std::cerr << "wicp_rgbd_slam: interrupted by " << tools::signalName(signal)
-              << " while writing; no outputs written, " << folder.target().string() << " left as it was\n";
-    return tools::interruptExitCode(signal);
-  }
+  if (tools::interrupted()) return discardInterrupted(folder, frames, frames);  // while writing: all tracked
   folder.publish();
 
   std::cout << std::fixed << std::setprecision(1) << "tracked " << counts.tracked << "/" << frames << " frames, "
@@ -310,19 +327,13 @@ int main(int argc, char** argv) {
     }
     const std::size_t frames = max_frames > 0 ? std::min(max_frames, source->size()) : source->size();
     // Checked and created before the long run, so a refused --out costs nothing.
-    io::AtomicFolder folder(out_dir, vm.count("overwrite") > 0);
+    io::AtomicFolder folder = openOutput(out_dir, vm.count("overwrite") > 0);
     std::cout << "running on " << source->describe() << ", " << frames << " frames\n";
 
     frontend::RgbdSlam slam(source->camera(), options);
     RunCounts counts = trackFrames(*source, frames, slam);
     slam.finish();  // joins the bundle-adjustment thread, also when interrupted
-    if (const int signal = tools::interruptSignal()) {
-      folder.discard();
-      std::cerr << "wicp_rgbd_slam: interrupted by " << tools::signalName(signal) << " after " << counts.processed
-                << " of " << frames << " frames; no outputs written, " << folder.target().string()
-                << " left as it was\n";
-      return tools::interruptExitCode(signal);
-    }
+    if (tools::interrupted()) return discardInterrupted(folder, counts.processed, frames);
     return writeAndPublish(folder, *source, frames, slam, counts);
   });
 }

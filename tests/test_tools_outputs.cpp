@@ -139,6 +139,7 @@ TEST(WicpRgbdSlamOutputs, AReRunReplacesTheWholeFolderOnlyWithOverwrite) {
   ToolRun r = run("wicp_rgbd_slam", slamArgs(seq, out), scratch / "err.txt");
   EXPECT_EQ(r.status, 1);
   EXPECT_TRUE(contains(r.err, "not empty")) << r.err;
+  EXPECT_TRUE(contains(r.err, "--overwrite")) << r.err;
   EXPECT_TRUE(fs::exists(out / "minimaps" / "minimap_007.txt")) << "refused, yet changed";
 
   blankImages(seq / "rgb");  // a failed re-run, even with --overwrite, keeps the old folder whole

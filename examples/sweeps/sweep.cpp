@@ -12,6 +12,7 @@
 #include <set>
 #include <sstream>
 #include <stdexcept>
+#include <system_error>
 #include <tuple>
 #include <utility>
 
@@ -346,6 +347,20 @@ int atLeast(const po::variables_map& vm, const std::string& option, int minimum)
                                 std::to_string(value));
   return value;
 }
+
+/// A sweep stopped by SIGINT/SIGTERM between runs: a partial results.csv
+/// would read as a finished sweep, so nothing is written (and the --out
+/// folder, if this run created it, removed while still empty). Returns the
+/// exit code (130/143).
+int discardInterrupted(const std::string& tool, const std::string& out_dir, bool created, std::size_t done,
+                       std::size_t total) {
+  std::error_code ignored;
+  if (created) fs::remove(out_dir, ignored);  // removes only an empty folder
+  const int signal = tools::interruptSignal();
+  std::cerr << tool << ": interrupted by " << tools::signalName(signal) << " after " << done << " of " << total
+            << " runs; no outputs written\n";
+  return tools::interruptExitCode(signal);
+}
 }  // namespace
 
 int runSweepTool(const std::string& tool, const SweepDefinition& sweep, int argc, const char* const argv[]) {
@@ -432,13 +447,7 @@ int runSweepTool(const std::string& tool, const SweepDefinition& sweep, int argc
         },
         tools::interrupted);
     progress.finish();
-    if (const int signal = tools::interruptSignal()) {
-      // A partial results.csv would read as a finished sweep: nothing is written.
-      if (created) fs::remove(out_dir);  // only if still empty
-      std::cerr << tool << ": interrupted by " << tools::signalName(signal) << " after " << runs.size() << " of "
-                << countRuns(cases) << " runs; no outputs written\n";
-      return tools::interruptExitCode(signal);
-    }
+    if (tools::interrupted()) return discardInterrupted(tool, out_dir, created, runs.size(), countRuns(cases));
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
     const std::string csv_path = (fs::path(out_dir) / "results.csv").string();
