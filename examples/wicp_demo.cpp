@@ -24,6 +24,7 @@
 
 #include <boost/program_options.hpp>
 
+#include "interrupt.h"
 #include "tool_support.h"
 #include "weighted_icp/core/statistics.h"
 #include "weighted_icp/io/map_format.h"
@@ -121,6 +122,7 @@ void printSummaryTable(const std::vector<AlignmentRecord>& records, std::size_t 
 }  // namespace
 
 int main(int argc, char** argv) {
+  tools::installInterruptHandlers();  // Ctrl-C stops between alignments, writing nothing
   return tools::runTool("wicp_demo", [&] {
     const auto start = std::chrono::steady_clock::now();
     simulation::SyntheticSessionOptions session_options;
@@ -206,7 +208,7 @@ int main(int argc, char** argv) {
     const std::vector<WeightStrategy>& strategies = allWeightStrategies();
     tools::Progress progress("aligning", pairs * strategies.size() * 2);
     std::vector<AlignmentRecord> records;
-    for (std::size_t pair = 0; pair < pairs; ++pair) {
+    for (std::size_t pair = 0; pair < pairs && !tools::interrupted(); ++pair) {
       LandmarkMap source = aligned_minimaps[pair + 1];
       source.transform(displacement.toIsometry());
       const LandmarkMap& target = aligned_minimaps[pair];
@@ -215,6 +217,7 @@ int main(int argc, char** argv) {
         const LandmarkCloud::ConstPtr source_cloud = toLandmarkCloud(source, weight);
         const LandmarkCloud::ConstPtr target_cloud = toLandmarkCloud(target, weight);
         for (const bool refine : {false, true}) {
+          if (tools::interrupted()) break;
           AlignmentSettings settings;
           settings.k = neighboursFor(strategy, neighbours);
           settings.refine = refine;
@@ -238,6 +241,12 @@ int main(int argc, char** argv) {
       }
     }
     progress.finish();
+    if (const int signal = tools::interruptSignal()) {
+      std::cerr << "wicp_demo: interrupted by " << tools::signalName(signal) << " after " << records.size() << " of "
+                << pairs * strategies.size() * 2 << " alignments; no outputs written, " << out_dir
+                << " left as it was\n";
+      return tools::interruptExitCode(signal);
+    }
 
     // Written only now, so that an error above leaves no mix of this run's
     // and an earlier run's files.

@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
+#include <limits>
 #include <set>
 #include <sstream>
 #include <string>
@@ -240,6 +241,19 @@ int cut(int argc, char** argv) {
   return 0;
 }
 
+/// A cloud stores positions as float: a landmark beyond its range would be
+/// written as infinity, which no loader accepts, so it is refused by id.
+void requireFloatPositions(const LandmarkMap& map, const std::string& map_path) {
+  const double limit = std::numeric_limits<float>::max();
+  for (const auto& landmark : map.landmarks)
+    if ((landmark.position.array().abs() > limit).any()) {
+      std::ostringstream position;
+      position << landmark.position.transpose().format(Eigen::IOFormat(Eigen::StreamPrecision, Eigen::DontAlignCols));
+      throw std::runtime_error(map_path + ": landmark " + std::to_string(landmark.id) + " at (" + position.str() +
+                               ") is beyond a point cloud's float range; not converting");
+    }
+}
+
 int convert(int argc, char** argv) {
   std::string map_path, output_path, strategy_name = "covariance";
   long long min_observations = 2;
@@ -276,6 +290,7 @@ int convert(int argc, char** argv) {
   }
 
   const LandmarkMap map = io::readLandmarkMap(map_path).withMinObservations(min_count);
+  requireFloatPositions(map, map_path);
   const LandmarkCloud::Ptr cloud = toLandmarkCloud(map, weightFunction(strategy));
   io::saveLandmarkCloud(*cloud, output_path);
   std::cout << output_path << ": " << cloud->size() << " landmarks with >= " << min_count << " observations, weight "

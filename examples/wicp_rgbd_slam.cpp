@@ -5,6 +5,9 @@
 //   session.txt     the whole session map in the same format
 //   map.ply         landmarks with weights and raw metrics
 //   report.json     counts, timing, skipped frames, ATE when ground truth exists
+// all built in a temporary folder beside DIR and published by one rename
+// (io::AtomicFolder), so DIR never mixes runs and a failed or interrupted run
+// leaves it as it was. A run that tracked no frame or mapped no landmark fails.
 
 #include <algorithm>
 #include <filesystem>
@@ -15,9 +18,11 @@
 
 #include <boost/program_options.hpp>
 
+#include "interrupt.h"
 #include "tool_support.h"
 #include "weighted_icp/core/statistics.h"
 #include "weighted_icp/frontend/slam/rgbd_slam.h"
+#include "weighted_icp/io/atomic_folder.h"
 #include "weighted_icp/io/cloud_io.h"
 #include "weighted_icp/io/map_format.h"
 #include "weighted_icp/io/trajectory.h"
@@ -101,9 +106,177 @@ std::string cameraFromFolderName(const std::string& dir) {
 /// A quantile of the per-frame times; 0 when no frame was timed.
 double percentile(const std::vector<double>& values, double q) { return values.empty() ? 0.0 : quantile(values, q); }
 
+/// Counts over the processed frames, for the checks, the report and the summary line.
+struct RunCounts {
+  std::size_t processed = 0, unreadable = 0, tracked = 0, skipped = 0, lost = 0, clahe = 0, dynamic = 0;
+  std::vector<double> tracking_ms;
+};
+
+/// Feeds frames [0, frames) to `slam`, stopping early when SIGINT or SIGTERM
+/// arrives (checked between frames, so a frame is never half processed).
+RunCounts trackFrames(const FrameSource& source, std::size_t frames, frontend::RgbdSlam& slam) {
+  RunCounts counts;
+  tools::Progress progress("tracking", frames);
+  for (std::size_t i = 0; i < frames && !tools::interrupted(); ++i, ++counts.processed) {
+    RgbdFrame image;
+    try {
+      image = source.load(i);
+    } catch (const std::exception& e) {
+      // A bad frame is reported and skipped; what is mapped stays.
+      std::cerr << "wicp_rgbd_slam: warning: frame " << i << " skipped: " << e.what() << '\n';
+      ++counts.unreadable;
+      progress.step();
+      continue;
+    }
+    const auto& record = slam.process(image);
+    progress.step(frontend::toString(record.result.status) + ", " + std::to_string(record.result.inliers) + " inliers");
+  }
+  progress.finish();
+  return counts;
+}
+
+void countResults(const frontend::RgbdSlam& slam, RunCounts& counts) {
+  for (const auto& record : slam.frames()) {
+    counts.tracking_ms.push_back(record.tracking_ms);
+    counts.tracked += record.result.hasPose();
+    counts.skipped += record.result.refused_by_quality_gate;
+    counts.lost += record.result.status == frontend::TrackingStatus::Lost;
+    counts.clahe += record.result.used_clahe;
+    counts.dynamic += record.result.dynamic;
+  }
+}
+
+/// A run fails, and writes nothing, when it has nothing to align: no frame
+/// tracked, or no landmark mapped (no keyframe with depth). The message says
+/// what happened to the frames, so a wrong camera or depth factor shows.
+void requireUsableRun(const RunCounts& counts, std::size_t frames, const LandmarkMap& session) {
+  std::ostringstream frames_text;
+  frames_text << " of " << frames << " frames (" << counts.unreadable << " unreadable, " << counts.skipped
+              << " refused by the quality gate, " << counts.lost << " lost)";
+  if (counts.tracked == 0)
+    throw std::runtime_error("no frame was tracked" + frames_text.str() +
+                             "; check the images, the camera and its depth_factor; nothing written");
+  if (session.landmarks.empty())
+    throw std::runtime_error("no landmark was mapped from " + std::to_string(counts.tracked) + " tracked" +
+                             frames_text.str() + "; is there valid depth? nothing written");
+}
+
+/// ATE against the ground truth when there is one. When it cannot be computed
+/// (fewer than 3 tracked poses, no timestamps in common) the run's own outputs
+/// are still valid: a warning, and the report says why instead of a number.
+void addAte(const Trajectory& truth, const Trajectory& trajectory, tools::JsonObject& report,
+            std::optional<metrics::AbsoluteTrajectoryError>& ate) {
+  if (truth.empty()) return;
+  std::string why;
+  if (trajectory.size() < 3) {
+    why = "only " + std::to_string(trajectory.size()) + " tracked pose(s); ATE needs 3";
+  } else {
+    try {
+      ate = metrics::computeAte(truth, trajectory);
+    } catch (const std::exception& e) {
+      why = e.what();
+    }
+  }
+  if (ate) {
+    report.add("ate_rmse_m", ate->translation.rmse).add("ate_pairs", ate->pairs);
+  } else {
+    std::cerr << "wicp_rgbd_slam: warning: no ATE against the ground truth: " << why << '\n';
+    report.add("ate_unavailable", why);
+  }
+}
+
+/// Writes trajectory.txt, session.txt, minimaps/ and map.ply into `dir`.
+void writeMaps(const fs::path& dir, const Trajectory& trajectory, const LandmarkMap& session,
+               const std::vector<LandmarkMap>& minimaps) {
+  fs::create_directories(dir / "minimaps");
+  io::writeTrajectory(trajectory, (dir / "trajectory.txt").string());
+  io::writeLandmarkMap(session, (dir / "session.txt").string());
+  for (std::size_t m = 0; m < minimaps.size(); ++m) {
+    std::ostringstream name;
+    name << "minimap_" << std::setw(3) << std::setfill('0') << m << ".txt";
+    io::writeLandmarkMap(minimaps[m], (dir / "minimaps" / name.str()).string());
+  }
+  io::saveLandmarkCloud(*toLandmarkCloud(session, CovarianceWeight{}), (dir / "map.ply").string());
+}
+
+tools::JsonObject makeReport(const FrameSource& source, std::size_t frames, const frontend::RgbdSlam& slam,
+                             const RunCounts& counts, std::size_t minimaps) {
+  tools::JsonObject report;
+  report.add("source", source.describe())
+      .add("frames", frames)
+      .add("tracked_frames", counts.tracked)
+      .add("keyframes", slam.map().keyframeCount())
+      .add("landmarks", slam.map().mapPointCount())
+      .add("minimaps", minimaps)
+      .add("median_ms_per_frame", percentile(counts.tracking_ms, 0.5))
+      .add("p90_ms_per_frame", percentile(counts.tracking_ms, 0.9))
+      .add("skipped_frames", counts.skipped)
+      .add("unreadable_frames", counts.unreadable)
+      .add("lost_frames", counts.lost)
+      .add("clahe_frames", counts.clahe)
+      .add("dynamic_matches", counts.dynamic)
+      .add("bundle_adjustments", slam.optimizationsRun());
+  return report;
+}
+
+/// A run stopped by SIGINT/SIGTERM after `processed` frames: nothing is
+/// published, and stderr says so. Returns the exit code (130/143).
+int discardInterrupted(io::AtomicFolder& folder, std::size_t processed, std::size_t frames) {
+  folder.discard();
+  const int signal = tools::interruptSignal();
+  std::cerr << "wicp_rgbd_slam: interrupted by " << tools::signalName(signal) << " after " << processed << " of "
+            << frames << " frames; no outputs written, " << folder.target().string() << " left as it was\n";
+  return tools::interruptExitCode(signal);
+}
+
+/// `--out`, refused when not empty unless --overwrite, before the long run.
+io::AtomicFolder openOutput(const std::string& out_dir, bool overwrite) {
+  try {
+    return io::AtomicFolder(out_dir, overwrite);
+  } catch (const std::runtime_error& e) {
+    const std::string what = e.what();
+    if (!overwrite && what.find("not empty") != std::string::npos)
+      throw std::runtime_error(what + " (--overwrite replaces it)");
+    throw;
+  }
+}
+
+/// Builds every output in the folder's temporary copy, then publishes it; an
+/// exception (or a signal, checked last) leaves `--out` as it was.
+int writeAndPublish(io::AtomicFolder& folder, const FrameSource& source, std::size_t frames,
+                    const frontend::RgbdSlam& slam, RunCounts& counts) {
+  countResults(slam, counts);
+  const LandmarkMap session = slam.sessionMap();
+  requireUsableRun(counts, frames, session);
+  const Trajectory trajectory = slam.trajectory();
+  const std::vector<LandmarkMap> minimaps = slam.miniMaps();
+  writeMaps(folder.path(), trajectory, session, minimaps);
+  tools::JsonObject report = makeReport(source, frames, slam, counts, minimaps.size());
+  std::optional<metrics::AbsoluteTrajectoryError> ate;
+  addAte(source.groundTruth(), trajectory, report, ate);
+  tools::writeTextFile((folder.path() / "report.json").string(), report.str() + "\n");
+  if (tools::interrupted()) return discardInterrupted(folder, frames, frames);  // while writing: all tracked
+  folder.publish();
+
+  std::cout << std::fixed << std::setprecision(1) << "tracked " << counts.tracked << "/" << frames << " frames, "
+            << slam.map().keyframeCount() << " keyframes, " << slam.map().mapPointCount() << " landmarks, "
+            << minimaps.size() << " mini-maps; median " << percentile(counts.tracking_ms, 0.5) << " ms/frame (p90 "
+            << percentile(counts.tracking_ms, 0.9) << "); skipped " << counts.skipped << ", lost " << counts.lost
+            << '\n';
+  if (ate)
+    std::cout << std::setprecision(2) << "ATE RMSE " << ate->translation.rmse * 100 << " cm over " << ate->pairs
+              << " poses\n";
+  std::cout << "wrote " << folder.target().string()
+            << "/{trajectory.txt, session.txt, minimaps/, map.ply, report.json}\n";
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
+  // First, so that a signal at any point stops the run cleanly, never killing
+  // it between writing a file and publishing the folder.
+  tools::installInterruptHandlers();
   return tools::runTool("wicp_rgbd_slam", [&] {
     std::string dataset, camera_spec, out_dir, matcher_name = "flann";
     std::size_t max_frames = 0;
@@ -111,8 +284,14 @@ int main(int argc, char** argv) {
     simulation::SyntheticRgbdOptions synthetic;
     po::options_description description(
         "wicp_rgbd_slam [--dataset DIR] [--camera fr1|fr2|fr3|FILE.yaml] [--max-frames N]\n"
-        "               [--minimap-keyframes N] --out DIR\n"
-        "Feature-based RGB-D SLAM producing weighted landmark maps. Options");
+        "               [--minimap-keyframes N] --out DIR [--overwrite]\n"
+        "Feature-based RGB-D SLAM producing weighted landmark maps. The outputs are built beside DIR\n"
+        "and published in one rename: DIR holds a whole run or is left as it was.\n"
+        "Exit 0: done (no ATE when the ground truth shares too few timestamps: a warning, and\n"
+        "report.json says why under \"ate_unavailable\"). Exit 1, with an error line and nothing\n"
+        "written: no frame tracked or no landmark mapped (black images, no depth, a wrong camera),\n"
+        "or any other error. Exit 2: bad command line. Exit 130/143: stopped by SIGINT/SIGTERM,\n"
+        "nothing written. Options");
     // One option per line reads as a table: not reflowed.
     // clang-format off
     description.add_options()
@@ -123,7 +302,8 @@ int main(int argc, char** argv) {
         ("max-frames", po::value(&max_frames)->default_value(0), "stop after N frames (0 = all)")
         ("minimap-keyframes", po::value(&options.minimap_keyframes)->default_value(options.minimap_keyframes),
          "keyframes per mini-map")
-        ("out", po::value(&out_dir)->required(), "output folder (created)")
+        ("out", po::value(&out_dir)->required(), "output folder (created; published complete or not at all)")
+        ("overwrite", "replace --out if it exists and is not empty")
         ("matcher", po::value(&matcher_name)->default_value(matcher_name), "flann (LSH) or brute-force")
         ("no-quality-gate", "do not skip frames by BRISQUE score")
         ("deterministic", "run bundle adjustment inline instead of in its own thread (reproducible)")
@@ -146,85 +326,14 @@ int main(int argc, char** argv) {
       source = std::make_unique<TumSource>(dataset, io::loadCamera(spec));
     }
     const std::size_t frames = max_frames > 0 ? std::min(max_frames, source->size()) : source->size();
+    // Checked and created before the long run, so a refused --out costs nothing.
+    io::AtomicFolder folder = openOutput(out_dir, vm.count("overwrite") > 0);
     std::cout << "running on " << source->describe() << ", " << frames << " frames\n";
-    fs::create_directories(fs::path(out_dir) / "minimaps");
 
     frontend::RgbdSlam slam(source->camera(), options);
-    tools::Progress progress("tracking", frames);
-    std::size_t unreadable = 0;
-    for (std::size_t i = 0; i < frames; ++i) {
-      RgbdFrame image;
-      try {
-        image = source->load(i);
-      } catch (const std::exception& e) {
-        // A bad frame is reported and skipped; what is mapped stays.
-        std::cerr << "wicp_rgbd_slam: warning: frame " << i << " skipped: " << e.what() << '\n';
-        ++unreadable;
-        progress.step();
-        continue;
-      }
-      const auto& record = slam.process(image);
-      progress.step(frontend::toString(record.result.status) + ", " + std::to_string(record.result.inliers) +
-                    " inliers");
-    }
-    progress.finish();
-    slam.finish();
-
-    // Outputs, each written atomically.
-    const Trajectory trajectory = slam.trajectory();
-    io::writeTrajectory(trajectory, (fs::path(out_dir) / "trajectory.txt").string());
-    const LandmarkMap session = slam.sessionMap();
-    io::writeLandmarkMap(session, (fs::path(out_dir) / "session.txt").string());
-    const std::vector<LandmarkMap> minimaps = slam.miniMaps();
-    for (std::size_t m = 0; m < minimaps.size(); ++m) {
-      std::ostringstream name;
-      name << "minimap_" << std::setw(3) << std::setfill('0') << m << ".txt";
-      io::writeLandmarkMap(minimaps[m], (fs::path(out_dir) / "minimaps" / name.str()).string());
-    }
-    if (!session.landmarks.empty())
-      io::saveLandmarkCloud(*toLandmarkCloud(session, CovarianceWeight{}), (fs::path(out_dir) / "map.ply").string());
-
-    std::vector<double> tracking_ms;
-    std::size_t tracked = 0, skipped = 0, lost = 0, clahe = 0, dynamic = 0;
-    for (const auto& record : slam.frames()) {
-      tracking_ms.push_back(record.tracking_ms);
-      tracked += record.result.hasPose();
-      skipped += record.result.refused_by_quality_gate;
-      lost += record.result.status == frontend::TrackingStatus::Lost;
-      clahe += record.result.used_clahe;
-      dynamic += record.result.dynamic;
-    }
-    tools::JsonObject report;
-    report.add("source", source->describe())
-        .add("frames", frames)
-        .add("tracked_frames", tracked)
-        .add("keyframes", slam.map().keyframeCount())
-        .add("landmarks", slam.map().mapPointCount())
-        .add("minimaps", minimaps.size())
-        .add("median_ms_per_frame", percentile(tracking_ms, 0.5))
-        .add("p90_ms_per_frame", percentile(tracking_ms, 0.9))
-        .add("skipped_frames", skipped)
-        .add("unreadable_frames", unreadable)
-        .add("lost_frames", lost)
-        .add("clahe_frames", clahe)
-        .add("dynamic_matches", dynamic)
-        .add("bundle_adjustments", slam.optimizationsRun());
-    const Trajectory truth = source->groundTruth();
-    std::optional<metrics::AbsoluteTrajectoryError> ate;
-    if (!truth.empty() && trajectory.size() >= 3) {
-      ate = metrics::computeAte(truth, trajectory);
-      report.add("ate_rmse_m", ate->translation.rmse).add("ate_pairs", ate->pairs);
-    }
-    tools::writeTextFile((fs::path(out_dir) / "report.json").string(), report.str() + "\n");
-
-    std::cout << std::fixed << std::setprecision(1) << "tracked " << tracked << "/" << frames << " frames, "
-              << slam.map().keyframeCount() << " keyframes, " << slam.map().mapPointCount() << " landmarks, "
-              << minimaps.size() << " mini-maps; median " << percentile(tracking_ms, 0.5) << " ms/frame (p90 "
-              << percentile(tracking_ms, 0.9) << "); skipped " << skipped << ", lost " << lost << '\n';
-    if (ate)
-      std::cout << std::setprecision(2) << "ATE RMSE " << ate->translation.rmse * 100 << " cm over " << ate->pairs
-                << " poses\n";
-    std::cout << "wrote " << out_dir << "/{trajectory.txt, session.txt, minimaps/, map.ply, report.json}\n";
-    return tracked > 0 ? 0 : 1;
+    RunCounts counts = trackFrames(*source, frames, slam);
+    slam.finish();  // joins the bundle-adjustment thread, also when interrupted
+    if (tools::interrupted()) return discardInterrupted(folder, counts.processed, frames);
+    return writeAndPublish(folder, *source, frames, slam, counts);
   });
 }

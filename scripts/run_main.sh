@@ -10,7 +10,8 @@ root="$(cd "$(dirname "$0")/.." && pwd)"
 cd "$root"
 echo
 echo "== 1/2  RGB-D front end on the synthetic sequence (build/examples/wicp_rgbd_slam)"
-"$root/build/examples/wicp_rgbd_slam" --out out/main/slam
+# --overwrite: the main job is re-run into the same folder, replaced whole.
+"$root/build/examples/wicp_rgbd_slam" --out out/main/slam --overwrite
 echo "report: $(cat out/main/slam/report.json)"
 echo
 echo "== 2/2  Mini-map alignment with the weighted ICP (build/examples/wicp_demo)"

@@ -128,3 +128,28 @@ TEST(Camera, InvalidCamerasAreNotSaved) {
   EXPECT_THROW(io::saveCamera(camera, path), std::runtime_error);
   EXPECT_FALSE(fs::exists(path));
 }
+
+/// Implausible but finite values (a focal length in millimetres, a principal
+/// point far outside the image, a depth factor of 0.001) are refused by key.
+TEST(Camera, ImplausibleValuesAreRefusedWithTheirKeysAndRanges) {
+  const auto dir = weighted_icp::testing::scratchDir("camera_implausible");
+  const fs::path path = dir / "implausible.yaml";
+  writeFile(path,
+            "%YAML:1.0\nfx: 0.5\nfy: 2e6\ncx: 5000\ncy: -300\nk1: 0\nk2: 0\np1: 0\np2: 0\nk3: 0\n"
+            "width: 640\nheight: 480\ndepth_factor: 0.001\n");
+  const std::string error = errorOf(path.string());
+  for (const char* key : {"fx", "fy", "cx", "cy", "depth_factor"})
+    EXPECT_NE(error.find(std::string(key) + " must be between"), std::string::npos) << key << ": " << error;
+  EXPECT_EQ(error.find("width "), std::string::npos) << error;
+
+  // The edges of the ranges are accepted: a principal point just outside the
+  // image, a 1 px focal length, a depth factor of 1e6.
+  writeFile(path,
+            "%YAML:1.0\nfx: 1\nfy: 1e5\ncx: -100\ncy: 700\nk1: 0\nk2: 0\np1: 0\np2: 0\nk3: 0\n"
+            "width: 640\nheight: 480\ndepth_factor: 1e6\n");
+  EXPECT_EQ(errorOf(path.string()), "") << "a plausible camera was refused";
+
+  PinholeCamera camera = tumCamera(1);
+  camera.depth_factor = 1e7;  // refused when saving too, so a saved camera loads back
+  EXPECT_THROW(io::saveCamera(camera, (dir / "saved.yaml").string()), std::runtime_error);
+}

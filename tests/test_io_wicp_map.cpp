@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -191,6 +192,47 @@ TEST(WicpMapConvert, PlyWithAnotherStrategyAndThreshold) {
   ASSERT_EQ(cloud->size(), 5u);
   const double counts[] = {2, 3, 1, 0, 2};
   for (std::size_t i = 0; i < 5; ++i) EXPECT_EQ((*cloud)[i].weight, counts[i]) << i;
+}
+
+/// A PLY of infinities would not load back: refused before writing, naming the landmark.
+TEST(WicpMapConvert, RefusesCoordinatesBeyondFloatNamingTheLandmark) {
+  const fs::path scratch = scratchDir("wicp_map_convert_huge");
+  std::string map = kSmallMap;
+  map.replace(map.find("LANDMARK 11  2 0 1"), 18, "LANDMARK 11  2 1e200 1");
+  writeFile(scratch / "huge.txt", map);
+  const fs::path cloud_path = scratch / "cloud.ply";
+  const ToolRun run = wicpMap("convert " + quoted(scratch / "huge.txt") + " " + quoted(cloud_path), scratch);
+  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_TRUE(contains(run.err, "wicp_map: error: ")) << run.err;
+  EXPECT_TRUE(contains(run.err, "landmark 11 ")) << run.err;
+  EXPECT_FALSE(fs::exists(cloud_path));
+}
+
+/// A full disk (a file-size limit, which needs no root) must fail the run and
+/// leave no truncated PLY; PCL's PLY writer itself reports nothing.
+TEST(WicpMapConvert, AFullDiskFailsAndLeavesNoTruncatedFile) {
+  const fs::path scratch = scratchDir("wicp_map_convert_full");
+  std::string map = "FRAME 0  0 0 0  1 0 0 0\n";
+  for (int id = 0; id < 4000; ++id)
+    map += "LANDMARK " + std::to_string(id) + "  " + std::to_string(id) +
+           " 0 1  0.001 0 0 0 0.001 0 0 0 0.001  2  0 1 1  0 2 2\n";
+  writeFile(scratch / "big.txt", map);
+  const fs::path cloud_path = scratch / "cloud.ply";
+  // 64 kB: the map is read in full, the cloud (about 150 kB) cannot be written.
+  const ToolRun run = wicpMap("convert " + quoted(scratch / "big.txt") + " " + quoted(cloud_path), scratch);
+  ASSERT_EQ(run.exit_code, 0) << "without the limit the conversion works: " << run.err;
+  fs::remove(cloud_path);
+  const fs::path tool = binaryDir() / "examples" / "wicp_map";
+  const std::string command = "ulimit -f 64; trap '' XFSZ; exec '" + tool.string() + "' convert " +
+                              quoted(scratch / "big.txt") + " " + quoted(cloud_path) + " >/dev/null 2>" +
+                              quoted(scratch / "err.txt");
+  const int status = std::system(("bash -c \"" + command + "\"").c_str());
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 1) << status;
+  EXPECT_TRUE(contains(readFile(scratch / "err.txt"), "cannot write " + cloud_path.string()))
+      << readFile(scratch / "err.txt");
+  EXPECT_FALSE(fs::exists(cloud_path)) << "a truncated cloud was left";
+  for (const auto& entry : fs::directory_iterator(scratch))
+    EXPECT_EQ(entry.path().filename().string().find(".tmp"), std::string::npos) << entry.path();
 }
 
 /// The four numbers (min, median, p90, max) printed after `label`.

@@ -172,6 +172,16 @@ TEST(SweepRunning, CsvHasOneRowPerRunWithTheDocumentedColumns) {
   EXPECT_EQ(strategy_yaw.size(), 60u);  // every strategy x displacement, once
 }
 
+/// A Ctrl-C between runs: the sweep ends early with the runs made so far.
+TEST(SweepRunning, StopsBeforeTheNextRunWhenAsked) {
+  AlignmentSettings settings;
+  settings.threads = 1;
+  std::size_t asked = 0;
+  const auto runs = runSweep(yawSweep().cases(5), sameMapPair(), settings, {}, [&] { return ++asked > 3; });
+  EXPECT_EQ(runs.size(), 3u);
+  EXPECT_EQ(asked, 4u);
+}
+
 TEST(SweepRunning, ErrorsAreMeasuredAgainstTheInverseDisplacement) {
   // With k = 1 every strategy is nearest-neighbour ICP, which recovers this
   // small motion exactly: the error is ~0 only if the truth is D^-1.

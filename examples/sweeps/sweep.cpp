@@ -12,6 +12,7 @@
 #include <set>
 #include <sstream>
 #include <stdexcept>
+#include <system_error>
 #include <tuple>
 #include <utility>
 
@@ -20,6 +21,7 @@
 
 #include <boost/program_options.hpp>
 
+#include "interrupt.h"
 #include "tool_support.h"
 #include "weighted_icp/io/map_format.h"
 #include "weighted_icp/registration/landmark_point.h"
@@ -217,7 +219,8 @@ std::vector<PlannedRun> planRuns(const std::vector<SweepCase>& cases) {
 std::size_t countRuns(const std::vector<SweepCase>& cases) { return planRuns(cases).size(); }
 
 std::vector<SweepRun> runSweep(const std::vector<SweepCase>& cases, const MapPair& maps,
-                               const AlignmentSettings& settings, const std::function<void(const SweepRun&)>& on_run) {
+                               const AlignmentSettings& settings, const std::function<void(const SweepRun&)>& on_run,
+                               const std::function<bool()>& stop) {
   if (cases.empty()) throw std::invalid_argument("the sweep has no case");
   std::vector<SweepRun> runs;
   // Per strategy: its weighted target, and one aligner per k so each builds
@@ -227,6 +230,7 @@ std::vector<SweepRun> runSweep(const std::vector<SweepCase>& cases, const MapPai
   LandmarkCloud::ConstPtr target;
   std::map<unsigned int, LandmarkAligner> aligners;
   for (const PlannedRun& planned : planRuns(cases)) {
+    if (stop && stop()) break;
     if (!target || planned.strategy != strategy) {
       strategy = planned.strategy;
       weight = weightFunction(strategy);
@@ -343,9 +347,24 @@ int atLeast(const po::variables_map& vm, const std::string& option, int minimum)
                                 std::to_string(value));
   return value;
 }
+
+/// A sweep stopped by SIGINT/SIGTERM between runs: a partial results.csv
+/// would read as a finished sweep, so nothing is written (and the --out
+/// folder, if this run created it, removed while still empty). Returns the
+/// exit code (130/143).
+int discardInterrupted(const std::string& tool, const std::string& out_dir, bool created, std::size_t done,
+                       std::size_t total) {
+  std::error_code ignored;
+  if (created) fs::remove(out_dir, ignored);  // removes only an empty folder
+  const int signal = tools::interruptSignal();
+  std::cerr << tool << ": interrupted by " << tools::signalName(signal) << " after " << done << " of " << total
+            << " runs; no outputs written\n";
+  return tools::interruptExitCode(signal);
+}
 }  // namespace
 
 int runSweepTool(const std::string& tool, const SweepDefinition& sweep, int argc, const char* const argv[]) {
+  tools::installInterruptHandlers();
   return tools::runTool(tool, [&] {
     std::string out_dir = "out/sweep_" + sweep.name;
     MapSelection selection;
@@ -416,14 +435,19 @@ int runSweepTool(const std::string& tool, const SweepDefinition& sweep, int argc
     std::cout << tool << ": " << maps.description << " (" << maps.source.landmarks.size() << " onto "
               << maps.target.landmarks.size() << " landmarks), " << cases.size() << " cases, " << countRuns(cases)
               << " runs" << (settings.refine ? ", with refinement" : "") << std::endl;
-    fs::create_directories(out_dir);
+    const bool created = fs::create_directories(out_dir);  // early, so a bad --out fails before the runs
 
     const auto start = std::chrono::steady_clock::now();
     tools::Progress progress(tool, countRuns(cases));
-    const std::vector<SweepRun> runs = runSweep(cases, maps, settings, [&](const SweepRun& run) {
-      progress.step(toString(run.strategy) + " k " + std::to_string(run.k) + " (" + run.displacement.toString() + ")");
-    });
+    const std::vector<SweepRun> runs = runSweep(
+        cases, maps, settings,
+        [&](const SweepRun& run) {
+          progress.step(toString(run.strategy) + " k " + std::to_string(run.k) + " (" + run.displacement.toString() +
+                        ")");
+        },
+        tools::interrupted);
     progress.finish();
+    if (tools::interrupted()) return discardInterrupted(tool, out_dir, created, runs.size(), countRuns(cases));
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
     const std::string csv_path = (fs::path(out_dir) / "results.csv").string();
@@ -450,6 +474,11 @@ int runSweepTool(const std::string& tool, const SweepDefinition& sweep, int argc
     try {
       runProcess(plot_command);
     } catch (const std::exception& e) {
+      if (const int signal = tools::interruptSignal()) {  // the plotter got the signal too
+        std::cerr << tool << ": interrupted by " << tools::signalName(signal) << " while plotting; the results are "
+                  << "complete in " << csv_path << ", no plot\n";
+        return tools::interruptExitCode(signal);
+      }
       std::cerr << tool << ": plotting failed: " << e.what() << "\n  the results are complete in " << csv_path
                 << "; plot them later with: " << plot_command[0] << ' ' << plot_command[1] << ' ' << csv_path << '\n';
       return 4;

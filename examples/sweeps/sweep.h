@@ -101,9 +101,12 @@ struct SweepRun {
 /// and none is repeated: in the k sweep base runs once per displacement.
 /// `settings.k` is ignored (each case has its k). `on_run` is called after
 /// each run, for progress. Results do not depend on settings.threads.
+/// `stop`, when given, is asked before each run: true ends the sweep early,
+/// returning the runs made so far (a Ctrl-C).
 std::vector<SweepRun> runSweep(const std::vector<SweepCase>& cases, const MapPair& maps,
                                const AlignmentSettings& settings,
-                               const std::function<void(const SweepRun&)>& on_run = {});
+                               const std::function<void(const SweepRun&)>& on_run = {},
+                               const std::function<bool()>& stop = {});
 /// How many runs runSweep() makes for `cases`.
 std::size_t countRuns(const std::vector<SweepCase>& cases);
 
@@ -116,7 +119,8 @@ std::string formatResultsCsv(const std::string& sweep_name, const std::vector<Sw
 /// (unless --no-plot) DIR/violin.png via scripts/plot_sweep.py.
 /// Returns the exit status: 0; 1 on errors (printed as "<tool>: error: ...");
 /// 2 on command-line errors; 4 when the results were written but the plot
-/// could not be made.
+/// could not be made; 130/143 when stopped by SIGINT/SIGTERM (between runs:
+/// nothing written; while plotting: the results written, the plot not).
 int runSweepTool(const std::string& tool, const SweepDefinition& sweep, int argc, const char* const argv[]);
 
 }  // namespace weighted_icp::sweep

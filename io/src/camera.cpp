@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <sstream>
 #include <stdexcept>
 #include <vector>
 
@@ -21,23 +22,52 @@ struct KeyProblem {
   std::string key, what;
 };
 
+/// Plausible ranges. A camera file outside them is a typo or a unit mistake
+/// (millimetres for metres, a focal length in mm, a swapped cx/width), and such
+/// a camera does not fail loudly: the front end tracks nothing or everything
+/// sits at absurd depths, and the run ends without a clue. Real RGB-D sensors
+/// have focal lengths of a few hundred to a few thousand pixels and depth
+/// factors of 1000 (mm) to 5000 (TUM); the bounds are far wider, to refuse only
+/// nonsense.
+constexpr double kMinFocal = 1.0, kMaxFocal = 1e5;
+constexpr double kMinDepthFactor = 1.0, kMaxDepthFactor = 1e6;
+constexpr int kMaxImageSide = 100000;
+/// How far outside the image the principal point may lie, as a fraction of the
+/// image side: cropped or shifted sensors put it off centre, never far outside.
+constexpr double kPrincipalPointMargin = 0.5;
+
+std::string rangeText(double low, double high) {
+  std::ostringstream text;
+  text << "must be between " << low << " and " << high;
+  return text.str();
+}
+
 /// What makes `camera` unusable; empty when it is valid.
 std::vector<KeyProblem> invalidKeys(const PinholeCamera& camera) {
   std::vector<KeyProblem> problems;
-  const auto positive = [&](const char* key, double value) {
-    if (!(std::isfinite(value) && value > 0.0)) problems.push_back({key, "must be a finite number > 0"});
+  const auto inRange = [&](const char* key, double value, double low, double high) {
+    if (!(std::isfinite(value) && value >= low && value <= high)) problems.push_back({key, rangeText(low, high)});
   };
   const auto finite = [&](const char* key, double value) {
     if (!std::isfinite(value)) problems.push_back({key, "must be finite"});
   };
-  positive("fx", camera.fx);
-  positive("fy", camera.fy);
-  finite("cx", camera.cx);
-  finite("cy", camera.cy);
+  inRange("fx", camera.fx, kMinFocal, kMaxFocal);
+  inRange("fy", camera.fy, kMinFocal, kMaxFocal);
   for (std::size_t i = 0; i < camera.distortion.size(); ++i) finite(kDistortionKeys[i], camera.distortion[i]);
-  if (camera.width <= 0) problems.push_back({"width", "must be > 0"});
-  if (camera.height <= 0) problems.push_back({"height", "must be > 0"});
-  positive("depth_factor", camera.depth_factor);
+  if (camera.width <= 0 || camera.width > kMaxImageSide)
+    problems.push_back({"width", "must be between 1 and " + std::to_string(kMaxImageSide)});
+  if (camera.height <= 0 || camera.height > kMaxImageSide)
+    problems.push_back({"height", "must be between 1 and " + std::to_string(kMaxImageSide)});
+  // Checked against the image only when its size is valid, else just finite.
+  const auto principal = [&](const char* key, double value, int side) {
+    if (side <= 0 || side > kMaxImageSide)
+      finite(key, value);
+    else
+      inRange(key, value, -kPrincipalPointMargin * side, (1.0 + kPrincipalPointMargin) * side);
+  };
+  principal("cx", camera.cx, camera.width);
+  principal("cy", camera.cy, camera.height);
+  inRange("depth_factor", camera.depth_factor, kMinDepthFactor, kMaxDepthFactor);
   return problems;
 }
 

@@ -1,3 +1,4 @@
+// Weighted landmark clouds as binary PCD/PLY through PCL, checked both ways: what is written must load back.
 #include "weighted_icp/io/cloud_io.h"
 
 #include <algorithm>
@@ -8,6 +9,9 @@
 #include <optional>
 #include <sstream>
 #include <stdexcept>
+#include <system_error>
+#include <utility>
+#include <vector>
 
 #include <pcl/PCLPointCloud2.h>
 #include <pcl/common/io.h>
@@ -92,6 +96,93 @@ std::optional<std::uint64_t> plyVertexCount(const std::string& path) {
   }
   return std::nullopt;
 }
+
+/// Bytes of one value of a PLY property type, 0 for a type we do not know.
+std::size_t plyTypeSize(const std::string& type) {
+  static const std::pair<const char*, std::size_t> kSizes[] = {
+      {"char", 1},  {"uchar", 1},   {"int8", 1},   {"uint8", 1},  {"short", 2}, {"ushort", 2},
+      {"int16", 2}, {"uint16", 2},  {"int", 4},    {"uint", 4},   {"int32", 4}, {"uint32", 4},
+      {"float", 4}, {"float32", 4}, {"double", 8}, {"float64", 8}};
+  for (const auto& [name, size] : kSizes)
+    if (type == name) return size;
+  return 0;
+}
+
+/// The size a complete binary PLY file has, from its own header: the header
+/// plus, for each element, its count times the bytes of its properties.
+/// nullopt when the header cannot say (list properties, an unknown type).
+std::optional<std::uintmax_t> plyExpectedSize(std::istream& in) {
+  std::string line;
+  std::uintmax_t data = 0, count = 0, element_bytes = 0;
+  while (std::getline(in, line) && line.rfind("end_header", 0) != 0) {
+    std::istringstream fields(line);
+    std::string keyword, type;
+    fields >> keyword;
+    if (keyword == "element") {
+      data += count * element_bytes;
+      std::string name;
+      if (!(fields >> name >> count)) return std::nullopt;
+      element_bytes = 0;
+    } else if (keyword == "property") {
+      fields >> type;
+      const std::size_t size = plyTypeSize(type);
+      if (size == 0) return std::nullopt;  // "list" or unknown
+      element_bytes += size;
+    }
+  }
+  if (!in) return std::nullopt;
+  data += count * element_bytes;
+  return static_cast<std::uintmax_t>(in.tellg()) + data;
+}
+
+/// The same for a binary PCD file: header, then POINTS times the bytes of a point.
+std::optional<std::uintmax_t> pcdExpectedSize(std::istream& in) {
+  std::string line;
+  std::uintmax_t points = 0, point_bytes = 0;
+  std::vector<std::uintmax_t> sizes, counts;
+  while (std::getline(in, line) && line.rfind("DATA", 0) != 0) {
+    std::istringstream fields(line);
+    std::string keyword;
+    fields >> keyword;
+    std::vector<std::uintmax_t>* target = keyword == "SIZE" ? &sizes : keyword == "COUNT" ? &counts : nullptr;
+    for (std::uintmax_t value = 0; target && fields >> value;) target->push_back(value);
+    if (keyword == "POINTS") fields >> points;
+  }
+  if (!in || line != "DATA binary" || sizes.size() != counts.size()) return std::nullopt;
+  for (std::size_t i = 0; i < sizes.size(); ++i) point_bytes += sizes[i] * counts[i];
+  return static_cast<std::uintmax_t>(in.tellg()) + points * point_bytes;
+}
+
+/// PCL's writers do not check their streams (its PLY writer reports nothing on
+/// a full disk): the written file is measured against what its header
+/// promises, so a truncated file is never renamed into place.
+void requireCompleteFile(const std::string& temporary, const std::string& ext, const std::string& path) {
+  std::ifstream in(temporary, std::ios::binary);
+  const auto expected = ext == ".ply" ? plyExpectedSize(in) : pcdExpectedSize(in);
+  std::error_code error;
+  const std::uintmax_t actual = std::filesystem::file_size(temporary, error);
+  if (!expected || error)
+    throw std::runtime_error("cannot write " + path + ": the written file has no complete header (disk full?)");
+  if (actual != *expected)
+    throw std::runtime_error("cannot write " + path + ": " + std::to_string(actual) + " bytes written of " +
+                             std::to_string(*expected) + " (disk full?)");
+}
+
+/// A point that would not load back (loadLandmarkCloud refuses it) is refused
+/// before writing: a position beyond float's range is stored as infinity.
+void requireWritablePoints(const LandmarkCloud& cloud, const std::string& path) {
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const LandmarkPoint& p = cloud[i];
+    std::ostringstream where;
+    where << "cannot save " << path << ": point " << i << " (" << p.x << " " << p.y << " " << p.z << ", weight "
+          << p.weight << ")";
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+      throw std::runtime_error(where.str() +
+                               " has a non-finite position (beyond float's range?); it would not load back");
+    if (!std::isfinite(p.weight) || p.weight < 0.0)
+      throw std::runtime_error(where.str() + " has a weight that is not finite and >= 0; it would not load back");
+  }
+}
 }  // namespace
 
 void saveLandmarkCloud(const LandmarkCloud& cloud, const std::string& path) {
@@ -100,6 +191,7 @@ void saveLandmarkCloud(const LandmarkCloud& cloud, const std::string& path) {
     throw std::runtime_error("cannot save " + path + ": the extension must be .pcd or .ply");
   if (ext == ".ply" && cloud.empty())
     throw std::runtime_error("cannot save " + path + ": PCL cannot write a PLY file without points; use .pcd");
+  requireWritablePoints(cloud, path);
   writeAtomically(path, [&](const std::string& temporary) {
     int status = -1;
     try {
@@ -109,6 +201,7 @@ void saveLandmarkCloud(const LandmarkCloud& cloud, const std::string& path) {
       throw std::runtime_error("cannot write " + path + " (" + pclMessage(e) + ")");
     }
     if (status != 0) throw std::runtime_error("cannot write " + path);
+    requireCompleteFile(temporary, ext, path);
   });
 }
 

@@ -1,7 +1,7 @@
 // A synthetic RGB-D sequence written in the TUM RGB-D layout (see
-// tum_export.h): images and lists frame by frame into a temporary folder
-// beside the target, the ground truth through io's trajectory writer, then one
-// rename.
+// tum_export.h): images and lists frame by frame into io::AtomicFolder's
+// temporary folder beside the target, the ground truth through io's trajectory
+// writer, then one rename.
 
 #include "weighted_icp/simulation/tum_export.h"
 
@@ -10,12 +10,11 @@
 #include <filesystem>
 #include <fstream>
 #include <stdexcept>
-#include <system_error>
 
-#include <unistd.h>
 #include <opencv2/imgcodecs.hpp>
 
 #include "weighted_icp/core/rgbd_frame.h"
+#include "weighted_icp/io/atomic_folder.h"
 #include "weighted_icp/io/trajectory.h"
 
 namespace weighted_icp::simulation {
@@ -40,36 +39,6 @@ double listedTimestamp(const std::string& text) {
 
 void writeImage(const fs::path& path, const cv::Mat& image) {
   if (!cv::imwrite(path.string(), image)) throw std::runtime_error("cannot write " + path.string());
-}
-
-/// `dir` as a folder path ("out/" names "out"), checked: absent, empty or
-/// (with `overwrite`) a folder; its parent is created.
-fs::path checkedTarget(const std::string& dir, bool overwrite) {
-  fs::path target = fs::path(dir).lexically_normal();
-  if (!target.has_filename()) target = target.parent_path();
-  if (target.empty()) throw std::runtime_error("writeTumSequence: no folder given");
-  std::error_code error;
-  if (fs::exists(target, error)) {
-    if (!fs::is_directory(target)) throw std::runtime_error(target.string() + " exists and is not a folder");
-    if (!fs::is_empty(target) && !overwrite)
-      throw std::runtime_error(target.string() + " exists and is not empty; not overwriting it");
-  }
-  const fs::path parent = target.has_parent_path() ? target.parent_path() : fs::path(".");
-  fs::create_directories(parent, error);
-  if (error) throw std::runtime_error("cannot create " + parent.string() + ": " + error.message());
-  return target;
-}
-
-/// A new folder beside the target, so the final rename stays on one file system.
-fs::path makeTemporaryFolder(const fs::path& target) {
-  const fs::path parent = target.has_parent_path() ? target.parent_path() : fs::path(".");
-  std::error_code error;
-  for (int attempt = 0;; ++attempt) {
-    const fs::path temporary =
-        parent / (target.filename().string() + ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(attempt));
-    if (fs::create_directory(temporary, error)) return temporary;
-    if (error) throw std::runtime_error("cannot write in " + parent.string() + ": " + error.message());
-  }
 }
 
 /// Renders every frame into `folder`: images, rgb.txt, depth.txt, groundtruth.txt.
@@ -101,41 +70,13 @@ void writeFrames(const SyntheticRgbdSequence& sequence, const fs::path& folder,
   io::writeTrajectory(groundtruth, (folder / "groundtruth.txt").string());
 }
 
-/// Renames `temporary` to `target`. A non-empty target is moved aside first and
-/// deleted after, or put back if the rename fails.
-void moveIntoPlace(const fs::path& temporary, const fs::path& target) {
-  if (!fs::exists(target) || fs::is_empty(target)) {
-    fs::rename(temporary, target);  // replaces an empty folder
-    return;
-  }
-  const fs::path old = temporary.string() + ".old";
-  fs::rename(target, old);
-  std::error_code error;
-  fs::rename(temporary, target, error);
-  if (error) {
-    fs::rename(old, target);
-    throw fs::filesystem_error("rename", temporary, target, error);
-  }
-  fs::remove_all(old, error);
-}
-
 }  // namespace
 
 void writeTumSequence(const SyntheticRgbdSequence& sequence, const std::string& dir, bool overwrite,
                       const std::function<void(std::size_t)>& frame_written) {
-  const fs::path target = checkedTarget(dir, overwrite);
-  const fs::path temporary = makeTemporaryFolder(target);
-  std::error_code error;
-  try {
-    writeFrames(sequence, temporary, frame_written);
-    moveIntoPlace(temporary, target);
-  } catch (const fs::filesystem_error& e) {
-    fs::remove_all(temporary, error);
-    throw std::runtime_error("cannot write " + target.string() + ": " + e.code().message());
-  } catch (...) {
-    fs::remove_all(temporary, error);
-    throw;
-  }
+  io::AtomicFolder folder(dir, overwrite);  // refuses a non-empty dir before rendering anything
+  writeFrames(sequence, folder.path(), frame_written);
+  folder.publish();
 }
 
 }  // namespace weighted_icp::simulation

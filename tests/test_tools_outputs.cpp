@@ -1,0 +1,213 @@
+// wicp_rgbd_slam's outputs are all or nothing (#10): a failed, refused or
+// interrupted run exits non-zero with an error line and leaves --out as it
+// was; a re-run publishes a whole folder, never a mix of two runs.
+
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "test_support.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using weighted_icp::testing::binaryDir;
+using weighted_icp::testing::readFile;
+using weighted_icp::testing::scratchDir;
+using weighted_icp::testing::writeFile;
+
+struct ToolRun {
+  int status = -1;  // exit code, or -1 when killed by a signal
+  std::string err;
+};
+
+fs::path tool(const std::string& name) { return binaryDir() / "examples" / name; }
+
+/// Runs a tool with `args` (shell syntax); stdout is dropped, stderr kept.
+ToolRun run(const std::string& name, const std::string& args, const fs::path& err_file) {
+  const std::string command = "'" + tool(name).string() + "' " + args + " >/dev/null 2>'" + err_file.string() + "'";
+  const int status = std::system(command.c_str());
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, readFile(err_file)};
+}
+
+bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+
+/// Every name in `dir`.
+std::vector<std::string> entries(const fs::path& dir) {
+  std::vector<std::string> names;
+  for (const auto& entry : fs::directory_iterator(dir)) names.push_back(entry.path().filename().string());
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+/// A short synthetic sequence in the TUM layout, which wicp_rgbd_slam tracks
+/// completely with the fr1 camera; the tests spoil one part of it.
+fs::path exportSequence(const fs::path& scratch, int frames) {
+  const fs::path dir = scratch / "seq";
+  const ToolRun r = run("wicp_synthetic_rgbd", "--frames " + std::to_string(frames) + " --out '" + dir.string() + "'",
+                        scratch / "export_err.txt");
+  EXPECT_EQ(r.status, 0) << r.err;
+  return dir;
+}
+
+/// Replaces every image in `folder` by a black one of the same size and type.
+void blankImages(const fs::path& folder) {
+  for (const auto& entry : fs::directory_iterator(folder)) {
+    const cv::Mat image = cv::imread(entry.path().string(), cv::IMREAD_UNCHANGED);
+    ASSERT_TRUE(cv::imwrite(entry.path().string(), cv::Mat::zeros(image.size(), image.type())));
+  }
+}
+
+std::string slamArgs(const fs::path& seq, const fs::path& out, const std::string& extra = "") {
+  return "--dataset '" + seq.string() + "' --camera fr1 --deterministic --out '" + out.string() + "' " + extra;
+}
+
+/// The error line, and nothing at all in the folder that holds --out but
+/// what was there before (no output, no temporary folder).
+void expectFailedWithNothingWritten(const ToolRun& r, const fs::path& parent, const std::vector<std::string>& before,
+                                    const std::string& message) {
+  EXPECT_EQ(r.status, 1) << r.err;
+  EXPECT_TRUE(contains(r.err, "wicp_rgbd_slam: error: ")) << r.err;
+  EXPECT_TRUE(contains(r.err, message)) << r.err;
+  EXPECT_EQ(entries(parent), before);
+}
+
+TEST(WicpRgbdSlamFailures, UnusableInputFailsWithAnErrorLineAndWritesNothing) {
+  const fs::path scratch = scratchDir("slam_failures");
+  const fs::path seq = exportSequence(scratch, 4);
+  const fs::path parent = scratch / "outputs";
+  fs::create_directories(parent);
+  const auto before = entries(parent);  // empty
+
+  blankImages(seq / "rgb");  // all-black RGB: no features
+  ToolRun r = run("wicp_rgbd_slam", slamArgs(seq, parent / "out"), scratch / "err.txt");
+  expectFailedWithNothingWritten(r, parent, before, "no frame was tracked");
+
+  const fs::path seq2 = exportSequence(scratchDir("slam_failures_depth"), 4);
+  blankImages(seq2 / "depth");  // all-zero depth: nothing to map
+  r = run("wicp_rgbd_slam", slamArgs(seq2, parent / "out"), scratch / "err.txt");
+  expectFailedWithNothingWritten(r, parent, before, "no frame was tracked");  // every frame lost
+
+  // An absurd depth factor is refused when the camera is read, by key.
+  const fs::path camera = scratch / "camera.yaml";
+  writeFile(camera,
+            "%YAML:1.0\nfx: 517.3\nfy: 516.5\ncx: 318.6\ncy: 255.3\nk1: 0\nk2: 0\np1: 0\np2: 0\nk3: 0\n"
+            "width: 640\nheight: 480\ndepth_factor: 0.005\n");
+  r = run(
+      "wicp_rgbd_slam",
+      "--dataset '" + seq2.string() + "' --camera '" + camera.string() + "' --out '" + (parent / "out").string() + "'",
+      scratch / "err.txt");
+  expectFailedWithNothingWritten(r, parent, before, "depth_factor must be between");
+}
+
+TEST(WicpRgbdSlamFailures, GroundTruthWithoutCommonTimestampsIsAWarningAndTheReportSaysWhy) {
+  const fs::path scratch = scratchDir("slam_no_ate");
+  const fs::path seq = exportSequence(scratch, 4);
+  writeFile(seq / "groundtruth.txt",
+            "# far from every frame\n1.0 0 0 0 0 0 0 1\n2.0 0 0 0 0 0 0 1\n3.0 0 0 0 0 0 0 1\n");
+  const fs::path out = scratch / "out";
+  const ToolRun r = run("wicp_rgbd_slam", slamArgs(seq, out), scratch / "err.txt");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_TRUE(contains(r.err, "wicp_rgbd_slam: warning: no ATE")) << r.err;
+  const std::string report = readFile(out / "report.json");
+  EXPECT_TRUE(contains(report, "\"ate_unavailable\":\"")) << report;
+  EXPECT_FALSE(contains(report, "ate_rmse_m")) << report;
+}
+
+TEST(WicpRgbdSlamOutputs, AReRunReplacesTheWholeFolderOnlyWithOverwrite) {
+  const fs::path scratch = scratchDir("slam_rerun");
+  const fs::path seq = exportSequence(scratch, 4);
+  const fs::path out = scratch / "out";
+  ASSERT_EQ(run("wicp_rgbd_slam", slamArgs(seq, out), scratch / "err.txt").status, 0);
+  // An older run's file the new run will not write, as a longer run's mini-map.
+  writeFile(out / "minimaps" / "minimap_007.txt", "stale");
+  const std::string trajectory = readFile(out / "trajectory.txt");
+
+  ToolRun r = run("wicp_rgbd_slam", slamArgs(seq, out), scratch / "err.txt");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_TRUE(contains(r.err, "not empty")) << r.err;
+  EXPECT_TRUE(contains(r.err, "--overwrite")) << r.err;
+  EXPECT_TRUE(fs::exists(out / "minimaps" / "minimap_007.txt")) << "refused, yet changed";
+
+  blankImages(seq / "rgb");  // a failed re-run, even with --overwrite, keeps the old folder whole
+  r = run("wicp_rgbd_slam", slamArgs(seq, out, "--overwrite"), scratch / "err.txt");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_EQ(readFile(out / "trajectory.txt"), trajectory);
+  EXPECT_TRUE(fs::exists(out / "map.ply"));
+
+  const fs::path seq2 = exportSequence(scratchDir("slam_rerun_2"), 4);
+  r = run("wicp_rgbd_slam", slamArgs(seq2, out, "--overwrite"), scratch / "err.txt");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_FALSE(fs::exists(out / "minimaps" / "minimap_007.txt")) << "an older run's file survived the re-run";
+  EXPECT_EQ(readFile(out / "trajectory.txt"), trajectory) << "the same frames, deterministic: the same trajectory";
+  EXPECT_EQ(entries(scratch), (std::vector<std::string>{"err.txt", "export_err.txt", "out", "seq"}));
+}
+
+/// Ctrl-C a second into a run on the synthetic sequence (150 frames, several
+/// seconds): it stops between frames, joins the bundle-adjustment thread, says
+/// so and writes nothing.
+TEST(WicpRgbdSlamOutputs, SigintStopsCleanlyAndWritesNothing) {
+  for (const int signal : {SIGINT, SIGTERM}) {
+    const fs::path scratch = scratchDir(signal == SIGINT ? "slam_sigint" : "slam_sigterm");
+    const fs::path out = scratch / "out", err = scratch / "err.txt";
+    const pid_t pid = ::fork();
+    ASSERT_GE(pid, 0);
+    if (pid == 0) {
+      std::freopen(err.c_str(), "w", stderr);
+      std::freopen("/dev/null", "w", stdout);
+      const std::string path = tool("wicp_rgbd_slam").string(), out_text = out.string();
+      ::execl(path.c_str(), path.c_str(), "--out", out_text.c_str(), static_cast<char*>(nullptr));
+      std::_Exit(127);
+    }
+    std::this_thread::sleep_for(std::chrono::seconds(1));
+    ::kill(pid, signal);
+    int status = 0;
+    ::waitpid(pid, &status, 0);
+    ASSERT_TRUE(WIFEXITED(status)) << "killed by the signal instead of stopping";
+    EXPECT_EQ(WEXITSTATUS(status), 128 + signal);
+    const std::string message = readFile(err);
+    EXPECT_TRUE(contains(message, signal == SIGINT ? "interrupted by SIGINT" : "interrupted by SIGTERM")) << message;
+    EXPECT_TRUE(contains(message, "no outputs written")) << message;
+    EXPECT_EQ(entries(scratch), std::vector<std::string>{"err.txt"}) << "partial outputs left";
+  }
+}
+
+/// wicp_demo stopped by Ctrl-C: exit 130, says so, leaves no --out folder.
+TEST(WicpDemo, SigintStopsCleanlyAndWritesNothing) {
+  const fs::path scratch = scratchDir("demo_sigint");
+  const fs::path out = scratch / "out", err = scratch / "err.txt";
+  const pid_t pid = ::fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    std::freopen(err.c_str(), "w", stderr);
+    std::freopen("/dev/null", "w", stdout);
+    const std::string path = tool("wicp_demo").string(), out_text = out.string();
+    // A session larger than the default, so that 1 s is surely mid-run.
+    ::execl(path.c_str(), path.c_str(), "--frames", "1200", "--landmarks", "20000", "--out", out_text.c_str(),
+            static_cast<char*>(nullptr));
+    std::_Exit(127);
+  }
+  std::this_thread::sleep_for(std::chrono::seconds(1));
+  ::kill(pid, SIGINT);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  ASSERT_TRUE(WIFEXITED(status)) << "killed by the signal instead of stopping";
+  EXPECT_EQ(WEXITSTATUS(status), 130);
+  EXPECT_TRUE(contains(readFile(err), "wicp_demo: interrupted by SIGINT")) << readFile(err);
+  EXPECT_EQ(entries(scratch), std::vector<std::string>{"err.txt"}) << "partial outputs left";
+}
+
+}  // namespace
