@@ -100,8 +100,8 @@ TEST(RegistrationRobustness, OneUnindexablePointAmongValidOnesIsNamed) {
 TEST(RegistrationRobustness, CoordinatesUpToTheLimitAreAccepted) {
   Weighted ce(2);
   const auto target = randomCloud(30, 4);
-  (*target)[3].x = NearestNeighborIndex::kMaxCoordinate;
-  (*target)[4].z = -NearestNeighborIndex::kMaxCoordinate;
+  (*target)[3].x = static_cast<float>(NearestNeighborIndex::kMaxCoordinate);
+  (*target)[4].z = -static_cast<float>(NearestNeighborIndex::kMaxCoordinate);
   EXPECT_NO_THROW(correspondences(ce, randomCloud(10, 5), target));
 }
 

@@ -47,7 +47,7 @@ class NearestNeighborIndex {
   /// infinite, the split never divides the points and the build recurses
   /// without bound (a stack overflow). Below 1e18 no sum and no squared
   /// distance between two points (at most 12e36) overflows float either.
-  static constexpr float kMaxCoordinate = 1e18f;
+  static constexpr double kMaxCoordinate = 1e18;
 
   /// @brief Whether a finite point can be indexed (every |coordinate| <= kMaxCoordinate).
   /// @param x, y, z  the point's coordinates
