@@ -3,7 +3,6 @@
 // errors, range-checked numeric options, progress on long runs, JSON output
 // and safe file writing.
 
-#include <algorithm>
 #include <chrono>
 #include <cstddef>
 #include <functional>
@@ -59,12 +58,20 @@ class RangedValue : public boost::program_options::typed_value<T> {
   using Wide = std::conditional_t<std::is_integral_v<T>, long long, double>;
 
  public:
+  /// @brief Use rangedValue() or positiveValue() rather than this.
+  /// @param store              where the parsed value goes (may be null)
+  /// @param minimum            smallest accepted value (excluded when `minimum_exclusive`)
+  /// @param maximum            largest accepted value
+  /// @param minimum_exclusive  accept only values greater than `minimum`
   RangedValue(T* store, Wide minimum, Wide maximum, bool minimum_exclusive)
       : boost::program_options::typed_value<T>(store),
         minimum_(minimum),
         maximum_(maximum),
         minimum_exclusive_(minimum_exclusive) {}
 
+  /// @brief boost's parsing hook: reads the token as a Wide number and checks it before storing it as T.
+  /// @param value_store  receives the value
+  /// @param tokens       the option's one token
   void xparse(boost::any& value_store, const std::vector<std::string>& tokens) const override {
     namespace po = boost::program_options;
     const std::string& text = po::validators::get_single_string(tokens);
@@ -98,12 +105,15 @@ class RangedValue : public boost::program_options::typed_value<T> {
 /// @param maximum  largest accepted value; by default the largest the type (or long long) holds
 template <typename T>
 RangedValue<T>* rangedValue(T* store, T minimum, T maximum = std::numeric_limits<T>::max()) {
-  using Wide = std::conditional_t<std::is_integral_v<T>, long long, double>;
-  const Wide top = std::is_integral_v<T> && static_cast<unsigned long long>(maximum) >
-                                                static_cast<unsigned long long>(std::numeric_limits<long long>::max())
-                       ? std::numeric_limits<long long>::max()
-                       : static_cast<Wide>(maximum);
-  return new RangedValue<T>(store, static_cast<Wide>(minimum), top, false);
+  if constexpr (std::is_integral_v<T>) {
+    // Integers are checked as long long: a larger unsigned maximum means "no upper bound".
+    constexpr auto top = static_cast<unsigned long long>(std::numeric_limits<long long>::max());
+    const long long bounded =
+        static_cast<unsigned long long>(maximum) > top ? static_cast<long long>(top) : static_cast<long long>(maximum);
+    return new RangedValue<T>(store, static_cast<long long>(minimum), bounded, false);
+  } else {
+    return new RangedValue<T>(store, static_cast<double>(minimum), static_cast<double>(maximum), false);
+  }
 }
 
 /// @brief A floating-point option accepting 0 < value <= maximum (see RangedValue).
