@@ -3,7 +3,9 @@
 //
 // Contract other tools rely on: with --json the last line of stdout is one
 // JSON object with transformation (4x4, as 4 rows), fitness_score,
-// iterations, converged, correspondences and time_ms (alignment only).
+// iterations, converged, degenerate (+ reason), correspondences and time_ms
+// (alignment only). Exit codes: 0 converged, 1 error, 2 bad command line,
+// 3 not converged, 4 degenerate problem (ICP not run).
 
 #include <iomanip>
 #include <iostream>
@@ -25,7 +27,10 @@ int main(int argc, char** argv) {
     std::size_t min_observations = 2;
     po::options_description options(
         "wicp_align --source A.txt --target B.txt [options]\n"
-        "Aligns landmark map A onto B (paper map format). Options");
+        "Aligns landmark map A onto B (paper map format).\n"
+        "Exit status: 0 converged, 1 error, 2 bad command line, 3 ICP did not converge, 4 degenerate problem\n"
+        "(fewer than 3 landmarks, all identical or collinear, or k at least the target's landmarks: not run).\n"
+        "Options");
     // One option per line reads as a table: not reflowed.
     // clang-format off
     options.add_options()
@@ -34,17 +39,20 @@ int main(int argc, char** argv) {
         ("target", po::value(&target_path)->required(), "target map")
         ("strategy", po::value(&strategy_name)->default_value(strategy_name),
          "weight strategy: base (plain PCL ICP), covariance, observations, mean-distance")
-        ("k", po::value(&settings.k)->default_value(settings.k), "neighbours among which the heaviest is chosen")
+        ("k", tools::rangedValue(&settings.k, 1u, 1000u)->default_value(settings.k),
+         "neighbours among which the heaviest is chosen (1-1000)")
         ("displace", po::value(&displacement_text),
          "move the source first: \"x y z roll pitch yaw\" (metres, degrees; R = Rz(yaw) Ry(pitch) Rx(roll))")
-        ("max-iterations", po::value(&settings.max_iterations)->default_value(settings.max_iterations),
+        ("max-iterations", tools::rangedValue(&settings.max_iterations, 1, 1000000)->default_value(settings.max_iterations),
          "ICP iteration limit (per stage)")
-        ("max-correspondence-distance", po::value(&settings.max_correspondence_distance),
+        ("max-correspondence-distance", tools::positiveValue(&settings.max_correspondence_distance),
          "ignore pairs farther apart than this (metres); default: no limit")
-        ("min-observations", po::value(&min_observations)->default_value(min_observations),
+        ("min-observations", tools::rangedValue(&min_observations, std::size_t{0}, std::size_t{1000000})
+                                 ->default_value(min_observations),
          "drop landmarks observed fewer times (the paper uses 2)")
         ("refine", po::bool_switch(&settings.refine), "finish with nearest-neighbour ICP after the weighted stage")
-        ("threads", po::value(&settings.threads)->default_value(settings.threads), "search threads, 0 = all")
+        ("threads", tools::rangedValue(&settings.threads, 0u, 1024u)->default_value(settings.threads),
+         "search threads, 0 = all (at most 1024)")
         ("json", "print the result as one JSON object on the last line of stdout");
     // clang-format on
     po::variables_map vm;
@@ -72,6 +80,7 @@ int main(int argc, char** argv) {
 
     std::cout << "source " << source.landmarks.size() << " landmarks, target " << target.landmarks.size()
               << " landmarks, strategy " << toString(strategy) << ", k " << settings.k << '\n'
+              << (result.degenerate ? "degenerate: " + result.reason + "; not aligned\n" : std::string())
               << "converged " << (result.converged ? "yes" : "no") << " after " << result.iterations << " iterations";
     if (settings.refine) std::cout << " + " << result.refine_iterations << " refinement";
     std::cout << ", fitness score " << result.fitness_score << ", " << result.correspondences << " correspondences, "
@@ -85,7 +94,9 @@ int main(int argc, char** argv) {
           .add("iterations", result.iterations)
           .add("refine_iterations", result.refine_iterations)
           .add("converged", result.converged)
-          .add("correspondences", result.correspondences)
+          .add("degenerate", result.degenerate);
+      if (result.degenerate) json.add("reason", result.reason);
+      json.add("correspondences", result.correspondences)
           .add("time_ms", result.time_ms)
           .add("strategy", toString(strategy))
           .add("k", static_cast<std::size_t>(settings.k))
@@ -93,6 +104,7 @@ int main(int argc, char** argv) {
           .add("target_landmarks", target.landmarks.size());
       std::cout << json.str() << std::endl;
     }
+    if (result.degenerate) return 4;
     return result.converged ? 0 : 3;
   });
 }

@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdint>
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
@@ -49,15 +50,6 @@ struct AlignmentRecord {
   double translation_error_m = 0.0;
   AlignmentResult result;
 };
-
-/// Integer options arrive as signed numbers so that "-5" is reported, not
-/// wrapped around into a huge unsigned value.
-std::size_t requireInRange(long long value, const char* option, long long minimum, long long maximum) {
-  if (value < minimum || value > maximum)
-    throw std::invalid_argument(std::string("--") + option + " must be between " + std::to_string(minimum) + " and " +
-                                std::to_string(maximum) + " (got " + std::to_string(value) + ")");
-  return static_cast<std::size_t>(value);
-}
 
 double maximum(const std::vector<double>& values) { return *std::max_element(values.begin(), values.end()); }
 
@@ -126,13 +118,11 @@ int main(int argc, char** argv) {
   return tools::runTool("wicp_demo", [&] {
     const auto start = std::chrono::steady_clock::now();
     simulation::SyntheticSessionOptions session_options;
-    long long seed = static_cast<long long>(session_options.seed);
-    long long frames = static_cast<long long>(session_options.num_frames);
-    long long landmarks = static_cast<long long>(session_options.num_landmarks);
     // One search thread by default: mini-maps of ~1000 landmarks leave threads
     // little to share, and on a busy machine a thread waiting to be scheduled
     // stalls every ICP iteration (measured: 8x slower with 2 threads under load).
-    long long frames_per_minimap = 40, k = 5, min_observations = 2, threads = 1;
+    std::size_t frames_per_minimap = 40, min_observation_count = 2;
+    unsigned int neighbours = 5, thread_count = 1;
     std::string displacement_text = "0.2 -0.15 0.05 3 -2 15", out_dir = "out/demo";
     po::options_description options(
         "wicp_demo [options]\n"
@@ -142,31 +132,36 @@ int main(int argc, char** argv) {
     // clang-format off
     options.add_options()
         ("help,h", "print this help")
-        ("seed", po::value(&seed)->default_value(seed), "session random seed (>= 0)")
-        ("frames", po::value(&frames)->default_value(frames), "camera frames of the session")
-        ("landmarks", po::value(&landmarks)->default_value(landmarks),
+        ("seed", tools::rangedValue(&session_options.seed, std::uint64_t{0})->default_value(session_options.seed),
+         "session random seed (>= 0)")
+        ("frames", tools::rangedValue(&session_options.num_frames, std::size_t{2}, std::size_t{100000})
+                       ->default_value(session_options.num_frames),
+         "camera frames of the session (2-100000)")
+        ("landmarks", tools::rangedValue(&session_options.num_landmarks, std::size_t{1}, std::size_t{10000000})
+                          ->default_value(session_options.num_landmarks),
          "landmarks placed in the room (only observed ones are kept)")
-        ("frames-per-minimap", po::value(&frames_per_minimap)->default_value(frames_per_minimap),
-         "consecutive frames per mini-map")
+        ("frames-per-minimap", tools::rangedValue(&frames_per_minimap, std::size_t{1})->default_value(frames_per_minimap),
+         "consecutive frames per mini-map (fewer than --frames)")
         ("displace", po::value(&displacement_text)->default_value(displacement_text),
          "motion applied to each source mini-map: \"x y z roll pitch yaw\" (metres, degrees; "
          "R = Rz(yaw) Ry(pitch) Rx(roll))")
-        ("k", po::value(&k)->default_value(k), "neighbours among which the heaviest is chosen (base uses 1)")
-        ("min-observations", po::value(&min_observations)->default_value(min_observations),
+        ("k", tools::rangedValue(&neighbours, 1u, 1000u)->default_value(neighbours),
+         "neighbours among which the heaviest is chosen (1-1000; base uses 1)")
+        ("min-observations", tools::rangedValue(&min_observation_count, std::size_t{1}, std::size_t{1000000})
+                                 ->default_value(min_observation_count),
          "align only landmarks observed this often within the mini-map (the paper uses 2)")
-        ("threads", po::value(&threads)->default_value(threads), "search threads, 0 = all")
+        ("threads", tools::rangedValue(&thread_count, 0u, 1024u)->default_value(thread_count),
+         "search threads, 0 = all (at most 1024)")
         ("out", po::value(&out_dir)->default_value(out_dir), "output folder");
     // clang-format on
     po::variables_map vm;
     if (!tools::parseCommandLine(argc, argv, options, vm)) return 0;
 
-    session_options.seed = requireInRange(seed, "seed", 0, std::numeric_limits<long long>::max());
-    session_options.num_frames = requireInRange(frames, "frames", 2, 100000);
-    session_options.num_landmarks = requireInRange(landmarks, "landmarks", 1, 10000000);
-    const std::size_t minimap_frames = requireInRange(frames_per_minimap, "frames-per-minimap", 1, frames - 1);
-    const auto neighbours = static_cast<unsigned int>(requireInRange(k, "k", 1, 1000));
-    const std::size_t min_observation_count = requireInRange(min_observations, "min-observations", 1, 1000000);
-    const auto thread_count = static_cast<unsigned int>(requireInRange(threads, "threads", 0, 1024));
+    // The one bound that depends on another option.
+    if (frames_per_minimap >= session_options.num_frames)
+      tools::throwOutOfRange("frames-per-minimap", std::to_string(frames_per_minimap), 1,
+                             static_cast<long long>(session_options.num_frames) - 1);
+    const std::size_t minimap_frames = frames_per_minimap;
     if (out_dir.empty()) throw std::invalid_argument("--out must name a folder");
     const Displacement displacement = Displacement::parse(displacement_text);
     const Eigen::Isometry3d true_alignment = displacement.toIsometry().inverse();

@@ -53,9 +53,9 @@ int main(int argc, char** argv) {
         ("help,h", "print this help")
         ("groundtruth", po::value(&groundtruth_path)->required(), "ground-truth trajectory")
         ("estimate", po::value(&estimate_path)->required(), "estimated trajectory")
-        ("max-difference", po::value(&max_difference)->default_value(max_difference),
+        ("max-difference", tools::positiveValue(&max_difference)->default_value(max_difference),
          "ATE: pair poses whose timestamps differ by less than this (seconds)")
-        ("rpe-delta", po::value(&rpe_delta)->default_value(rpe_delta), "RPE: compare poses this far apart")
+        ("rpe-delta", tools::positiveValue(&rpe_delta)->default_value(rpe_delta), "RPE: compare poses this far apart")
         ("rpe-unit", po::value(&rpe_unit_name)->default_value(rpe_unit_name),
          "unit of --rpe-delta: s (seconds) or f (frames)")
         ("json", "print the result as one JSON object on the last line of stdout");

@@ -35,13 +35,6 @@ namespace {
 
 const char* const kUsage = "usage: wicp_map stats|cut|convert MAP [options]   (wicp_map COMMAND --help for each)";
 
-/// boost::program_options reads "-1" into an unsigned option as 2^64 - 1, so
-/// counts are read signed and checked here.
-std::size_t nonNegative(long long value, const std::string& option) {
-  if (value < 0) throw po::error("--" + option + " must be >= 0, got " + std::to_string(value));
-  return static_cast<std::size_t>(value);
-}
-
 /// Parses one command's arguments; argv[0] is the command's name. The
 /// positional arguments are declared in `positional_options` and explained in
 /// the usage line of `visible`, which alone --help prints. Returns false after
@@ -70,14 +63,14 @@ void printDistribution(const std::string& label, std::vector<double> values) {
 
 int stats(int argc, char** argv) {
   std::string map_path;
-  long long min_observations = 2;
+  std::size_t min_count = 2;
   po::options_description visible(
       "wicp_map stats MAP [--min-observations N]\n"
       "Frames, landmarks and their histogram of observation counts; then, over the landmarks\n"
       "with >= N observations, the bounding box and min/median/90th percentile/max of the\n"
       "covariance Frobenius norm, the mean observation distance and each strategy's weight.\n"
       "Options");
-  visible.add_options()("min-observations", po::value(&min_observations)->default_value(min_observations),
+  visible.add_options()("min-observations", tools::rangedValue(&min_count, std::size_t{0})->default_value(min_count),
                         "landmarks the extents and distributions are over (the paper aligns those with >= 2)");
   po::options_description positional_options;
   positional_options.add_options()("map", po::value(&map_path)->required(), "landmark map");
@@ -85,7 +78,6 @@ int stats(int argc, char** argv) {
   positional.add("map", 1);
   po::variables_map vm;
   if (!parseArguments(argc, argv, visible, positional_options, positional, vm)) return 0;
-  const std::size_t min_count = nonNegative(min_observations, "min-observations");
 
   const LandmarkMap map = io::readLandmarkMap(map_path);
   std::cout << "map         " << map_path << '\n' << "frames      " << map.frames.size();
@@ -180,7 +172,7 @@ void requireNoStaleMiniMaps(const fs::path& folder, const std::set<std::string>&
 
 int cut(int argc, char** argv) {
   std::string map_path, out_dir, ranges_text;
-  long long frames_per_minimap = 0, min_observations = 1;
+  std::size_t frames_per_minimap = 0, min_count = 1;
   po::options_description visible(
       "wicp_map cut MAP --out DIR (--frames-per-minimap N | --ranges \"0-119,120-239\") [--min-observations N]\n"
       "Writes DIR/minimap_000.txt, ... in the map format: the frames of each mini-map and every landmark\n"
@@ -189,10 +181,10 @@ int cut(int argc, char** argv) {
   // clang-format off
   visible.add_options()
       ("out", po::value(&out_dir)->required(), "output folder (created if missing)")
-      ("frames-per-minimap", po::value(&frames_per_minimap),
+      ("frames-per-minimap", tools::rangedValue(&frames_per_minimap, std::size_t{1}),
        "consecutive frames per mini-map, in frame-id order; the last may be shorter")
       ("ranges", po::value(&ranges_text), "frame-id ranges FIRST-LAST, comma separated; may overlap")
-      ("min-observations", po::value(&min_observations)->default_value(min_observations),
+      ("min-observations", tools::rangedValue(&min_count, std::size_t{0})->default_value(min_count),
        "drop landmarks observed fewer times within the mini-map; 1 keeps every landmark it saw "
        "(0 is the same: a mini-map has no landmark it did not see)");
   // clang-format on
@@ -204,15 +196,12 @@ int cut(int argc, char** argv) {
   if (!parseArguments(argc, argv, visible, positional_options, positional, vm)) return 0;
   if (vm.count("frames-per-minimap") == vm.count("ranges"))
     throw po::error("give either --frames-per-minimap or --ranges");
-  if (vm.count("frames-per-minimap") && frames_per_minimap < 1)
-    throw po::error("--frames-per-minimap must be >= 1, got " + std::to_string(frames_per_minimap));
   const std::vector<FrameRange> ranges = vm.count("ranges") ? parseRanges(ranges_text) : std::vector<FrameRange>{};
-  const std::size_t min_count = nonNegative(min_observations, "min-observations");
 
   const LandmarkMap map = io::readLandmarkMap(map_path);
   std::vector<LandmarkMap> minis;
   if (ranges.empty()) {
-    minis = map.splitIntoMiniMaps(static_cast<std::size_t>(frames_per_minimap));
+    minis = map.splitIntoMiniMaps(frames_per_minimap);
   } else {
     for (const auto& range : ranges) {
       LandmarkMap mini = map.miniMap(range.first, range.last);
@@ -256,7 +245,7 @@ void requireFloatPositions(const LandmarkMap& map, const std::string& map_path) 
 
 int convert(int argc, char** argv) {
   std::string map_path, output_path, strategy_name = "covariance";
-  long long min_observations = 2;
+  std::size_t min_count = 2;
   po::options_description visible(
       "wicp_map convert MAP OUT.pcd|OUT.ply [--strategy covariance] [--min-observations 2]\n"
       "Saves the landmarks as a weighted LandmarkCloud (x y z weight covariance_norm\n"
@@ -267,7 +256,7 @@ int convert(int argc, char** argv) {
   visible.add_options()
       ("strategy", po::value(&strategy_name)->default_value(strategy_name),
        "weight: base, covariance, observations, mean-distance")
-      ("min-observations", po::value(&min_observations)->default_value(min_observations),
+      ("min-observations", tools::rangedValue(&min_count, std::size_t{0})->default_value(min_count),
        "drop landmarks observed fewer times (the paper uses 2)");
   // clang-format on
   po::options_description positional_options;
@@ -281,7 +270,6 @@ int convert(int argc, char** argv) {
   positional.add("map", 1).add("output", 1);
   po::variables_map vm;
   if (!parseArguments(argc, argv, visible, positional_options, positional, vm)) return 0;
-  const std::size_t min_count = nonNegative(min_observations, "min-observations");
   WeightStrategy strategy = WeightStrategy::Covariance;
   try {
     strategy = parseWeightStrategy(strategy_name);

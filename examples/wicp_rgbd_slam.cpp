@@ -10,6 +10,7 @@
 // leaves it as it was. A run that tracked no frame or mapped no landmark fails.
 
 #include <algorithm>
+#include <cstdint>
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
@@ -299,16 +300,19 @@ int main(int argc, char** argv) {
         ("dataset", po::value(&dataset), "TUM RGB-D folder (rgb.txt, depth.txt, optional groundtruth.txt); "
                                          "default: the synthetic sequence")
         ("camera", po::value(&camera_spec), "fr1, fr2, fr3 or a camera YAML; default: from the folder name")
-        ("max-frames", po::value(&max_frames)->default_value(0), "stop after N frames (0 = all)")
-        ("minimap-keyframes", po::value(&options.minimap_keyframes)->default_value(options.minimap_keyframes),
-         "keyframes per mini-map")
+        ("max-frames", tools::rangedValue(&max_frames, std::size_t{0})->default_value(0), "stop after N frames (0 = all)")
+        ("minimap-keyframes", tools::rangedValue(&options.minimap_keyframes, std::size_t{1}, std::size_t{100000})
+                                  ->default_value(options.minimap_keyframes),
+         "keyframes per mini-map (1-100000)")
         ("out", po::value(&out_dir)->required(), "output folder (created; published complete or not at all)")
         ("overwrite", "replace --out if it exists and is not empty")
         ("matcher", po::value(&matcher_name)->default_value(matcher_name), "flann (LSH) or brute-force")
         ("no-quality-gate", "do not skip frames by BRISQUE score")
         ("deterministic", "run bundle adjustment inline instead of in its own thread (reproducible)")
-        ("synthetic-frames", po::value(&synthetic.frames)->default_value(synthetic.frames), "synthetic: frames")
-        ("seed", po::value(&synthetic.seed)->default_value(synthetic.seed), "synthetic: seed")
+        ("synthetic-frames", tools::rangedValue(&synthetic.frames, std::size_t{1}, std::size_t{100000})
+                                 ->default_value(synthetic.frames),
+         "synthetic: frames (1-100000)")
+        ("seed", tools::rangedValue(&synthetic.seed, std::uint64_t{0})->default_value(synthetic.seed), "synthetic: seed")
         ("moving-object", po::bool_switch(&synthetic.moving_object), "synthetic: a box moves through the view")
         ("dim", po::bool_switch(&synthetic.dim_lighting), "synthetic: dim, low-contrast, noisy images");
     // clang-format on

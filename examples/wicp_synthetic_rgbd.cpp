@@ -21,8 +21,6 @@ int main(int argc, char** argv) {
   return tools::runTool("wicp_synthetic_rgbd", [&] {
     std::string out_dir;
     simulation::SyntheticRgbdOptions options;
-    // Signed, so that "--frames -3" is an error rather than a wrapped huge count.
-    long long frames = static_cast<long long>(options.frames);
     bool no_depth_noise = false, overwrite = false;
     po::options_description description(
         "wicp_synthetic_rgbd --out DIR [options]\n"
@@ -32,20 +30,21 @@ int main(int argc, char** argv) {
     description.add_options()
         ("help,h", "print this help")
         ("out", po::value(&out_dir)->required(), "output folder (written complete or not at all)")
-        ("frames", po::value(&frames)->default_value(frames), "number of frames")
-        ("seed", po::value(&options.seed)->default_value(options.seed), "random seed (textures, path phases, noise)")
-        ("fps", po::value(&options.fps)->default_value(options.fps), "frames per second (timestamps)")
+        ("frames", tools::rangedValue(&options.frames, std::size_t{1}, std::size_t{100000})->default_value(options.frames),
+         "number of frames (1-100000)")
+        ("seed", tools::rangedValue(&options.seed, std::uint64_t{0})->default_value(options.seed),
+         "random seed (textures, path phases, noise)")
+        ("fps", tools::positiveValue(&options.fps, 1e6)->default_value(options.fps), "frames per second (timestamps)")
         ("moving-object", po::bool_switch(&options.moving_object), "carry a textured box across the view now and then")
         ("dim", po::bool_switch(&options.dim_lighting), "dim, low-contrast, noisy images")
         ("no-depth-noise", po::bool_switch(&no_depth_noise), "exact depth (up to the 16-bit resolution)")
-        ("depth-noise-coefficient", po::value(&options.depth_noise_coefficient)->default_value(options.depth_noise_coefficient),
+        ("depth-noise-coefficient", tools::rangedValue(&options.depth_noise_coefficient, 0.0, 1.0)
+                                        ->default_value(options.depth_noise_coefficient),
          "depth noise sigma = coefficient * z^2 (metres)")
         ("overwrite", po::bool_switch(&overwrite), "replace DIR if it exists and is not empty");
     // clang-format on
     po::variables_map vm;
     if (!tools::parseCommandLine(argc, argv, description, vm)) return 0;
-    if (frames < 1) throw std::invalid_argument("--frames must be at least 1");
-    options.frames = static_cast<std::size_t>(frames);
     options.depth_noise = !no_depth_noise;
 
     const simulation::SyntheticRgbdSequence sequence(options);

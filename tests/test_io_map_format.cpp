@@ -164,6 +164,33 @@ TEST(MapFormatErrors, NegativeObservationCount) {
                 "observation count n '-1' is not a non-negative integer");
 }
 
+TEST(MapFormatErrors, PositionBeyondWhatTheSearchIndexHolds) {
+  // 1.8e38 is a valid double but overflows the float kd-tree's split: it crashed wicp_align.
+  expectRefused(std::string(kTwoFrames) + "LANDMARK 5  1.8e38 0 1  1 0 0 0 1 0 0 0 1  0\n", 3,
+                "landmark 5: position has a coordinate beyond");
+  expectRefused(std::string(kTwoFrames) + "LANDMARK 5  0 0 -2e18  1 0 0 0 1 0 0 0 1  0\n", 3, "beyond ±1e18");
+}
+
+TEST(MapFormatErrors, CovarianceThatIsNotOne) {
+  expectRefused(std::string(kTwoFrames) + "LANDMARK 8  0 0 1  1 0.5 0 0 1 0 0 0 1  0\n", 3,
+                "landmark 8: covariance is not symmetric");
+  expectRefused(std::string(kTwoFrames) + "LANDMARK 8  0 0 1  1 0 0 0 -1 0 0 0 1  0\n", 3,
+                "landmark 8: covariance is not positive semi-definite");
+  expectRefused(std::string(kTwoFrames) + "LANDMARK 8  0 0 1  1 2 0 2 1 0 0 0 1  0\n", 3,
+                "not positive semi-definite");  // symmetric, eigenvalues 3, -1, 1
+}
+
+TEST(MapFormat, AcceptsCovariancesWithinRoundingOfValidOnes) {
+  const fs::path path = scratchDir("rounding") / "map.txt";
+  // Asymmetric in the 12th digit, singular, and a -1e-20 eigenvalue from printing: all real covariances.
+  writeFile(path, std::string(kTwoFrames) +
+                      "LANDMARK 1  0 0 1  1e-4 2.0000000000001e-5 0 2e-5 1e-4 0 0 0 1e-4  0\n"
+                      "LANDMARK 2  0 0 1  1 1 0 1 1 0 0 0 0  0\n"
+                      "LANDMARK 3  0 0 1  1 0 0 0 -1e-20 0 0 0 1  0\n"
+                      "LANDMARK 4  1e18 -1e18 1  0 0 0 0 0 0 0 0 0  0\n");
+  EXPECT_EQ(io::readLandmarkMap(path.string()).landmarks.size(), 4u);
+}
+
 TEST(MapFormatErrors, DuplicateFrameId) {
   expectRefused(std::string(kTwoFrames) + "FRAME 1  5 5 5  1 0 0 0\n", 3, "frame 1 is defined twice");
 }
@@ -263,6 +290,14 @@ TEST(MapFormatWrite, RefusesMapsTheReaderWouldRefuse) {
   map = awkwardMap();
   map.landmarks[1].id = 42;
   refused(map, "landmark 42 appears twice");
+
+  map = awkwardMap();
+  map.landmarks[1].covariance(0, 1) += 1.0;
+  refused(map, "landmark 7: covariance is not symmetric");
+
+  map = awkwardMap();
+  map.landmarks[1].position.z() = 3e38;
+  refused(map, "landmark 7: position has a coordinate beyond");
 
   map = awkwardMap();
   map.frames[3].linear() *= 2.0;  // a scaling: no quaternion stores it

@@ -301,8 +301,8 @@ TEST_F(SweepTool, BadOptionValuesFailSayingWhich) {
     EXPECT_NE(status, 0) << expected;
     EXPECT_NE(errors.find(expected), std::string::npos) << errors;
   };
-  fails({"--k", "0"}, "--k must be >= 1");
-  fails({"--max-iterations", "-3"}, "--max-iterations must be >= 1");
+  fails({"--k", "0"}, "--k must be between 1 and 1000 (got 0)");
+  fails({"--max-iterations", "-3"}, "--max-iterations must be between 1 and 1000000 (got -3)");
   fails({"--source-frames", "5-2", "--target-frames", "6-9"}, "--source-frames \"5-2\"");
   fails({"--source-frames", "0-4", "--target-frames", "x"}, "--target-frames \"x\"");
   fails({"--source-frames", "0-4"}, "give both --source-frames and --target-frames");

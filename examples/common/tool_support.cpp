@@ -1,8 +1,12 @@
 #include "tool_support.h"
 
 #include <boost/program_options/errors.hpp>
+#include <cctype>
+#include <cerrno>
+#include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <iomanip>
 #include <iostream>
@@ -42,6 +46,47 @@ bool parseCommandLine(int argc, const char* const argv[], const boost::program_o
   }
   po::notify(vm);
   return true;
+}
+
+namespace detail {
+
+bool parseInteger(const std::string& text, long long& value) {
+  const char* first = text.data();
+  const char* last = text.data() + text.size();
+  if (first != last && *first == '+') ++first;  // from_chars takes '-' only
+  const auto [end, error] = std::from_chars(first, last, value);
+  return error == std::errc() && end == last && first != last;
+}
+
+bool parseReal(const std::string& text, double& value) {
+  if (text.empty() || std::isspace(static_cast<unsigned char>(text.front()))) return false;
+  char* end = nullptr;
+  errno = 0;
+  value = std::strtod(text.c_str(), &end);
+  return end == text.c_str() + text.size() && errno == 0 && std::isfinite(value);
+}
+
+std::string describeRange(bool integer, double minimum, double maximum, bool minimum_exclusive) {
+  const auto shown = [](double v) {
+    std::ostringstream out;
+    out << std::setprecision(15) << v;
+    return out.str();
+  };
+  const std::string kind = integer ? "an integer " : "";
+  const bool unbounded = maximum >= static_cast<double>(std::numeric_limits<long long>::max());
+  if (minimum_exclusive)
+    return kind + "greater than " + shown(minimum) + (unbounded ? "" : " and at most " + shown(maximum));
+  if (unbounded) return kind + "at least " + shown(minimum);
+  return kind + "between " + shown(minimum) + " and " + shown(maximum);
+}
+
+}  // namespace detail
+
+void throwOutOfRange(const std::string& option, const std::string& value, long long minimum, long long maximum) {
+  throw boost::program_options::error(
+      "--" + option + " must be " +
+      detail::describeRange(false, static_cast<double>(minimum), static_cast<double>(maximum), false) + " (got " +
+      value + ")");
 }
 
 Progress::Progress(std::string label, std::size_t total)

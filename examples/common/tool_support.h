@@ -1,12 +1,15 @@
 #pragma once
 // What every command-line tool of weighted_icp shares: the way it reports
-// errors, progress on long runs, JSON output and safe file writing.
+// errors, range-checked numeric options, progress on long runs, JSON output
+// and safe file writing.
 
 #include <chrono>
 #include <cstddef>
 #include <functional>
+#include <limits>
 #include <ostream>
 #include <string>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -25,6 +28,100 @@ int runTool(const std::string& tool, const std::function<int()>& body);
 bool parseCommandLine(int argc, const char* const argv[], const boost::program_options::options_description& options,
                       boost::program_options::variables_map& vm,
                       const boost::program_options::positional_options_description* positional = nullptr);
+
+namespace detail {
+/// Reads all of `text` as a base-10 integer (an optional sign included); false when it is not one.
+bool parseInteger(const std::string& text, long long& value);
+/// Reads all of `text` as a finite number; false when it is not one.
+bool parseReal(const std::string& text, double& value);
+/// "between 1 and 1000", "at least 0", "greater than 0", "an integer between ...".
+std::string describeRange(bool integer, double minimum, double maximum, bool minimum_exclusive);
+}  // namespace detail
+
+/// @brief Throws the command-line error (exit 2 through runTool) "--<option> must be <range> (got <value>)".
+/// For bounds that depend on another option, checked after parsing; rangedValue() reports the same way.
+/// @param option   the option's name without dashes
+/// @param value    what was given, as typed
+/// @param minimum  smallest accepted value
+/// @param maximum  largest accepted value
+[[noreturn]] void throwOutOfRange(const std::string& option, const std::string& value, long long minimum,
+                                  long long maximum);
+
+/// A numeric option value checked while it is parsed. Integers are read signed,
+/// so "-1" is reported instead of wrapping around into a huge unsigned count;
+/// floating-point values must be finite. Out of range, it throws a
+/// boost::program_options error that names the option: runTool prints
+/// "--k must be between 1 and 1000 (got -1)" and returns 2.
+template <typename T>
+class RangedValue : public boost::program_options::typed_value<T> {
+  static_assert(std::is_arithmetic_v<T> && !std::is_same_v<T, bool>, "numbers only");
+  using Wide = std::conditional_t<std::is_integral_v<T>, long long, double>;
+
+ public:
+  /// @brief Use rangedValue() or positiveValue() rather than this.
+  /// @param store              where the parsed value goes (may be null)
+  /// @param minimum            smallest accepted value (excluded when `minimum_exclusive`)
+  /// @param maximum            largest accepted value
+  /// @param minimum_exclusive  accept only values greater than `minimum`
+  RangedValue(T* store, Wide minimum, Wide maximum, bool minimum_exclusive)
+      : boost::program_options::typed_value<T>(store),
+        minimum_(minimum),
+        maximum_(maximum),
+        minimum_exclusive_(minimum_exclusive) {}
+
+  /// @brief boost's parsing hook: reads the token as a Wide number and checks it before storing it as T.
+  /// @param value_store  receives the value
+  /// @param tokens       the option's one token
+  void xparse(boost::any& value_store, const std::vector<std::string>& tokens) const override {
+    namespace po = boost::program_options;
+    const std::string& text = po::validators::get_single_string(tokens);
+    Wide value{};
+    bool ok;
+    if constexpr (std::is_integral_v<T>)
+      ok = detail::parseInteger(text, value);
+    else
+      ok = detail::parseReal(text, value);
+    const bool below = minimum_exclusive_ ? !(value > minimum_) : value < minimum_;
+    if (!ok || below || value > maximum_) {
+      // %canonical_option% becomes "--k" when boost adds the option's name.
+      throw po::error_with_option_name("%canonical_option% must be " +
+                                       detail::describeRange(std::is_integral_v<T> && !ok,
+                                                             static_cast<double>(minimum_),
+                                                             static_cast<double>(maximum_), minimum_exclusive_) +
+                                       " (got " + text + ")");
+    }
+    value_store = static_cast<T>(value);
+  }
+
+ private:
+  Wide minimum_;
+  Wide maximum_;
+  bool minimum_exclusive_;
+};
+
+/// @brief A numeric option accepting minimum <= value <= maximum (see RangedValue).
+/// @param store    where the value goes, as po::value(&variable) does
+/// @param minimum  smallest accepted value
+/// @param maximum  largest accepted value; by default the largest the type (or long long) holds
+template <typename T>
+RangedValue<T>* rangedValue(T* store, T minimum, T maximum = std::numeric_limits<T>::max()) {
+  if constexpr (std::is_integral_v<T>) {
+    // Integers are checked as long long: a larger unsigned maximum means "no upper bound".
+    constexpr auto top = static_cast<unsigned long long>(std::numeric_limits<long long>::max());
+    const long long bounded =
+        static_cast<unsigned long long>(maximum) > top ? static_cast<long long>(top) : static_cast<long long>(maximum);
+    return new RangedValue<T>(store, static_cast<long long>(minimum), bounded, false);
+  } else {
+    return new RangedValue<T>(store, static_cast<double>(minimum), static_cast<double>(maximum), false);
+  }
+}
+
+/// @brief A floating-point option accepting 0 < value <= maximum (see RangedValue).
+/// @param store    where the value goes
+/// @param maximum  largest accepted value
+inline RangedValue<double>* positiveValue(double* store, double maximum = std::numeric_limits<double>::max()) {
+  return new RangedValue<double>(store, 0.0, maximum, true);
+}
 
 /// One line on stderr, rewritten in place: "label  12/40  (30%)  eta 5 s".
 /// Prints plain lines instead when stderr is not a terminal (CI logs).

@@ -340,14 +340,6 @@ void runProcess(const std::vector<std::string>& argv) {
         ")");
 }
 
-int atLeast(const po::variables_map& vm, const std::string& option, int minimum) {
-  const int value = vm[option].as<int>();
-  if (value < minimum)
-    throw std::invalid_argument("--" + option + " must be >= " + std::to_string(minimum) + ", got " +
-                                std::to_string(value));
-  return value;
-}
-
 /// A sweep stopped by SIGINT/SIGTERM between runs: a partial results.csv
 /// would read as a finished sweep, so nothing is written (and the --out
 /// folder, if this run created it, removed while still empty). Returns the
@@ -369,12 +361,14 @@ int runSweepTool(const std::string& tool, const SweepDefinition& sweep, int argc
     std::string out_dir = "out/sweep_" + sweep.name;
     MapSelection selection;
     std::string source_frames, target_frames;
+    std::size_t min_observations = 2;
+    unsigned int k = 5;
+    AlignmentSettings settings;
     po::options_description options(
         tool + " [--map SESSION.txt | --source A.txt --target B.txt] [options]\n" + sweep.description +
         "\nAligns the source onto the target with base (plain ICP, k = 1), covariance, observations\n"
         "and mean-distance at each case; writes DIR/results.csv, DIR/run.json and DIR/violin.png.\n"
         "Exit status: 0 ok, 1 error, 2 bad command line, 4 results written but plotting failed.\nOptions");
-    // Integers as int and checked: boost would wrap "-1" into a huge unsigned.
     // One option per line reads as a table: not reflowed.
     // clang-format off
     options.add_options()
@@ -388,17 +382,20 @@ int runSweepTool(const std::string& tool, const SweepDefinition& sweep, int argc
         ("target-frames", po::value(&target_frames), "cut the target mini-map from these frames, e.g. 120-239")
         ("source", po::value(&selection.source_path), "source map file (with --target, instead of --map)")
         ("target", po::value(&selection.target_path), "target map file")
-        ("min-observations", po::value<int>()->default_value(2), "drop landmarks observed fewer times");
+        ("min-observations", tools::rangedValue(&min_observations, std::size_t{0})->default_value(min_observations),
+         "drop landmarks observed fewer times");
     // clang-format on
     if (!sweep.sweeps_k)
-      options.add_options()("k", po::value<int>()->default_value(5),
-                            "neighbours among which the heaviest is chosen (weighted strategies)");
+      options.add_options()("k", tools::rangedValue(&k, 1u, 1000u)->default_value(k),
+                            "neighbours among which the heaviest is chosen (weighted strategies; 1-1000)");
     // One option per line reads as a table: not reflowed.
     // clang-format off
     options.add_options()
-        ("max-iterations", po::value<int>()->default_value(150), "ICP iteration limit (per stage)")
+        ("max-iterations", tools::rangedValue(&settings.max_iterations, 1, 1000000)->default_value(settings.max_iterations),
+         "ICP iteration limit (per stage)")
         ("refine", "finish each run with nearest-neighbour ICP (k = 1)")
-        ("threads", po::value<int>()->default_value(0), "search threads, 0 = all; results do not depend on it")
+        ("threads", tools::rangedValue(&settings.threads, 0u, 1024u)->default_value(settings.threads),
+         "search threads, 0 = all (at most 1024); results do not depend on it")
         ("out", po::value(&out_dir)->default_value(out_dir), "output folder")
         ("no-plot", "write the CSV only");
     // clang-format on
@@ -422,12 +419,10 @@ int runSweepTool(const std::string& tool, const SweepDefinition& sweep, int argc
     if (vm.count("source-frames"))
       selection.frame_ranges.emplace(FrameRange::parse(source_frames, "--source-frames"),
                                      FrameRange::parse(target_frames, "--target-frames"));
-    selection.min_observations = static_cast<std::size_t>(atLeast(vm, "min-observations", 0));
-    AlignmentSettings settings;
-    const unsigned int k = sweep.sweeps_k ? 0 : static_cast<unsigned int>(atLeast(vm, "k", 1));
-    settings.max_iterations = settings.refine_max_iterations = atLeast(vm, "max-iterations", 1);
+    selection.min_observations = min_observations;
+    if (sweep.sweeps_k) k = 0;
+    settings.refine_max_iterations = settings.max_iterations;
     settings.refine = vm.count("refine") > 0;
-    settings.threads = static_cast<unsigned int>(atLeast(vm, "threads", 0));
     const bool plot = vm.count("no-plot") == 0;
 
     const MapPair maps = loadMapPair(selection);

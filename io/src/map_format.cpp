@@ -10,8 +10,11 @@
 #include <string_view>
 #include <vector>
 
+#include <Eigen/Eigenvalues>
+
 #include "text_fields.h"
 #include "weighted_icp/io/atomic_file.h"
+#include "weighted_icp/registration/nearest_neighbor_index.h"
 
 namespace weighted_icp::io {
 
@@ -72,6 +75,24 @@ Eigen::Isometry3d parseFrame(const FieldReader& f) {
   return pose;
 }
 
+/// Why a landmark cannot be used (empty when it can): a position the search
+/// index cannot hold, or a covariance that is not one (not symmetric, or with a
+/// negative eigenvalue). Tolerances absorb the rounding of a printed matrix.
+std::string landmarkProblem(const Landmark& landmark) {
+  const Eigen::Vector3d& p = landmark.position;
+  if (p.cwiseAbs().maxCoeff() > NearestNeighborIndex::kMaxCoordinate)
+    return "position has a coordinate beyond ±1e18, more than the search index can hold";
+  const Eigen::Matrix3d& c = landmark.covariance;
+  const double norm = c.norm();
+  if ((c - c.transpose()).norm() > 1e-9 * norm) return "covariance is not symmetric";
+  const Eigen::Matrix3d symmetric = 0.5 * (c + c.transpose());
+  const double smallest =
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(symmetric, Eigen::EigenvaluesOnly).eigenvalues().minCoeff();
+  if (smallest < -1e-12 * norm)
+    return "covariance is not positive semi-definite (eigenvalue " + std::to_string(smallest) + ")";
+  return {};
+}
+
 Landmark parseLandmark(const std::vector<std::string_view>& fields, const FieldReader& f) {
   Landmark landmark;
   landmark.id = f.id(1, "landmark id");
@@ -91,6 +112,8 @@ Landmark parseLandmark(const std::vector<std::string_view>& fields, const FieldR
     landmark.observations[i] = {f.id(at, "observation frame id"), f.number(at + 1, "observation u"),
                                 f.number(at + 2, "observation v")};
   }
+  const std::string problem = landmarkProblem(landmark);
+  if (!problem.empty()) f.fail("landmark " + std::to_string(landmark.id) + ": " + problem);
   return landmark;
 }
 
@@ -161,6 +184,8 @@ void requireWritable(const LandmarkMap& map) {
     if (!ids.insert(landmark.id).second) throw std::invalid_argument(name + " appears twice");
     if (!finite(landmark.position) || !finite(landmark.covariance))
       throw std::invalid_argument(name + " has a non-finite position or covariance");
+    const std::string problem = landmarkProblem(landmark);
+    if (!problem.empty()) throw std::invalid_argument(name + ": " + problem);
     for (const auto& o : landmark.observations) {
       if (!map.frames.count(o.frame_id))
         throw std::invalid_argument(name + " is observed by frame " + std::to_string(o.frame_id) +

@@ -1,6 +1,15 @@
 #include "weighted_icp/registration/nearest_neighbor_index.h"
 
+#include <sstream>
+
 namespace weighted_icp {
+
+void NearestNeighborIndex::throwUnindexable(std::size_t index, double x, double y, double z) {
+  std::ostringstream message;
+  message << "point " << index << " (" << x << ", " << y << ", " << z << ") has a coordinate beyond ±" << kMaxCoordinate
+          << ", more than the float search index can hold";
+  throw std::invalid_argument(message.str());
+}
 
 NearestNeighborIndex::NearestNeighborIndex(const NearestNeighborIndex& other)
     : xyz_(other.xyz_),

@@ -10,6 +10,7 @@
 #include <cstddef>
 #include <limits>
 #include <memory>
+#include <string>
 
 #include <Eigen/Core>
 
@@ -30,20 +31,27 @@ struct AlignmentSettings {
   double euclidean_fitness_epsilon = -std::numeric_limits<double>::max();
   bool refine = false;
   int refine_max_iterations = 150;
-  unsigned int threads = 0;  // 0: every hardware thread
+  unsigned int threads = 0;  // 0: every hardware thread, at most 1024
 };
 
 struct AlignmentResult {
   /// Maps the source (as given) onto the target.
   Eigen::Matrix4d transformation = Eigen::Matrix4d::Identity();
   /// PCL's fitness score: mean squared distance from each transformed source
-  /// point to its nearest target point, unweighted.
+  /// point to its nearest target point, unweighted. NaN when degenerate.
   double fitness_score = 0.0;
   int iterations = 0;               // weighted stage
   int refine_iterations = 0;        // refinement stage, 0 when not run
   bool converged = false;           // of the last stage run
   std::size_t correspondences = 0;  // used by the last iteration
   double time_ms = 0.0;
+  /// The problem has no unique rigid solution, so ICP was not run (the
+  /// transformation is the guess, converged false): fewer than 3 finite points,
+  /// all identical or all collinear in source or target, or k > 1 and at least
+  /// the target's finite point count (every source point would choose among
+  /// the whole target). `reason` says which, naming the cloud.
+  bool degenerate = false;
+  std::string reason;
 };
 
 /// Aligns weighted landmark clouds (weights in the points' `weight` field).
@@ -58,15 +66,21 @@ class LandmarkAligner {
 
   const AlignmentSettings& settings() const { return settings_; }
 
-  /// Throws std::invalid_argument when the cloud is empty or has no finite point.
+  /// @brief Sets the target and builds its search structures, once.
+  /// @param target  throws std::invalid_argument when it is empty, has no finite point, or a finite point has a
+  ///                coordinate beyond NearestNeighborIndex::kMaxCoordinate (named by index)
   void setTarget(LandmarkCloud::ConstPtr target);
-  /// Throws std::invalid_argument when the source is empty or has no finite
-  /// point, or when no target was set.
+  /// @brief Aligns `source` onto the target; a degenerate problem is reported in the result, not run.
+  /// @param source  throws std::invalid_argument as setTarget() does, or when no target was set
+  /// @param guess   initial transformation
+
   AlignmentResult align(const LandmarkCloud::ConstPtr& source,
                         const Eigen::Matrix4d& guess = Eigen::Matrix4d::Identity());
 
  private:
   struct Pipeline;
+  /// Why aligning `source` onto the current target is degenerate; empty when it is not.
+  std::string degeneracy(const LandmarkCloud& source, std::size_t source_points) const;
   AlignmentSettings settings_;
   std::unique_ptr<Pipeline> pipeline_;
 };

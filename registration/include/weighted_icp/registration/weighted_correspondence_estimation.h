@@ -88,10 +88,17 @@ class WeightedCorrespondenceEstimation
   /// @param force_no_recompute  stored with the tree, also unused
   void setSearchMethodSource(const typename Base::KdTreeReciprocalPtr& tree, bool force_no_recompute = false);
 
-  /// Threads for the search; 0 (default) uses every hardware thread.
-  void setNumberOfThreads(unsigned int threads) { threads_ = threads; }
+  /// Most search threads setNumberOfThreads() accepts.
+  static constexpr unsigned int kMaxThreads = 1024;
+
+  /// @brief Threads for the search; 0 (default) uses every hardware thread.
+  /// @param threads  0 to kMaxThreads; larger counts are refused (std::invalid_argument), not clamped, so a
+  ///                 wrapped-around negative number is reported instead of silently running
+  void setNumberOfThreads(unsigned int threads);
   unsigned int getNumberOfThreads() const { return threads_; }
 
+  /// Throws std::invalid_argument naming the point when a finite target point has a coordinate beyond
+  /// NearestNeighborIndex::kMaxCoordinate (the float index would overflow), checked once per target.
   void determineCorrespondences(pcl::Correspondences& correspondences,
                                 double max_distance = std::numeric_limits<double>::max()) override;
 
@@ -119,6 +126,11 @@ class WeightedCorrespondenceEstimation
   /// For every source index, the chosen target (or UNAVAILABLE) and its
   /// squared distance, written by slot so the thread count cannot matter.
   void chooseTargets(double max_dist_sqr, pcl::Correspondences& per_source) const;
+  /// Builds `index` on `cloud`; a coordinate the index cannot hold is thrown as
+  /// std::invalid_argument naming `what` ("target"/"source") and the point.
+  template <typename PointT>
+  void buildIndex(NearestNeighborIndex& index, const pcl::PointCloud<PointT>& cloud, const pcl::Indices* indices,
+                  const char* what);
 
   unsigned int k_;
   unsigned int threads_ = 0;

@@ -2,7 +2,10 @@
 // Implementation of WeightedCorrespondenceEstimation, included by the library's instantiations
 // (or by users, with WEIGHTED_ICP_NO_PRECOMPILE, for other point types).
 
+#include <algorithm>
 #include <cmath>
+#include <exception>
+#include <optional>
 #include <stdexcept>
 #include <thread>
 #include <utility>
@@ -42,6 +45,29 @@ bool loadXyz(const PointT& p, float* xyz) {
   xyz[1] = p.y;
   xyz[2] = p.z;
   return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
+}
+
+/// Carries the first exception thrown on any thread of an OpenMP region out of
+/// it: an exception that leaves a parallel region calls std::terminate, so each
+/// thread catches, records here, and the caller rethrows after the region.
+class RegionErrors {
+ public:
+  void capture() noexcept {
+#pragma omp critical(weighted_icp_region_errors)
+    if (!first_) first_ = std::current_exception();
+  }
+  void rethrowFirst() const {
+    if (first_) std::rethrow_exception(first_);
+  }
+
+ private:
+  std::exception_ptr first_;
+};
+
+/// Candidates a search can return: never more than the indexed points, so an
+/// absurd k costs no more memory than k = the index size (same results).
+inline std::size_t scratchSize(unsigned int k, const NearestNeighborIndex& index) {
+  return std::max<std::size_t>(1, std::min<std::size_t>(k, index.size()));
 }
 
 inline int resolveThreads(unsigned int requested) {
@@ -97,6 +123,15 @@ void WeightedCorrespondenceEstimation<PointSource, PointTarget, Scalar>::setNumb
 }
 
 template <typename PointSource, typename PointTarget, typename Scalar>
+void WeightedCorrespondenceEstimation<PointSource, PointTarget, Scalar>::setNumberOfThreads(unsigned int threads) {
+  // libgomp crashes creating ~100,000 threads; far fewer already only thrash.
+  if (threads > kMaxThreads)
+    throw std::invalid_argument(getClassName() + ": " + std::to_string(threads) + " threads requested, at most " +
+                                std::to_string(kMaxThreads) + " (0 = every hardware thread)");
+  threads_ = threads;
+}
+
+template <typename PointSource, typename PointTarget, typename Scalar>
 void WeightedCorrespondenceEstimation<PointSource, PointTarget, Scalar>::setTargetWeights(std::vector<double> weights) {
   checkWeights(weights, getClassName() + "::setTargetWeights");
   target_weights_ = std::move(weights);
@@ -141,6 +176,17 @@ void WeightedCorrespondenceEstimation<PointSource, PointTarget, Scalar>::setSear
 }
 
 template <typename PointSource, typename PointTarget, typename Scalar>
+template <typename PointT>
+void WeightedCorrespondenceEstimation<PointSource, PointTarget, Scalar>::buildIndex(
+    NearestNeighborIndex& index, const pcl::PointCloud<PointT>& cloud, const pcl::Indices* indices, const char* what) {
+  try {
+    index.build(cloud, indices);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(getClassName() + ": " + what + " " + e.what());
+  }
+}
+
+template <typename PointSource, typename PointTarget, typename Scalar>
 bool WeightedCorrespondenceEstimation<PointSource, PointTarget, Scalar>::initComputeWeighted() {
   if (!target_) {
     PCL_ERROR("[weighted_icp::%s::compute] No input target dataset was given!\n", getClassName().c_str());
@@ -148,7 +194,7 @@ bool WeightedCorrespondenceEstimation<PointSource, PointTarget, Scalar>::initCom
   }
   if (!pcl::PCLBase<PointSource>::initCompute()) return false;
   if (target_cloud_updated_) {
-    target_index_.build(*target_, target_indices_.get());
+    buildIndex(target_index_, *target_, target_indices_.get(), "target");
     std::string error;
     if (!detail::resolveWeights(*target_, target_weights_, target_weight_field_, kDefaultWeightField,
                                 target_weights_in_use_, error)) {
@@ -167,7 +213,7 @@ bool WeightedCorrespondenceEstimation<PointSource, PointTarget, Scalar>::initCom
 template <typename PointSource, typename PointTarget, typename Scalar>
 bool WeightedCorrespondenceEstimation<PointSource, PointTarget, Scalar>::initComputeWeightedReciprocal() {
   if (source_cloud_updated_) {
-    source_index_.build(*input_, indices_.get());
+    buildIndex(source_index_, *input_, indices_.get(), "source");
     std::string error;
     if (!detail::resolveWeights(*input_, source_weights_, source_weight_field_, kDefaultWeightField,
                                 source_weights_in_use_, error)) {
@@ -186,23 +232,37 @@ void WeightedCorrespondenceEstimation<PointSource, PointTarget, Scalar>::chooseT
   per_source.resize(indices_->size());
   // Each source point is decided on its own and written to its own slot, so
   // the result cannot depend on how the loop is split between threads.
+  const std::size_t scratch_size = detail::scratchSize(k_, target_index_);
+  detail::RegionErrors errors;
 #pragma omp parallel num_threads(detail::resolveThreads(threads_)) if (n > 512)
   {
-    NearestNeighborIndex::Scratch candidates(k_);
+    std::optional<NearestNeighborIndex::Scratch> candidates;
+    try {
+      candidates.emplace(scratch_size);
+    } catch (...) {
+      errors.capture();
+    }
+    // Every thread must reach the worksharing loop, even one that failed above.
 #pragma omp for schedule(static)
     for (std::ptrdiff_t i = 0; i < n; ++i) {
-      pcl::Correspondence& corr = per_source[i];
-      corr.index_query = (*indices_)[i];
-      corr.index_match = pcl::UNAVAILABLE;
-      float query[3];
-      if (!detail::loadXyz((*input_)[corr.index_query], query)) continue;
-      const std::size_t found = target_index_.knn(query, candidates);
-      const int best = detail::heaviestCandidate(candidates, found, max_dist_sqr, target_weights_in_use_);
-      if (best < 0) continue;
-      corr.index_match = candidates.indices()[best];
-      corr.distance = candidates.squaredDistances()[best];
+      if (!candidates) continue;
+      try {
+        pcl::Correspondence& corr = per_source[i];
+        corr.index_query = (*indices_)[i];
+        corr.index_match = pcl::UNAVAILABLE;
+        float query[3];
+        if (!detail::loadXyz((*input_)[corr.index_query], query)) continue;
+        const std::size_t found = target_index_.knn(query, *candidates);
+        const int best = detail::heaviestCandidate(*candidates, found, max_dist_sqr, target_weights_in_use_);
+        if (best < 0) continue;
+        corr.index_match = candidates->indices()[best];
+        corr.distance = candidates->squaredDistances()[best];
+      } catch (...) {
+        errors.capture();
+      }
     }
   }
+  errors.rethrowFirst();
 }
 
 namespace detail {
@@ -237,20 +297,33 @@ void WeightedCorrespondenceEstimation<PointSource, PointTarget, Scalar>::determi
   const double max_dist_sqr = max_distance * max_distance;
   chooseTargets(max_dist_sqr, correspondences);
   const auto n = static_cast<std::ptrdiff_t>(correspondences.size());
+  const std::size_t scratch_size = detail::scratchSize(k_, source_index_);
+  detail::RegionErrors errors;
 #pragma omp parallel num_threads(detail::resolveThreads(threads_)) if (n > 512)
   {
-    NearestNeighborIndex::Scratch candidates(k_);
+    std::optional<NearestNeighborIndex::Scratch> candidates;
+    try {
+      candidates.emplace(scratch_size);
+    } catch (...) {
+      errors.capture();
+    }
 #pragma omp for schedule(static)
     for (std::ptrdiff_t i = 0; i < n; ++i) {
-      pcl::Correspondence& corr = correspondences[i];
-      if (corr.index_match == pcl::UNAVAILABLE) continue;
-      float query[3];
-      detail::loadXyz((*target_)[corr.index_match], query);  // finite: it is in the index
-      const std::size_t found = source_index_.knn(query, candidates);
-      const int back = detail::heaviestCandidate(candidates, found, max_dist_sqr, source_weights_in_use_);
-      if (back < 0 || candidates.indices()[back] != corr.index_query) corr.index_match = pcl::UNAVAILABLE;
+      if (!candidates) continue;
+      try {
+        pcl::Correspondence& corr = correspondences[i];
+        if (corr.index_match == pcl::UNAVAILABLE) continue;
+        float query[3];
+        detail::loadXyz((*target_)[corr.index_match], query);  // finite: it is in the index
+        const std::size_t found = source_index_.knn(query, *candidates);
+        const int back = detail::heaviestCandidate(*candidates, found, max_dist_sqr, source_weights_in_use_);
+        if (back < 0 || candidates->indices()[back] != corr.index_query) corr.index_match = pcl::UNAVAILABLE;
+      } catch (...) {
+        errors.capture();
+      }
     }
   }
+  errors.rethrowFirst();
   detail::keepMatched(correspondences);
   this->deinitCompute();
 }

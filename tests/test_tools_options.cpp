@@ -1,0 +1,172 @@
+// Numeric options of every tool are range-checked as they are parsed (issue
+// #10): a negative count must not wrap into a huge unsigned one, an absurd
+// thread count must not reach libgomp; each is a command-line error (exit 2)
+// naming the option, the range and the value. And wicp_align refuses maps it
+// cannot index and reports degenerate problems with their own exit code.
+
+#include <array>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include <sys/wait.h>
+
+#include <gtest/gtest.h>
+
+#include "test_support.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using weighted_icp::testing::binaryDir;
+using weighted_icp::testing::scratchDir;
+
+struct ToolRun {
+  int status = 0;
+  std::string out;
+  std::string err;
+};
+
+/// Runs build/examples/<tool> with a 60 s limit, so an option that makes a tool run forever fails the test.
+ToolRun run(const std::string& tool, const std::string& args, const fs::path& scratch) {
+  const fs::path err_file = scratch / "stderr.txt";
+  const std::string command =
+      "timeout 60 " + (binaryDir() / "examples" / tool).string() + " " + args + " 2>" + err_file.string();
+  ToolRun result;
+  FILE* pipe = popen(command.c_str(), "r");
+  std::array<char, 4096> buffer{};
+  while (std::fgets(buffer.data(), buffer.size(), pipe)) result.out += buffer.data();
+  result.status = WEXITSTATUS(pclose(pipe));
+  std::ifstream err(err_file);
+  result.err.assign(std::istreambuf_iterator<char>(err), {});
+  return result;
+}
+
+struct BadOption {
+  const char* tool;
+  const char* args;
+  const char* message;  // expected in stderr
+};
+
+TEST(ToolOptions, OutOfRangeNumbersAreCommandLineErrorsNamingTheOption) {
+  const fs::path scratch = scratchDir("options");
+  const BadOption cases[] = {
+      {"wicp_align", "--source a --target b --k -1", "--k must be between 1 and 1000 (got -1)"},
+      {"wicp_align", "--source a --target b --k 4294967295", "--k must be between 1 and 1000 (got 4294967295)"},
+      {"wicp_align", "--source a --target b --k 100000", "--k must be between 1 and 1000 (got 100000)"},
+      {"wicp_align", "--source a --target b --threads 100000", "--threads must be between 0 and 1024 (got 100000)"},
+      {"wicp_align", "--source a --target b --threads -1", "--threads must be between 0 and 1024 (got -1)"},
+      {"wicp_align", "--source a --target b --min-observations -1", "--min-observations must be between 0"},
+      {"wicp_align", "--source a --target b --max-iterations 0", "--max-iterations must be between 1"},
+      {"wicp_align", "--source a --target b --max-correspondence-distance -2",
+       "--max-correspondence-distance must be greater than 0 (got -2)"},
+      {"wicp_align", "--source a --target b --k five", "--k must be an integer between 1 and 1000 (got five)"},
+      {"wicp_demo", "--k 0", "--k must be between 1 and 1000 (got 0)"},
+      {"wicp_demo", "--threads 2000", "--threads must be between 0 and 1024 (got 2000)"},
+      {"wicp_demo", "--seed -1", "--seed must be at least 0 (got -1)"},
+      {"wicp_demo", "--frames 100 --frames-per-minimap 100", "--frames-per-minimap must be between 1 and 99 (got 100)"},
+      {"wicp_map", "stats a --min-observations -1", "--min-observations must be at least 0 (got -1)"},
+      {"wicp_map", "cut a --out b --frames-per-minimap 0", "--frames-per-minimap must be at least 1 (got 0)"},
+      {"wicp_map", "convert a b --min-observations -3", "--min-observations must be at least 0 (got -3)"},
+      {"wicp_evaluate", "a b --rpe-delta -1", "--rpe-delta must be greater than 0 (got -1)"},
+      {"wicp_evaluate", "a b --max-difference nan", "--max-difference must be greater than 0 (got nan)"},
+      {"wicp_rgbd_slam", "--out x --max-frames -1", "--max-frames must be at least 0 (got -1)"},
+      {"wicp_rgbd_slam", "--out x --minimap-keyframes -1", "--minimap-keyframes must be between 1 and 100000"},
+      {"wicp_rgbd_slam", "--out x --seed -1", "--seed must be at least 0 (got -1)"},
+      {"wicp_rgbd_slam", "--out x --synthetic-frames -1", "--synthetic-frames must be between 1 and 100000 (got -1)"},
+      {"wicp_synthetic_rgbd", "--out x --frames -3", "--frames must be between 1 and 100000 (got -3)"},
+      {"wicp_synthetic_rgbd", "--out x --fps 0", "--fps must be greater than 0"},
+      {"wicp_synthetic_rgbd", "--out x --depth-noise-coefficient -1", "--depth-noise-coefficient must be between 0"},
+      {"wicp_sweep_k", "--threads -1", "--threads must be between 0 and 1024 (got -1)"},
+      {"wicp_sweep_yaw", "--k -1", "--k must be between 1 and 1000 (got -1)"},
+      {"wicp_sweep_xy", "--max-iterations -5", "--max-iterations must be between 1 and 1000000 (got -5)"},
+      {"wicp_sweep_xy_yaw", "--min-observations -1", "--min-observations must be at least 0 (got -1)"},
+  };
+  for (const auto& c : cases) {
+    SCOPED_TRACE(std::string(c.tool) + " " + c.args);
+    const ToolRun r = run(c.tool, c.args, scratch);
+    EXPECT_EQ(r.status, 2) << r.err;
+    EXPECT_NE(r.err.find(c.message), std::string::npos) << r.err;
+  }
+}
+
+TEST(ToolOptions, BoundsThemselvesAreAccepted) {
+  const fs::path scratch = scratchDir("bounds");
+  // --help after the options: parsing (and so the range check) runs, then help exits 0.
+  for (const char* args : {"--k 1000 --threads 1024 --help", "--k 1 --threads 0 --min-observations 0 --help",
+                           "--k=+5 --max-correspondence-distance 1e-3 --help"}) {
+    SCOPED_TRACE(args);
+    const ToolRun r = run("wicp_align", args, scratch);
+    EXPECT_EQ(r.status, 0) << r.err;
+  }
+}
+
+/// A map of `positions` (one "x y z" each), every landmark seen by two frames.
+fs::path writeMap(const fs::path& folder, const std::string& name, const std::vector<std::string>& positions) {
+  std::ostringstream text;
+  text << "FRAME 0  0 0 0  1 0 0 0\nFRAME 1  1 0 0  1 0 0 0\n";
+  for (std::size_t i = 0; i < positions.size(); ++i)
+    text << "LANDMARK " << i << "  " << positions[i] << "  1e-4 0 0 0 1e-4 0 0 0 1e-4  2  0 100 100  1 120 100\n";
+  const fs::path path = folder / name;
+  std::ofstream(path) << text.str();
+  return path;
+}
+
+std::vector<std::string> grid(std::size_t n) {
+  std::vector<std::string> positions;
+  for (std::size_t i = 0; i < n; ++i)
+    positions.push_back(std::to_string(0.3 * (i % 4)) + " " + std::to_string(0.2 * (i / 4 % 3)) + " " +
+                        std::to_string(1.0 + 0.25 * (i / 12)));
+  return positions;
+}
+
+TEST(WicpAlignDegenerate, ReportedInJsonWithExitCode4) {
+  const fs::path scratch = scratchDir("degenerate");
+  const std::string source = writeMap(scratch, "source.txt", grid(40)).string();
+  const struct {
+    std::vector<std::string> target;
+    const char* args;
+    const char* reason;
+  } cases[] = {
+      {grid(2), "--k 1", "only 2 finite target points, fewer than 3"},
+      {{"0 0 1", "1 0 1", "0 1 1", "0 0 2"}, "", "k = 5 is at least the 4 finite target points"},
+      {{"0 0 1", "0.1 0.1 1.1", "0.2 0.2 1.2", "0.3 0.3 1.3", "0.5 0.5 1.5", "0.9 0.9 1.9"}, "--k 1", "collinear"},
+      {std::vector<std::string>(20, "1 2 3"), "--k 1", "identical"},
+      {grid(12), "--k 12", "k = 12 is at least the 12 finite target points"},
+  };
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.reason);
+    const std::string target = writeMap(scratch, "target.txt", c.target).string();
+    const ToolRun r =
+        run("wicp_align", "--source " + source + " --target " + target + " " + c.args + " --json", scratch);
+    EXPECT_EQ(r.status, 4) << r.err << r.out;
+    EXPECT_NE(r.out.find("\"converged\":false,\"degenerate\":true,\"reason\":\""), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find(c.reason), std::string::npos) << r.out;
+  }
+  const std::string target = writeMap(scratch, "target.txt", grid(40)).string();
+  const ToolRun fine = run("wicp_align", "--source " + source + " --target " + target + " --json", scratch);
+  EXPECT_EQ(fine.status, 0) << fine.err << fine.out;
+  EXPECT_NE(fine.out.find("\"degenerate\":false"), std::string::npos) << fine.out;
+}
+
+TEST(WicpAlignDegenerate, CoordinatesBeyondTheIndexAreRefusedWithFileAndLine) {
+  // As target these crashed wicp_align and wicp_sweep_k (exit 139); as source they were accepted.
+  const fs::path scratch = scratchDir("huge");
+  const fs::path huge = writeMap(scratch, "huge.txt", std::vector<std::string>(20, "1.8e38 1.8e38 1.8e38"));
+  const std::string valid = writeMap(scratch, "valid.txt", grid(40)).string();
+  for (const std::string args :
+       {"--source " + valid + " --target " + huge.string(), "--source " + huge.string() + " --target " + valid}) {
+    const ToolRun r = run("wicp_align", args, scratch);
+    EXPECT_EQ(r.status, 1) << r.err;
+    EXPECT_NE(r.err.find(huge.string() + ":3: landmark 0: position has a coordinate beyond"), std::string::npos)
+        << r.err;
+  }
+  const ToolRun sweep = run(
+      "wicp_sweep_k",
+      "--source " + valid + " --target " + huge.string() + " --no-plot --out " + (scratch / "sweep").string(), scratch);
+  EXPECT_EQ(sweep.status, 1) << sweep.err;
+  EXPECT_NE(sweep.err.find(huge.string() + ":3"), std::string::npos) << sweep.err;
+}
+
+}  // namespace
