@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "test_support.h"
+#include "tool_runner.h"
 #include "weighted_icp/io/map_format.h"
 #include "weighted_icp/io/trajectory.h"
 #include "weighted_icp/registration/rigid_motion.h"
@@ -19,23 +20,10 @@ namespace {
 namespace fs = std::filesystem;
 using weighted_icp::testing::binaryDir;
 
-struct ToolRun {
-  int status = 0;
-  std::string out;  // stdout; stderr goes to err
-  std::string err;
-};
+using weighted_icp::testing::ToolRun;
 
 ToolRun run(const std::string& tool, const std::string& args, const fs::path& scratch) {
-  const fs::path err_file = scratch / "stderr.txt";
-  const std::string command = (binaryDir() / "examples" / tool).string() + " " + args + " 2>" + err_file.string();
-  ToolRun result;
-  FILE* pipe = popen(command.c_str(), "r");
-  std::array<char, 4096> buffer{};
-  while (std::fgets(buffer.data(), buffer.size(), pipe)) result.out += buffer.data();
-  result.status = WEXITSTATUS(pclose(pipe));
-  std::ifstream err(err_file);
-  result.err.assign(std::istreambuf_iterator<char>(err), {});
-  return result;
+  return weighted_icp::testing::runBuiltTool(tool, args, scratch);
 }
 
 std::string lastLine(const std::string& text) {

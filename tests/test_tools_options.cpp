@@ -15,6 +15,7 @@
 #include <gtest/gtest.h>
 
 #include "test_support.h"
+#include "tool_runner.h"
 
 namespace {
 
@@ -22,25 +23,11 @@ namespace fs = std::filesystem;
 using weighted_icp::testing::binaryDir;
 using weighted_icp::testing::scratchDir;
 
-struct ToolRun {
-  int status = 0;
-  std::string out;
-  std::string err;
-};
+using weighted_icp::testing::ToolRun;
 
-/// Runs build/examples/<tool> with a 60 s limit, so an option that makes a tool run forever fails the test.
+/// At most 60 s: an option that makes a tool run forever fails the test.
 ToolRun run(const std::string& tool, const std::string& args, const fs::path& scratch) {
-  const fs::path err_file = scratch / "stderr.txt";
-  const std::string command =
-      "timeout 60 " + (binaryDir() / "examples" / tool).string() + " " + args + " 2>" + err_file.string();
-  ToolRun result;
-  FILE* pipe = popen(command.c_str(), "r");
-  std::array<char, 4096> buffer{};
-  while (std::fgets(buffer.data(), buffer.size(), pipe)) result.out += buffer.data();
-  result.status = WEXITSTATUS(pclose(pipe));
-  std::ifstream err(err_file);
-  result.err.assign(std::istreambuf_iterator<char>(err), {});
-  return result;
+  return weighted_icp::testing::runBuiltTool(tool, args, scratch, 60);
 }
 
 struct BadOption {

@@ -1,0 +1,45 @@
+#pragma once
+// Runs a built command-line tool as a user would, for the tests that check
+// exit codes, stdout and stderr.
+
+#include <sys/wait.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <string>
+
+#include "test_support.h"
+
+namespace weighted_icp::testing {
+
+/// What a tool run gave: its exit status, stdout and stderr.
+struct ToolRun {
+  int status = -1;
+  std::string out;
+  std::string err;
+};
+
+/// Runs build/examples/<tool> with `args` (shell syntax). stderr goes through
+/// a file in `scratch`. With `timeout_seconds` > 0 the run is killed after
+/// that long (status 124), so an option that makes a tool run forever fails
+/// the test instead of hanging it.
+inline ToolRun runBuiltTool(const std::string& tool, const std::string& args, const std::filesystem::path& scratch,
+                            int timeout_seconds = 0) {
+  const std::filesystem::path err_file = scratch / "stderr.txt";
+  const std::string limit = timeout_seconds > 0 ? "timeout " + std::to_string(timeout_seconds) + " " : "";
+  const std::string command =
+      limit + (binaryDir() / "examples" / tool).string() + " " + args + " 2>" + err_file.string();
+  ToolRun result;
+  FILE* pipe = popen(command.c_str(), "r");
+  std::array<char, 4096> buffer{};
+  while (std::fgets(buffer.data(), buffer.size(), pipe)) result.out += buffer.data();
+  result.status = WEXITSTATUS(pclose(pipe));
+  std::ifstream err(err_file);
+  result.err.assign(std::istreambuf_iterator<char>(err), {});
+  return result;
+}
+
+}  // namespace weighted_icp::testing
