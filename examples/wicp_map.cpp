@@ -39,7 +39,7 @@ const char* const kUsage = "usage: wicp_map stats|cut|convert MAP [options]   (w
 /// positional arguments are declared in `positional_options` and explained in
 /// the usage line of `visible`, which alone --help prints. Returns false after
 /// printing the help.
-bool parseArguments(int argc, char** argv, po::options_description& visible,
+bool parseArguments(int argc, char** argv, const std::string& usage, po::options_description& visible,
                     const po::options_description& positional_options,
                     const po::positional_options_description& positional, po::variables_map& vm) {
   visible.add_options()("help,h", "print this help");
@@ -49,6 +49,14 @@ bool parseArguments(int argc, char** argv, po::options_description& visible,
   if (vm.count("help")) {
     std::cout << visible << '\n';
     return false;
+  }
+  // notify() would say "the option '--map' is required": there is no such
+  // option, so a missing positional argument is named as the usage line does.
+  for (unsigned i = 0; i < positional.max_total_count(); ++i) {
+    const std::string& name = positional.name_for_position(i);
+    if (!vm.count(name))
+      throw po::error(std::string("wicp_map ") + argv[0] + ": " + positional_options.find(name, false).description() +
+                      " is required (usage: " + usage + ")");
   }
   po::notify(vm);
   return true;
@@ -64,8 +72,10 @@ void printDistribution(const std::string& label, std::vector<double> values) {
 int stats(int argc, char** argv) {
   std::string map_path;
   std::size_t min_count = 2;
+  const std::string usage = "wicp_map stats MAP [--min-observations N]";
   po::options_description visible(
-      "wicp_map stats MAP [--min-observations N]\n"
+      usage +
+      "\n"
       "Frames, landmarks and their histogram of observation counts; then, over the landmarks\n"
       "with >= N observations, the bounding box and min/median/90th percentile/max of the\n"
       "covariance Frobenius norm, the mean observation distance and each strategy's weight.\n"
@@ -73,11 +83,11 @@ int stats(int argc, char** argv) {
   visible.add_options()("min-observations", tools::rangedValue(&min_count, std::size_t{0})->default_value(min_count),
                         "landmarks the extents and distributions are over (the paper aligns those with >= 2)");
   po::options_description positional_options;
-  positional_options.add_options()("map", po::value(&map_path)->required(), "landmark map");
+  positional_options.add_options()("map", po::value(&map_path)->required(), "a MAP file");
   po::positional_options_description positional;
   positional.add("map", 1);
   po::variables_map vm;
-  if (!parseArguments(argc, argv, visible, positional_options, positional, vm)) return 0;
+  if (!parseArguments(argc, argv, usage, visible, positional_options, positional, vm)) return 0;
 
   const LandmarkMap map = io::readLandmarkMap(map_path);
   std::cout << "map         " << map_path << '\n' << "frames      " << map.frames.size();
@@ -173,8 +183,11 @@ void requireNoStaleMiniMaps(const fs::path& folder, const std::set<std::string>&
 int cut(int argc, char** argv) {
   std::string map_path, out_dir, ranges_text;
   std::size_t frames_per_minimap = 0, min_count = 1;
+  const std::string usage =
+      "wicp_map cut MAP --out DIR (--frames-per-minimap N | --ranges \"0-119,120-239\") [--min-observations N]";
   po::options_description visible(
-      "wicp_map cut MAP --out DIR (--frames-per-minimap N | --ranges \"0-119,120-239\") [--min-observations N]\n"
+      usage +
+      "\n"
       "Writes DIR/minimap_000.txt, ... in the map format: the frames of each mini-map and every landmark\n"
       "they saw, with only their observations (LandmarkMap::miniMap). Options");
   // One option per line reads as a table: not reflowed.
@@ -189,11 +202,11 @@ int cut(int argc, char** argv) {
        "(0 is the same: a mini-map has no landmark it did not see)");
   // clang-format on
   po::options_description positional_options;
-  positional_options.add_options()("map", po::value(&map_path)->required(), "landmark map");
+  positional_options.add_options()("map", po::value(&map_path)->required(), "a MAP file");
   po::positional_options_description positional;
   positional.add("map", 1);
   po::variables_map vm;
-  if (!parseArguments(argc, argv, visible, positional_options, positional, vm)) return 0;
+  if (!parseArguments(argc, argv, usage, visible, positional_options, positional, vm)) return 0;
   if (vm.count("frames-per-minimap") == vm.count("ranges"))
     throw po::error("give either --frames-per-minimap or --ranges");
   const std::vector<FrameRange> ranges = vm.count("ranges") ? parseRanges(ranges_text) : std::vector<FrameRange>{};
@@ -246,8 +259,10 @@ void requireFloatPositions(const LandmarkMap& map, const std::string& map_path) 
 int convert(int argc, char** argv) {
   std::string map_path, output_path, strategy_name = "covariance";
   std::size_t min_count = 2;
+  const std::string usage = "wicp_map convert MAP OUT.pcd|OUT.ply [--strategy covariance] [--min-observations 2]";
   po::options_description visible(
-      "wicp_map convert MAP OUT.pcd|OUT.ply [--strategy covariance] [--min-observations 2]\n"
+      usage +
+      "\n"
       "Saves the landmarks as a weighted LandmarkCloud (x y z weight covariance_norm\n"
       "mean_observation_distance num_observations). A map without landmarks gives an empty\n"
       "cloud, which only PCD can hold. Options");
@@ -263,13 +278,13 @@ int convert(int argc, char** argv) {
   // One option per line reads as a table: not reflowed.
   // clang-format off
   positional_options.add_options()
-      ("map", po::value(&map_path)->required(), "landmark map")
-      ("output", po::value(&output_path)->required(), "output cloud");
+      ("map", po::value(&map_path)->required(), "a MAP file")
+      ("output", po::value(&output_path)->required(), "an output cloud OUT.pcd|OUT.ply");
   // clang-format on
   po::positional_options_description positional;
   positional.add("map", 1).add("output", 1);
   po::variables_map vm;
-  if (!parseArguments(argc, argv, visible, positional_options, positional, vm)) return 0;
+  if (!parseArguments(argc, argv, usage, visible, positional_options, positional, vm)) return 0;
   WeightStrategy strategy = WeightStrategy::Covariance;
   try {
     strategy = parseWeightStrategy(strategy_name);

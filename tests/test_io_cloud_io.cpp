@@ -185,3 +185,40 @@ TEST(CloudIo, NonFinitePositionOrBadWeightIsRefused) {
 }
 
 }  // namespace
+
+namespace {
+
+/// A PCD of three landmarks whose header says `count` for WIDTH and POINTS.
+fs::path pcdDeclaring(const fs::path& path, const std::string& count) {
+  io::saveLandmarkCloud(*toLandmarkCloud(threeLandmarks(), UniformWeight{}), path.string());
+  std::string text = readFile(path);
+  for (const std::string key : {"WIDTH 3\n", "POINTS 3\n"}) {
+    const std::size_t at = text.find(key);
+    EXPECT_NE(at, std::string::npos) << key;
+    text.replace(at, key.size(), key.substr(0, key.find(' ') + 1) + count + "\n");
+  }
+  writeFile(path, text);
+  return path;
+}
+
+}  // namespace
+
+// Issue #10: PCL's reader only said "vector::_M_default_append".
+TEST(CloudIo, NegativePointCountIsNamed) {
+  const fs::path path = pcdDeclaring(scratchDir("cloud_negative_count") / "negative.pcd", "-5");
+  expectError([&] { io::loadLandmarkCloud(path.string()); }, path, "number of points");
+}
+
+// Issue #10: PCL printed "[pcl::PCDReader::...]" lines besides our one message.
+TEST(CloudIo, PclPrintsNothingOnABrokenFile) {
+  const fs::path scratch = scratchDir("cloud_pcl_quiet");
+  const fs::path negative = pcdDeclaring(scratch / "negative.pcd", "-5");
+  const fs::path truncated = pcdDeclaring(scratch / "truncated.pcd", "3000");
+  writeFile(scratch / "garbage.ply", "ply\nformat binary_little_endian 1.0\nelement vertex 9\nend_header\n\x01");
+  for (const fs::path& path : {negative, truncated, scratch / "garbage.ply"}) {
+    ::testing::internal::CaptureStderr();
+    EXPECT_THROW(io::loadLandmarkCloud(path.string()), std::runtime_error) << path;
+    const std::string printed = ::testing::internal::GetCapturedStderr();
+    EXPECT_EQ(printed.find("[pcl::"), std::string::npos) << path << ":\n" << printed;
+  }
+}

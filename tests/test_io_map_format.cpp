@@ -151,6 +151,37 @@ TEST(MapFormatErrors, NonNumbers) {
                 "observation u '1O' is not a number");
 }
 
+/// The message of reading `text` as a map; empty if it was read.
+std::string refusal(const std::string& text) {
+  const fs::path path =
+      scratchDir(std::string("map_token_") + ::testing::UnitTest::GetInstance()->current_test_info()->name()) /
+      "bad_map.txt";
+  writeFile(path, text);
+  try {
+    io::readLandmarkMap(path.string());
+  } catch (const io::MapFormatError& e) {
+    return e.what();
+  }
+  return {};
+}
+
+// Issue #10: a bad token is echoed clipped and escaped, whatever the file holds.
+TEST(MapFormatErrors, HugeTokenIsClipped) {
+  const std::string message =
+      refusal(std::string(kTwoFrames) + "FRAME 2  0 0 " + std::string(1 << 20, '7') + "x  1 0 0 0\n");
+  EXPECT_LT(message.size(), 200u + scratchDir("map_token_HugeTokenIsClipped").string().size()) << message;
+  EXPECT_NE(message.find("tz '7777"), std::string::npos) << message;
+  EXPECT_NE(message.find("(1048577 bytes) is not a number"), std::string::npos) << message;
+}
+
+TEST(MapFormatErrors, NulAndBinaryBytesAreEscaped) {
+  const std::string nul = refusal(std::string(kTwoFrames) + "FRAME 2  0 0 1" + std::string(1, '\0') + "2  1 0 0 0\n");
+  EXPECT_NE(nul.find("tz '1\\x002' is not a number"), std::string::npos) << nul;
+  const std::string binary = refusal(std::string(kTwoFrames) + "\x01\xff\x1b[31m 2\n");
+  EXPECT_NE(binary.find("unknown record '\\x01\\xff\\x1b[31m'"), std::string::npos) << binary;
+  for (const char c : binary) EXPECT_TRUE(c >= 0x20 && c < 0x7f) << binary;
+}
+
 TEST(MapFormatErrors, NanAndInfinity) {
   expectRefused(std::string(kTwoFrames) + "LANDMARK 1  nan 0 1  1 0 0 0 1 0 0 0 1  0\n", 3, "x is nan");
   expectRefused(std::string(kTwoFrames) + "LANDMARK 1  0 0 1  1 0 0 0 inf 0 0 0 1  0\n", 3, "covariance entry is inf");

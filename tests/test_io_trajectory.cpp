@@ -124,6 +124,20 @@ TEST(Trajectory, MalformedLinesNameFileAndLine) {
   EXPECT_NE(readError(missing).find(missing), std::string::npos);
 }
 
+// Issue #10: a token is echoed clipped to a few bytes and with \xNN for bytes
+// that are not printable, so a NUL does not cut the message short.
+TEST(Trajectory, BadTokensAreClippedAndEscaped) {
+  const auto dir = weighted_icp::testing::scratchDir("trajectory_bad_tokens");
+  const std::string huge =
+      readError(writeText(dir / "huge.txt", "1.0 0 0 " + std::string(1 << 20, 'z') + " 0 0 0 1\n"));
+  EXPECT_LT(huge.size(), 200u + dir.string().size()) << huge;
+  EXPECT_NE(huge.find("tz 'zzzz"), std::string::npos) << huge;
+  EXPECT_NE(huge.find("(1048576 bytes) is not a number"), std::string::npos) << huge;
+  const std::string nul =
+      readError(writeText(dir / "nul.txt", "1.0 0 0 " + std::string("4\0\x7f\x80", 4) + " 0 0 0 1\n"));
+  EXPECT_NE(nul.find("tz '4\\x00\\x7f\\x80' is not a number"), std::string::npos) << nul;
+}
+
 TEST(Trajectory, NonRigidPosesAreNotWritten) {
   const auto dir = weighted_icp::testing::scratchDir("trajectory_write_invalid");
   Trajectory trajectory = curvedTrajectory(3);

@@ -78,6 +78,24 @@ TEST(ToolOptions, OutOfRangeNumbersAreCommandLineErrorsNamingTheOption) {
   }
 }
 
+// Issue #10: wicp_map said "the option '--map' is required", an option it does not have.
+TEST(ToolOptions, WicpMapNamesAMissingPositionalArgument) {
+  const fs::path scratch = scratchDir("wicp_map_positionals");
+  const std::pair<const char*, const char*> cases[] = {
+      {"stats", "wicp_map stats: a MAP file is required (usage: wicp_map stats MAP"},
+      {"cut --out x --frames-per-minimap 2", "wicp_map cut: a MAP file is required (usage: wicp_map cut MAP"},
+      {"convert", "wicp_map convert: a MAP file is required (usage: wicp_map convert MAP"},
+      {"convert a.txt", "wicp_map convert: an output cloud OUT.pcd|OUT.ply is required (usage: wicp_map convert"},
+  };
+  for (const auto& [args, message] : cases) {
+    SCOPED_TRACE(args);
+    const ToolRun r = run("wicp_map", args, scratch);
+    EXPECT_EQ(r.status, 2) << r.err;
+    EXPECT_NE(r.err.find(message), std::string::npos) << r.err;
+    EXPECT_EQ(r.err.find("--map"), std::string::npos) << r.err;
+  }
+}
+
 TEST(ToolOptions, BoundsThemselvesAreAccepted) {
   const fs::path scratch = scratchDir("bounds");
   // --help after the options: parsing (and so the range check) runs, then help exits 0.

@@ -15,6 +15,7 @@
 
 #include <pcl/PCLPointCloud2.h>
 #include <pcl/common/io.h>
+#include <pcl/console/print.h>
 #include <pcl/conversions.h>
 #include <pcl/exceptions.h>
 #include <pcl/io/pcd_io.h>
@@ -36,6 +37,20 @@ std::string pclMessage(const pcl::PCLException& e) {
   const std::string message = e.what();
   return message.rfind(": ", 0) == 0 ? message.substr(2) : message;
 }
+
+/// PCL prints its own errors on stderr ("[pcl::PCDReader::read] ..."), then
+/// returns a status we turn into one message of ours: while an object of this
+/// class lives, PCL prints nothing. The level is global, so it is restored.
+class QuietPcl {
+ public:
+  QuietPcl() : level_(pcl::console::getVerbosityLevel()) { pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS); }
+  ~QuietPcl() { pcl::console::setVerbosityLevel(level_); }
+  QuietPcl(const QuietPcl&) = delete;
+  QuietPcl& operator=(const QuietPcl&) = delete;
+
+ private:
+  pcl::console::VERBOSITY_LEVEL level_;
+};
 
 std::string typeName(std::uint8_t datatype) {
   return std::string(1, pcl::getFieldType(datatype)) + std::to_string(8 * pcl::getFieldSize(datatype));
@@ -193,6 +208,7 @@ void saveLandmarkCloud(const LandmarkCloud& cloud, const std::string& path) {
     throw std::runtime_error("cannot save " + path + ": PCL cannot write a PLY file without points; use .pcd");
   requireWritablePoints(cloud, path);
   writeAtomically(path, [&](const std::string& temporary) {
+    const QuietPcl quiet;
     int status = -1;
     try {
       status =
@@ -213,6 +229,7 @@ LandmarkCloud::Ptr loadLandmarkCloud(const std::string& path) {
   if (!std::filesystem::is_regular_file(path)) throw std::runtime_error(path + ": not a regular file");
   auto cloud = std::make_shared<LandmarkCloud>();
   pcl::PCLPointCloud2 blob;
+  const QuietPcl quiet;
   try {
     if (ext == ".pcd") {
       blob = readPcd(path);
@@ -225,10 +242,15 @@ LandmarkCloud::Ptr loadLandmarkCloud(const std::string& path) {
     }
   } catch (const std::bad_alloc&) {  // PCL allocates what the header declares
     throw std::runtime_error(path + ": the header declares more points than fit in memory");
+  } catch (const std::length_error&) {  // a negative count, read as a huge unsigned one
+    throw std::runtime_error(path + ": the header declares an impossible number of points (negative or too large)");
   } catch (const pcl::PCLException& e) {
     throw std::runtime_error(path + ": not a readable " + ext.substr(1) + " point cloud (" + pclMessage(e) + ")");
   }
   requireLandmarkFields(blob, path);
+  // fromPCLPointCloud2 takes a reference to the first byte of the data, which
+  // an empty cloud does not have (undefined behaviour).
+  if (blob.data.empty()) return cloud;
   pcl::fromPCLPointCloud2(blob, *cloud);
   requireValidPoints(*cloud, path);
   return cloud;

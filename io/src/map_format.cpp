@@ -36,8 +36,8 @@ class FieldReader {
     const auto text = fields_[i];
     const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
     if (error != std::errc() || end != text.data() + text.size())
-      fail(std::string(name) + " '" + std::string(text) + "' is not a number");
-    if (!std::isfinite(value)) fail(std::string(name) + " is " + std::string(text) + "; it must be finite");
+      fail(std::string(name) + " " + detail::quoteToken(text) + " is not a number");
+    if (!std::isfinite(value)) fail(std::string(name) + " is " + detail::clipToken(text) + "; it must be finite");
     return value;
   }
 
@@ -46,7 +46,7 @@ class FieldReader {
     const auto text = fields_[i];
     const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
     if (error != std::errc() || end != text.data() + text.size())
-      fail(std::string(name) + " '" + std::string(text) + "' is not a non-negative integer");
+      fail(std::string(name) + " " + detail::quoteToken(text) + " is not a non-negative integer");
     return value;
   }
 
@@ -145,7 +145,7 @@ LandmarkMap parseLandmarkMap(std::istream& in, const std::string& source) {
       map.landmarks.push_back(std::move(landmark));
       landmark_lines.push_back(line_number);
     } else {
-      f.fail("unknown record '" + std::string(fields[0]) + "' (expected FRAME or LANDMARK)");
+      f.fail("unknown record " + detail::quoteToken(fields[0]) + " (expected FRAME or LANDMARK)");
     }
   }
   if (in.bad()) throw MapFormatError(source, line_number, "read error");

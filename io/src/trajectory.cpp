@@ -25,8 +25,9 @@ double finiteNumber(const std::string& text, const char* name, const std::string
   double value = 0.0;
   const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
   if (error != std::errc() || end != text.data() + text.size())
-    failAt(path, line, std::string(name) + " '" + text + "' is not a number");
-  if (!std::isfinite(value)) failAt(path, line, std::string(name) + " is " + text + "; it must be finite");
+    failAt(path, line, std::string(name) + " " + detail::quoteToken(text) + " is not a number");
+  if (!std::isfinite(value))
+    failAt(path, line, std::string(name) + " is " + detail::clipToken(text) + "; it must be finite");
   return value;
 }
 
@@ -68,8 +69,9 @@ std::vector<TimestampedLine> readTimestampedLines(const std::string& path, std::
     line.line = line_number;
     const auto [previous, inserted] = line_of_timestamp.emplace(line.timestamp, line_number);
     if (!inserted)
-      failAt(path, line_number,
-             "timestamp " + fields[0] + " already appears on line " + std::to_string(previous->second));
+      failAt(
+          path, line_number,
+          "timestamp " + detail::clipToken(fields[0]) + " already appears on line " + std::to_string(previous->second));
     line.fields.assign(std::make_move_iterator(fields.begin() + 1), std::make_move_iterator(fields.end()));
     lines.push_back(std::move(line));
   }

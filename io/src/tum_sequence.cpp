@@ -8,6 +8,8 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "text_fields.h"
+
 namespace weighted_icp::io {
 
 namespace fs = std::filesystem;
@@ -16,6 +18,13 @@ namespace {
 
 /// The benchmark's association limit between colour and depth images.
 constexpr double kMaxRgbDepthDifference = 0.02;
+
+/// An image path as a list names it, for a message: the list's entry is
+/// clipped and escaped (it may be binary garbage), the folder is ours.
+std::string shownImagePath(const fs::path& folder, const std::string& entry) {
+  const std::string shown = detail::clipToken(entry);
+  return fs::path(entry).is_absolute() ? shown : (folder / shown).string();
+}
 
 std::string sizeText(const cv::Mat& image) { return std::to_string(image.cols) + "x" + std::to_string(image.rows); }
 
@@ -51,10 +60,11 @@ TumSequence TumSequence::open(const std::string& directory) {
     frame.depth_path = (folder / depth[d].fields[0]).string();
     // Checked now, so a long run does not stop at its 500th frame.
     if (!fs::is_regular_file(frame.rgb_path))
-      throw std::runtime_error(rgb_list + ":" + std::to_string(rgb[r].line) + ": no such image file " + frame.rgb_path);
+      throw std::runtime_error(rgb_list + ":" + std::to_string(rgb[r].line) + ": no such image file " +
+                               shownImagePath(folder, rgb[r].fields[0]));
     if (!fs::is_regular_file(frame.depth_path))
       throw std::runtime_error(depth_list + ":" + std::to_string(depth[d].line) + ": no such image file " +
-                               frame.depth_path);
+                               shownImagePath(folder, depth[d].fields[0]));
     sequence.frames_.push_back(std::move(frame));
   }
   if (sequence.frames_.empty())
