@@ -55,7 +55,7 @@ bool parseArguments(int argc, char** argv, const std::string& usage, po::options
   for (unsigned i = 0; i < positional.max_total_count(); ++i) {
     const std::string& name = positional.name_for_position(i);
     if (!vm.count(name))
-      throw po::error(std::string("wicp_map ") + argv[0] + ": " + positional_options.find(name, false).description() +
+      throw po::error(std::string(argv[0]) + ": " + positional_options.find(name, false).description() +
                       " is required (usage: " + usage + ")");
   }
   po::notify(vm);

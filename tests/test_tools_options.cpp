@@ -82,10 +82,10 @@ TEST(ToolOptions, OutOfRangeNumbersAreCommandLineErrorsNamingTheOption) {
 TEST(ToolOptions, WicpMapNamesAMissingPositionalArgument) {
   const fs::path scratch = scratchDir("wicp_map_positionals");
   const std::pair<const char*, const char*> cases[] = {
-      {"stats", "wicp_map stats: a MAP file is required (usage: wicp_map stats MAP"},
-      {"cut --out x --frames-per-minimap 2", "wicp_map cut: a MAP file is required (usage: wicp_map cut MAP"},
-      {"convert", "wicp_map convert: a MAP file is required (usage: wicp_map convert MAP"},
-      {"convert a.txt", "wicp_map convert: an output cloud OUT.pcd|OUT.ply is required (usage: wicp_map convert"},
+      {"stats", "error: stats: a MAP file is required (usage: wicp_map stats MAP"},
+      {"cut --out x --frames-per-minimap 2", "error: cut: a MAP file is required (usage: wicp_map cut MAP"},
+      {"convert", "error: convert: a MAP file is required (usage: wicp_map convert MAP"},
+      {"convert a.txt", "error: convert: an output cloud OUT.pcd|OUT.ply is required (usage: wicp_map convert"},
   };
   for (const auto& [args, message] : cases) {
     SCOPED_TRACE(args);
