@@ -9,6 +9,8 @@ packages=(
   libopencv-dev libopencv-contrib-dev opencv-data libceres-dev
   libgtest-dev libbenchmark-dev
   python3-matplotlib python3-numpy
+  libnanoflann-dev pybind11-dev python3-pybind11 python3-pytest python3-mypy python3-open3d
+  clang libclang-rt-14-dev
 )
 
 missing=()

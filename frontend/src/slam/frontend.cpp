@@ -357,6 +357,10 @@ void Frontend::insertKeyframe(const Frame& frame, const std::vector<std::pair<st
   keyframe.timestamp = frame.timestamp;
   keyframe.pose_wc = frame.pose_wc;
   keyframe.segment = segment_;
+  keyframe.keypoints = frame.keypoints;
+  keyframe.descriptors = frame.descriptors.clone();  // the keyframe outlives the frame's buffers
+  keyframe.pixels = frame.pixels;
+  keyframe.depths = frame.depths;
   const KeyframeId keyframe_id = map_.addKeyframe(keyframe);
   last_keyframe_id_ = keyframe_id;
   const std::vector<bool> used = observeTrackedPoints(keyframe_id, frame, tracked);

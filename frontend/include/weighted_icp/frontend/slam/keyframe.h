@@ -6,6 +6,7 @@
 #include <vector>
 
 #include <Eigen/Geometry>
+#include <opencv2/core.hpp>
 
 #include "weighted_icp/frontend/slam/map_point.h"
 
@@ -19,6 +20,13 @@ struct Keyframe {
   /// The mini-map segment it belongs to; a new segment starts after tracking is lost.
   std::size_t segment = 0;
   std::vector<MapPointId> observed_points;
+  /// Every feature the keyframe detected (not only those that became
+  /// landmarks): what place recognition describes the keyframe by and what
+  /// loop verification matches against another keyframe's landmarks.
+  std::vector<cv::KeyPoint> keypoints;  // as detected (distorted image)
+  cv::Mat descriptors;                  // one binary (ORB) row per keypoint, CV_8U
+  std::vector<Eigen::Vector2d> pixels;  // undistorted keypoint positions
+  std::vector<double> depths;           // metres at each keypoint, 0 = none
 };
 
 }  // namespace weighted_icp::frontend
