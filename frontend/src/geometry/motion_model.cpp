@@ -21,4 +21,9 @@ void ConstantVelocityModel::reset() {
   latest_wc_.reset();
 }
 
+void ConstantVelocityModel::applyCorrection(const Eigen::Isometry3d& delta_wc) {
+  if (previous_wc_) previous_wc_ = delta_wc * *previous_wc_;
+  if (latest_wc_) latest_wc_ = delta_wc * *latest_wc_;
+}
+
 }  // namespace weighted_icp::frontend

@@ -109,8 +109,20 @@ TrackingResult Frontend::track(const RgbdFrame& image) {
   Frame frame = makeFrame(image, result.used_clahe);
   result.features = frame.size();
   current_color_ = image.color;
+  followMapCorrection();
   if (state_ != FrontendState::Tracking) return initialize(frame, result);
   return trackFrame(frame, result);
+}
+
+bool Frontend::followMapCorrection() {
+  const auto delta_wc = map_.applyPendingCorrection(last_keyframe_id_);
+  if (!delta_wc) return false;
+  // The tracker's state is where its last keyframe was: it moves as that keyframe did.
+  if (last_pose_wc_) last_pose_wc_ = *delta_wc * *last_pose_wc_;
+  motion_.applyCorrection(*delta_wc);
+  last_keyframe_.pose_wc = *delta_wc * last_keyframe_.pose_wc;
+  local_map_ = LocalMap{};  // the revision changed too; the points moved
+  return true;
 }
 
 void Frontend::transitionTo(FrontendState next) {

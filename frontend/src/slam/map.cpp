@@ -1,6 +1,7 @@
 #include "weighted_icp/frontend/slam/map.h"
 
 #include <algorithm>
+#include <iterator>
 #include <set>
 #include <stdexcept>
 #include <string>
@@ -95,6 +96,7 @@ LocalMap Map::localMap(std::size_t keyframes) const {
 MapWindow Map::window(std::size_t keyframes) const {
   std::lock_guard<std::mutex> lock(mutex_);
   MapWindow window;
+  window.corrections = corrections_;
   if (keyframes_.empty()) return window;
   const std::size_t segment = keyframes_.rbegin()->second.segment;
   for (auto it = keyframes_.rbegin(); it != keyframes_.rend() && window.keyframes.size() < keyframes; ++it) {
@@ -109,6 +111,7 @@ MapWindow Map::window(std::size_t keyframes) const {
 void Map::applyOptimization(const MapWindow& optimised,
                             const std::vector<std::pair<MapPointId, KeyframeId>>& rejected_observations) {
   std::lock_guard<std::mutex> lock(mutex_);
+  if (optimised.corrections != corrections_) return;  // optimised in the frame before a loop correction
   ++revision_;
   for (const auto& keyframe : optimised.keyframes) {
     const auto it = keyframes_.find(keyframe.id);
@@ -134,6 +137,60 @@ void Map::applyOptimization(const MapWindow& optimised,
     }
     if (observations.empty()) points_.erase(point);
   }
+}
+
+KeyframePoses Map::keyframePoses() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  KeyframePoses poses;
+  poses.corrections = corrections_;
+  for (const auto& [id, keyframe] : keyframes_) {
+    poses.ids.push_back(id);
+    poses.poses_wc.push_back(keyframe.pose_wc);
+    poses.segments.push_back(keyframe.segment);
+  }
+  return poses;
+}
+
+std::uint64_t Map::corrections() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return corrections_;
+}
+
+bool Map::postCorrection(PoseGraphCorrection correction) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (correction.base_corrections != corrections_) return false;
+  pending_correction_ = std::move(correction);
+  return true;
+}
+
+bool Map::correctionPending() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return pending_correction_.has_value();
+}
+
+Eigen::Isometry3d Map::deltaOf(const PoseGraphCorrection& correction, KeyframeId id) {
+  auto after = correction.delta_wc.upper_bound(id);
+  if (after == correction.delta_wc.begin()) return Eigen::Isometry3d::Identity();
+  return std::prev(after)->second;
+}
+
+std::optional<Eigen::Isometry3d> Map::applyPendingCorrection(KeyframeId follow) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (!pending_correction_) return std::nullopt;
+  const PoseGraphCorrection correction = std::move(*pending_correction_);
+  pending_correction_.reset();
+  ++revision_;
+  ++corrections_;
+  for (auto& [id, keyframe] : keyframes_) keyframe.pose_wc = deltaOf(correction, id) * keyframe.pose_wc;
+  for (auto& [id, point] : points_) {
+    if (point.observations.empty()) continue;
+    KeyframeId reference = point.observations.front().keyframe;
+    for (const auto& observation : point.observations) reference = std::min(reference, observation.keyframe);
+    const Eigen::Isometry3d delta = deltaOf(correction, reference);
+    point.position = delta * point.position;
+    point.covariance = delta.linear() * point.covariance * delta.linear().transpose();
+  }
+  return keyframes_.count(follow) ? deltaOf(correction, follow) : Eigen::Isometry3d::Identity();
 }
 
 std::vector<Keyframe> Map::keyframes() const {

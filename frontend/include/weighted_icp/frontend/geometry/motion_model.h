@@ -17,6 +17,9 @@ class ConstantVelocityModel {
   std::optional<Eigen::Isometry3d> predict() const;
   /// Forgets the poses, e.g. after tracking was lost.
   void reset();
+  /// Moves the recorded poses by a world-frame correction (new = delta_wc * old),
+  /// as a loop closure moves the map: the velocity, relative, is unchanged.
+  void applyCorrection(const Eigen::Isometry3d& delta_wc);
 
  private:
   std::optional<Eigen::Isometry3d> previous_wc_;

@@ -124,6 +124,13 @@ class Frontend {
   /// depth sizes or a depth image that is not CV_32F.
   TrackingResult track(const RgbdFrame& image);
 
+  /// Applies a pose-graph correction posted to the map (Map::postCorrection)
+  /// and moves the tracking state with it: the last pose, the motion model and
+  /// the last keyframe follow the last keyframe's correction, and the local map
+  /// is taken again. track() calls it first; call it after the last frame too.
+  /// @return true when a correction was applied.
+  bool followMapCorrection();
+
   FrontendState state() const { return state_; }
   /// The segment the next keyframe belongs to: 0, then one more after each loss.
   std::size_t segment() const { return segment_; }

@@ -28,6 +28,31 @@ struct LocalMap {
 struct MapWindow {
   std::vector<Keyframe> keyframes;  // oldest first
   std::vector<MapPoint> points;
+  /// Map::corrections() when it was taken: a window taken before a pose-graph
+  /// correction is not written back (its poses are in the old frame).
+  std::uint64_t corrections = 0;
+};
+
+/// The keyframe poses the pose graph starts from, read in one go.
+struct KeyframePoses {
+  std::uint64_t corrections = 0;  // Map::corrections() when they were read
+  std::vector<KeyframeId> ids;    // ascending
+  std::vector<Eigen::Isometry3d> poses_wc;
+  std::vector<std::size_t> segments;
+};
+
+/// @brief A pose-graph correction: per keyframe, the world-frame motion that
+/// takes its pose from where the pose graph read it to where the optimisation
+/// put it (new = delta_wc * old).
+///
+/// Keyframes it does not list (added after the poses were read) move with the
+/// nearest listed keyframe before them, which they were tracked from; every map
+/// point moves with its reference keyframe, the first keyframe still observing
+/// it, and its covariance turns with it.
+struct PoseGraphCorrection {
+  /// Map::corrections() when the corrected poses were read (KeyframePoses::corrections).
+  std::uint64_t base_corrections = 0;
+  std::map<KeyframeId, Eigen::Isometry3d> delta_wc;
 };
 
 class Map {
@@ -51,9 +76,31 @@ class Map {
 
   /// Writes back what the backend optimised: keyframe poses and point
   /// positions/covariances, for the ids that still exist; removes the listed
-  /// observations (outliers) and points left with none.
+  /// observations (outliers) and points left with none. Does nothing when a
+  /// pose-graph correction was applied since the window was taken.
   void applyOptimization(const MapWindow& optimised,
                          const std::vector<std::pair<MapPointId, KeyframeId>>& rejected_observations);
+
+  /// @brief Every keyframe's pose and segment, with the correction count, under one lock.
+  KeyframePoses keyframePoses() const;
+  /// @brief How many pose-graph corrections have been applied.
+  std::uint64_t corrections() const;
+  /// @brief Hands a correction to the tracking thread, which applies it between
+  /// two frames (applyPendingCorrection), so a frame is never tracked half in the
+  /// old frame and half in the new. Replaces a correction still pending: the
+  /// newer one was computed from the same poses with every loop so far.
+  /// @param correction The correction.
+  /// @return false (nothing posted) when it is stale: a correction was applied
+  /// after its poses were read, so they must be read and optimised again.
+  bool postCorrection(PoseGraphCorrection correction);
+  /// @brief True while a posted correction waits to be applied.
+  bool correctionPending() const;
+  /// @brief Applies the pending correction, if any, to keyframes and points in
+  /// one step (revision and corrections() bump).
+  /// @param follow A keyframe whose correction the caller wants back.
+  /// @return The world-frame correction applied to `follow` (identity if it is
+  /// unknown), or nothing when no correction was pending.
+  std::optional<Eigen::Isometry3d> applyPendingCorrection(KeyframeId follow);
 
   std::vector<Keyframe> keyframes() const;
   std::vector<MapPoint> mapPoints() const;
@@ -62,11 +109,15 @@ class Map {
 
  private:
   std::vector<MapPointId> currentSegmentPoints(std::size_t keyframes) const;  // lock held
+  /// The correction of a keyframe: its own, else that of the nearest listed keyframe before it.
+  static Eigen::Isometry3d deltaOf(const PoseGraphCorrection& correction, KeyframeId id);
 
   mutable std::mutex mutex_;
   std::map<KeyframeId, Keyframe> keyframes_;
   std::map<MapPointId, MapPoint> points_;
   std::uint64_t revision_ = 0;
+  std::uint64_t corrections_ = 0;
+  std::optional<PoseGraphCorrection> pending_correction_;
   KeyframeId next_keyframe_id_ = 0;
   MapPointId next_point_id_ = 0;
 };

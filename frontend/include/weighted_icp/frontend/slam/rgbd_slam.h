@@ -38,6 +38,11 @@ class RgbdSlam {
 
   const std::vector<FrameRecord>& frames() const { return frames_; }
   const Map& map() const { return map_; }
+  /// The map, for the mapping layer's loop closing, which posts pose-graph corrections to it.
+  Map& map() { return map_; }
+  /// Applies a pose-graph correction still pending after the last frame (the
+  /// next frame would have); returns true if there was one.
+  bool applyPendingCorrection() { return frontend_.followMapCorrection(); }
   std::size_t optimizationsRun() const { return backend_.optimizationsRun(); }
   /// One pose per frame that got one (camera-to-world), expressed through its
   /// reference keyframe as the backend left it.
