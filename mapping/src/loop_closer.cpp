@@ -1,0 +1,157 @@
+// The loop-closing stage: detection per keyframe, pose-graph optimisation per loop, corrections posted to the map.
+#include "weighted_icp/mapping/loop_closer.h"
+
+#include <stdexcept>
+#include <utility>
+
+namespace weighted_icp::mapping {
+
+namespace {
+
+/// Nodes at the keyframe poses (the first fixed), odometry edges between consecutive keyframes.
+PoseGraph odometryGraph(const frontend::KeyframePoses& keyframes, const OdometryNoiseModel& model) {
+  PoseGraph graph;
+  for (std::size_t i = 0; i < keyframes.ids.size(); ++i) graph.addNode(keyframes.ids[i], keyframes.poses_wc[i], i == 0);
+  for (std::size_t i = 1; i < keyframes.ids.size(); ++i) {
+    const Eigen::Isometry3d relative = keyframes.poses_wc[i - 1].inverse() * keyframes.poses_wc[i];
+    const bool across_segments = keyframes.segments[i - 1] != keyframes.segments[i];
+    graph.addEdge({keyframes.ids[i - 1], keyframes.ids[i], relative,
+                   odometryInformation(relative, model, across_segments), PoseGraphEdgeKind::Odometry});
+  }
+  return graph;
+}
+
+}  // namespace
+
+LoopCloser::LoopCloser(frontend::Map& map, LoopDetector detector, LoopClosingOptions options)
+    : map_(map), detector_(std::move(detector)), options_(std::move(options)) {
+  if (!detector_) throw std::invalid_argument("LoopCloser: no loop detector given");
+  if (options_.background_thread) thread_ = std::thread([this] { run(); });
+}
+
+LoopCloser::~LoopCloser() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    stopping_ = true;
+  }
+  wake_.notify_all();
+  if (thread_.joinable()) thread_.join();
+}
+
+void LoopCloser::rethrowError() const {
+  if (error_) std::rethrow_exception(error_);
+}
+
+void LoopCloser::keyframeInserted(frontend::KeyframeId keyframe) {
+  if (!options_.background_thread) {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      rethrowError();
+    }
+    try {
+      process(keyframe);
+    } catch (...) {
+      std::lock_guard<std::mutex> lock(mutex_);
+      error_ = std::current_exception();
+      throw;
+    }
+    return;
+  }
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    rethrowError();
+    queue_.push_back(keyframe);
+  }
+  wake_.notify_one();
+}
+
+void LoopCloser::flush() {
+  std::unique_lock<std::mutex> lock(mutex_);
+  idle_.wait(lock, [this] { return (queue_.empty() && !running_) || error_; });
+  rethrowError();
+}
+
+LoopClosingStats LoopCloser::stats() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return stats_;
+}
+
+std::vector<LoopConstraint> LoopCloser::acceptedLoops() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return loops_;
+}
+
+void LoopCloser::run() {
+  std::unique_lock<std::mutex> lock(mutex_);
+  while (true) {
+    wake_.wait(lock, [this] { return !queue_.empty() || stopping_; });
+    // Queued keyframes are processed before stopping; after an error nothing more is.
+    if (error_ || queue_.empty()) {
+      if (stopping_) break;
+      queue_.clear();
+      continue;
+    }
+    const frontend::KeyframeId keyframe = queue_.front();
+    queue_.pop_front();
+    running_ = true;
+    lock.unlock();
+    std::exception_ptr error;
+    try {
+      process(keyframe);
+    } catch (...) {
+      error = std::current_exception();
+    }
+    lock.lock();
+    running_ = false;
+    if (error && !error_) error_ = error;
+    idle_.notify_all();
+  }
+  idle_.notify_all();
+}
+
+void LoopCloser::process(frontend::KeyframeId keyframe) {
+  const std::optional<LoopConstraint> loop = detector_(map_, keyframe);
+  if (!loop) return;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    ++stats_.loops_detected;
+  }
+  if (!closeLoop(*loop)) return;
+  std::lock_guard<std::mutex> lock(mutex_);
+  ++stats_.loops_accepted;
+  loops_.push_back(*loop);
+}
+
+bool LoopCloser::closeLoop(const LoopConstraint& candidate) {
+  for (int attempt = 0; attempt <= options_.max_stale_retries; ++attempt) {
+    const frontend::KeyframePoses keyframes = map_.keyframePoses();
+    PoseGraph graph = odometryGraph(keyframes, options_.odometry);
+    const auto known = [&graph](const LoopConstraint& loop) {
+      return graph.poses().count(loop.query) && graph.poses().count(loop.match);
+    };
+    // loops_ changes only in this thread: reading it here needs no lock.
+    for (const LoopConstraint& loop : loops_)
+      if (known(loop)) graph.addEdge(loopEdge(loop));
+    if (!known(candidate)) return false;  // names a keyframe the map does not have
+    graph.addEdge(loopEdge(candidate));
+
+    const PoseGraphSummary summary = graph.optimize(options_.pose_graph);
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      ++stats_.pose_graph_optimisations;
+    }
+    if (!summary.ok) throw std::runtime_error("LoopCloser: pose-graph optimisation failed: " + summary.message);
+    if (!summary.edge_used.back()) return false;
+
+    frontend::PoseGraphCorrection correction;
+    correction.base_corrections = keyframes.corrections;
+    for (std::size_t i = 0; i < keyframes.ids.size(); ++i)
+      correction.delta_wc[keyframes.ids[i]] = graph.poses().at(keyframes.ids[i]) * keyframes.poses_wc[i].inverse();
+    if (map_.postCorrection(std::move(correction))) return true;
+    // A correction was applied while this one was computed: read the poses again.
+  }
+  throw std::runtime_error("LoopCloser: the map kept changing under the pose-graph optimisation (" +
+                           std::to_string(options_.max_stale_retries + 1) + " attempts)");
+}
+
+}  // namespace weighted_icp::mapping

@@ -1,0 +1,37 @@
+// RgbdSlam composed with the loop closer.
+#include "weighted_icp/mapping/loop_closing_slam.h"
+
+#include <stdexcept>
+
+namespace weighted_icp::mapping {
+
+LoopClosingSlam::LoopClosingSlam(const PinholeCamera& camera, LoopDetector detector,
+                                 const LoopClosingSlamOptions& options)
+    : slam_(camera, options.slam) {
+  if (options.loop_closure)
+    loop_closer_ = std::make_unique<LoopCloser>(slam_.map(), std::move(detector), options.loop_closing);
+}
+
+const frontend::FrameRecord& LoopClosingSlam::process(const RgbdFrame& image) {
+  const frontend::FrameRecord& record = slam_.process(image);
+  // A keyframe's pose is expressed relative to itself: its reference is its id.
+  if (loop_closer_ && record.result.keyframe) loop_closer_->keyframeInserted(record.result.reference_keyframe);
+  return record;
+}
+
+void LoopClosingSlam::finish() {
+  slam_.finish();
+  if (!loop_closer_) return;
+  loop_closer_->flush();
+  slam_.applyPendingCorrection();
+}
+
+LoopClosingStats LoopClosingSlam::loopStats() const {
+  return loop_closer_ ? loop_closer_->stats() : LoopClosingStats{};
+}
+
+std::vector<LoopConstraint> LoopClosingSlam::acceptedLoops() const {
+  return loop_closer_ ? loop_closer_->acceptedLoops() : std::vector<LoopConstraint>{};
+}
+
+}  // namespace weighted_icp::mapping

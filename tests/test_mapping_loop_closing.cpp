@@ -1,0 +1,191 @@
+// Loop closing: map corrections move keyframes and landmarks together, the loop closer corrects a drifted map,
+// the background thread agrees with the inline mode, and errors are carried out.
+#include <atomic>
+#include <stdexcept>
+
+#include <gtest/gtest.h>
+
+#include "pose_graph_fixtures.h"
+#include "weighted_icp/frontend/slam/map.h"
+#include "weighted_icp/mapping/loop_closer.h"
+
+namespace weighted_icp::testing {
+namespace {
+
+using frontend::KeyframeId;
+using frontend::Map;
+
+/// A map of the drifted loop's keyframes, each creating one point 2 m in front of it.
+void fillMap(Map& map, const DriftedLoop& loop, std::size_t first, std::size_t last) {
+  for (std::size_t i = first; i < last; ++i) {
+    frontend::Keyframe keyframe;
+    keyframe.pose_wc = loop.drifted[i];
+    const KeyframeId id = map.addKeyframe(keyframe);
+    frontend::MapPoint point;
+    point.position = loop.drifted[i] * Eigen::Vector3d(0, 0, 2);
+    point.covariance = Eigen::Vector3d(1e-4, 2e-4, 4e-4).asDiagonal();
+    point.observations.push_back({id, Eigen::Vector2d(320, 240), 2.0});
+    map.addMapPoint(point);
+  }
+}
+
+TEST(MapCorrection, LandmarksMoveWithTheirReferenceKeyframe) {
+  Map map;
+  for (int i = 0; i < 3; ++i) map.addKeyframe({});
+  frontend::MapPoint seen_first_by_1;
+  seen_first_by_1.position = Eigen::Vector3d(0, 0, 1);
+  seen_first_by_1.covariance = Eigen::Vector3d(1e-4, 1e-4, 9e-4).asDiagonal();
+  seen_first_by_1.observations = {
+      {2, Eigen::Vector2d::Zero(), 0.0},
+      {1, Eigen::Vector2d::Zero(), 0.0}};  // the reference is the first keyframe, not the first listed
+  const auto point_1 = map.addMapPoint(seen_first_by_1);
+  frontend::MapPoint seen_by_0 = seen_first_by_1;
+  seen_by_0.observations = {{0, Eigen::Vector2d::Zero(), 0.0}, {2, Eigen::Vector2d::Zero(), 0.0}};
+  const auto point_0 = map.addMapPoint(seen_by_0);
+
+  Eigen::Isometry3d delta = Eigen::Isometry3d::Identity();
+  delta.linear() = Eigen::AngleAxisd(0.5, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  delta.translation() = Eigen::Vector3d(1, 2, 3);
+  frontend::PoseGraphCorrection correction;
+  correction.base_corrections = map.corrections();
+  correction.delta_wc = {{0, Eigen::Isometry3d::Identity()}, {1, delta}};  // keyframe 2 came after: follows 1
+  const auto revision = map.revision();
+  ASSERT_TRUE(map.postCorrection(correction));
+  EXPECT_TRUE(map.correctionPending());
+  const auto followed = map.applyPendingCorrection(2);
+  ASSERT_TRUE(followed);
+  EXPECT_TRUE(followed->isApprox(delta));
+  EXPECT_FALSE(map.correctionPending());
+  EXPECT_GT(map.revision(), revision);
+  EXPECT_EQ(map.corrections(), 1u);
+
+  EXPECT_TRUE(map.keyframePose(0)->isApprox(Eigen::Isometry3d::Identity()));
+  EXPECT_TRUE(map.keyframePose(1)->isApprox(delta));
+  EXPECT_TRUE(map.keyframePose(2)->isApprox(delta));
+  EXPECT_TRUE(map.mapPoint(point_1)->position.isApprox(delta * Eigen::Vector3d(0, 0, 1)));
+  const Eigen::Matrix3d rotated = delta.linear() * seen_first_by_1.covariance * delta.linear().transpose();
+  EXPECT_TRUE(map.mapPoint(point_1)->covariance.isApprox(rotated));
+  EXPECT_TRUE(map.mapPoint(point_0)->position.isApprox(Eigen::Vector3d(0, 0, 1)));
+
+  // Computed from poses read before that correction: stale, refused.
+  EXPECT_FALSE(map.postCorrection(correction));
+  EXPECT_FALSE(map.applyPendingCorrection(0));
+}
+
+TEST(MapCorrection, ABundleAdjustmentWindowTakenBeforeACorrectionIsNotWrittenBack) {
+  Map map;
+  map.addKeyframe({});
+  map.addKeyframe({});
+  frontend::MapWindow window = map.window(7);
+  window.keyframes[1].pose_wc.translation() = Eigen::Vector3d(5, 0, 0);
+  frontend::PoseGraphCorrection correction;
+  correction.delta_wc[0] = Eigen::Isometry3d(Eigen::Translation3d(0, 1, 0));
+  ASSERT_TRUE(map.postCorrection(correction));
+  map.applyPendingCorrection(0);
+  map.applyOptimization(window, {});
+  EXPECT_TRUE(map.keyframePose(1)->translation().isApprox(Eigen::Vector3d(0, 1, 0)));
+}
+
+/// Loops at fixed keyframes: the true closure at the last keyframe and a wrong one (aliasing) at `wrong_at`.
+mapping::LoopDetector scriptedDetector(const DriftedLoop& loop, KeyframeId wrong_at) {
+  return [&loop, wrong_at](const Map&, KeyframeId query) -> std::optional<mapping::LoopConstraint> {
+    mapping::LoopConstraint constraint;
+    constraint.query = query;
+    constraint.information = Eigen::Matrix<double, 6, 6>::Identity() * 1e4;
+    if (query == loop.truth.size() - 1) {
+      constraint.match = 0;
+      constraint.query_in_match = loop.truth[0].inverse() * loop.truth[query];
+      return constraint;
+    }
+    if (query == wrong_at) {
+      constraint.match = 5;
+      constraint.query_in_match = loop.truth[5].inverse() * loop.truth[query];
+      constraint.query_in_match.translation() += Eigen::Vector3d(1.0, -0.5, 0.4);
+      return constraint;
+    }
+    return std::nullopt;
+  };
+}
+
+/// Runs the loop closer over the drifted loop as a tracker would: keyframe by keyframe, applying corrections
+/// between them. Returns the final keyframe poses.
+std::vector<Eigen::Isometry3d> runLoopCloser(const DriftedLoop& loop, bool background,
+                                             mapping::LoopClosingStats& stats) {
+  Map map;
+  mapping::LoopClosingOptions options;
+  options.background_thread = background;
+  mapping::LoopCloser closer(map, scriptedDetector(loop, 30), options);
+  for (std::size_t i = 0; i < loop.drifted.size(); ++i) {
+    map.applyPendingCorrection(i);
+    fillMap(map, loop, i, i + 1);
+    closer.keyframeInserted(i);
+  }
+  closer.flush();
+  map.applyPendingCorrection(0);
+  stats = closer.stats();
+  const auto poses = map.keyframePoses();
+  // Every point still sits 2 m in front of its keyframe.
+  for (const auto& point : map.mapPoints()) {
+    const Eigen::Isometry3d pose = *map.keyframePose(point.observations.front().keyframe);
+    EXPECT_LT((pose.inverse() * point.position - Eigen::Vector3d(0, 0, 2)).norm(), 1e-9);
+  }
+  return poses.poses_wc;
+}
+
+TEST(LoopCloser, CorrectsTheDriftedMapRefusesTheWrongLoopAndTheThreadAgreesWithInline) {
+  const DriftedLoop loop = makeDriftedLoop(60, 3.0, 0.1, 0.005);
+  mapping::LoopClosingStats inline_stats, background_stats;
+  const auto inline_poses = runLoopCloser(loop, false, inline_stats);
+  const auto background_poses = runLoopCloser(loop, true, background_stats);
+
+  EXPECT_EQ(inline_stats.loops_detected, 2u);
+  EXPECT_EQ(inline_stats.loops_accepted, 1u);
+  EXPECT_EQ(inline_stats.pose_graph_optimisations, 2u);
+  EXPECT_LT(rmsPositionError(loop, inline_poses), rmsPositionError(loop, loop.drifted) / 3);
+
+  EXPECT_EQ(background_stats.loops_detected, inline_stats.loops_detected);
+  EXPECT_EQ(background_stats.loops_accepted, inline_stats.loops_accepted);
+  ASSERT_EQ(background_poses.size(), inline_poses.size());
+  for (std::size_t i = 0; i < inline_poses.size(); ++i)
+    EXPECT_LT((background_poses[i].translation() - inline_poses[i].translation()).norm(), 1e-6) << "keyframe " << i;
+}
+
+TEST(LoopCloser, ADetectorErrorIsCarriedOutAndTheThreadStopsCleanly) {
+  for (const bool background : {false, true}) {
+    Map map;
+    mapping::LoopClosingOptions options;
+    options.background_thread = background;
+    std::atomic<int> calls{0};
+    auto closer = std::make_unique<mapping::LoopCloser>(
+        map,
+        [&calls](const Map&, KeyframeId query) -> std::optional<mapping::LoopConstraint> {
+          ++calls;
+          if (query == 2) throw std::runtime_error("vocabulary file truncated");
+          return std::nullopt;
+        },
+        options);
+    bool thrown = false;
+    try {
+      for (KeyframeId i = 0; i < 5; ++i) {
+        map.addKeyframe({});
+        closer->keyframeInserted(i);
+      }
+      closer->flush();
+    } catch (const std::runtime_error& error) {
+      thrown = true;
+      EXPECT_NE(std::string(error.what()).find("vocabulary"), std::string::npos);
+    }
+    EXPECT_TRUE(thrown) << (background ? "background" : "inline");
+    EXPECT_THROW(closer->flush(), std::runtime_error) << "the error must not be lost after being reported once";
+    closer.reset();  // joins without hanging or throwing
+    EXPECT_LE(calls.load(), 3) << "nothing is processed after the error";
+  }
+}
+
+TEST(LoopCloser, RequiresADetector) {
+  Map map;
+  EXPECT_THROW(mapping::LoopCloser(map, mapping::LoopDetector{}), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace weighted_icp::testing
