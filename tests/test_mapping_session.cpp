@@ -164,6 +164,30 @@ void expectErrorAt(const fs::path& folder, const fs::path& file, std::size_t lin
   }
 }
 
+TEST(Session, RebuildsTheFrontEndMap) {
+  mapping::Session session = makeSession();
+  EXPECT_THROW(session.toMap(), std::invalid_argument) << "keyframe ids 0, 2, 4 cannot be a run's";
+  for (auto& keyframe : session.keyframes) keyframe.id /= 2;
+  for (auto& point : session.points)
+    for (auto& observation : point.observations) observation.keyframe /= 2;
+  for (auto& frame : session.frames) frame.reference_keyframe /= 2;
+  const auto map = session.toMap();
+  ASSERT_EQ(map->keyframeCount(), session.keyframes.size());
+  ASSERT_EQ(map->mapPointCount(), session.points.size());
+  const auto points = map->mapPoints();
+  for (std::size_t j = 0; j < points.size(); ++j) {
+    EXPECT_EQ(points[j].id, j);
+    EXPECT_EQ(points[j].position, session.points[j].position);
+    EXPECT_EQ(points[j].observations.size(), session.points[j].observations.size());
+  }
+  const auto keyframes = map->keyframes();
+  for (std::size_t k = 0; k < keyframes.size(); ++k) {
+    EXPECT_TRUE(keyframes[k].pose_wc.isApprox(session.keyframes[k].pose_wc));
+    EXPECT_EQ(keyframes[k].observed_points.size(), session.keyframes[k].observed_points.size());
+    EXPECT_EQ(keyframes[k].keypoints.size(), session.keyframes[k].keypoints.size());
+  }
+}
+
 TEST(Session, CorruptFilesFailNamingFileAndLine) {
   const mapping::Session session = makeSession();
   const fs::path root = scratchDir("corrupt");

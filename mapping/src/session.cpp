@@ -282,6 +282,19 @@ void Session::validate() const {
       fail("frame at " + detail::exact(frame.timestamp) + ": unknown reference keyframe or non-finite pose");
 }
 
+std::unique_ptr<frontend::Map> Session::toMap() const {
+  validate();
+  auto map = std::make_unique<frontend::Map>();
+  for (std::size_t i = 0; i < keyframes.size(); ++i) {
+    if (keyframes[i].id != i)
+      throw std::invalid_argument("session: keyframe ids must be 0, 1, 2, ... to rebuild a map (found " +
+                                  std::to_string(keyframes[i].id) + " at position " + std::to_string(i) + ")");
+    map->addKeyframe(keyframes[i]);
+  }
+  for (const auto& point : points) map->addMapPoint(point);
+  return map;
+}
+
 Session captureSession(const frontend::RgbdSlam& slam, const PinholeCamera& camera) {
   Session session;
   session.camera = camera;

@@ -6,6 +6,7 @@
 // and line of any error.
 
 #include <cstddef>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -43,6 +44,11 @@ struct Session {
 
   /// @brief Camera-to-world pose of every frame: its reference keyframe's pose times pose_in_reference.
   Trajectory trajectory() const;
+  /// @brief The session as a front-end map again (for place recognition, the mini-map graph, a merge).
+  /// Keyframes keep their ids, which must therefore be 0, 1, 2, ... as a SLAM run numbers them
+  /// (std::invalid_argument otherwise); landmarks are numbered again in id order (the map assigns point ids;
+  /// a run's ids have gaps where bundle adjustment removed points), with their observations in the same order.
+  std::unique_ptr<frontend::Map> toMap() const;
   /// @brief Throws std::invalid_argument naming the first inconsistency (duplicate or unordered ids, an
   /// observation or a frame naming an unknown keyframe, feature arrays of different lengths, non-finite values).
   void validate() const;
