@@ -108,9 +108,9 @@ int main(int argc, char** argv) {
       std::cout << json.str() << std::endl;
     }
     if (!plot_path.empty())
-      tools::plotAlignment("wicp_align", source, target, weight, result.transformation, plot_path,
-                           source_path + " onto " + target_path + " (" + toString(strategy) + ", k " +
-                               std::to_string(settings.k) + ")");
+      tools::plotAlignment(
+          "wicp_align", source, target, weight, result.transformation, plot_path,
+          source_path + " onto " + target_path + " (" + toString(strategy) + ", k " + std::to_string(settings.k) + ")");
     if (result.degenerate) return 4;
     return result.converged ? 0 : 3;
   });

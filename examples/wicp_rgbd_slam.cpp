@@ -257,8 +257,9 @@ int writeAndPublish(io::AtomicFolder& folder, const FrameSource& source, std::si
   std::optional<metrics::AbsoluteTrajectoryError> ate;
   addAte(source.groundTruth(), trajectory, report, ate);
   // The picture beside trajectory.txt; a missing matplotlib is a warning, not a failed run.
-  if (ate) tools::plotTrajectory("wicp_rgbd_slam", source.groundTruth(), trajectory, ate->alignment, 0.02,
-                                 (folder.path() / "trajectory.png").string(), source.describe());
+  if (ate)
+    tools::plotTrajectory("wicp_rgbd_slam", source.groundTruth(), trajectory, ate->alignment, 0.02,
+                          (folder.path() / "trajectory.png").string(), source.describe());
   tools::writeTextFile((folder.path() / "report.json").string(), report.str() + "\n");
   if (tools::interrupted()) return discardInterrupted(folder, frames, frames);  // while writing: all tracked
   folder.publish();

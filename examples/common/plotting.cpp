@@ -44,7 +44,8 @@ class ScratchFolder {
  public:
   ScratchFolder() {
     std::string pattern = (fs::temp_directory_path() / "wicp_plot_XXXXXX").string();
-    if (!::mkdtemp(pattern.data())) throw std::runtime_error("cannot create a scratch folder: " + std::string(std::strerror(errno)));
+    if (!::mkdtemp(pattern.data()))
+      throw std::runtime_error("cannot create a scratch folder: " + std::string(std::strerror(errno)));
     path_ = pattern;
   }
   ~ScratchFolder() {
@@ -62,7 +63,10 @@ class ScratchFolder {
 /// Runs the script on the tables in `data` and publishes the picture; a warning and false on any failure.
 bool draw(const std::string& tool, const std::string& kind, const fs::path& data, const std::string& png,
           const std::string& title) {
-  const std::string python = WEIGHTED_ICP_PYTHON, script = WEIGHTED_ICP_PLOT_RESULTS_SCRIPT;
+  // WEIGHTED_ICP_PLOT_PYTHON picks another interpreter (and lets the tests take matplotlib away).
+  const char* chosen = std::getenv("WEIGHTED_ICP_PLOT_PYTHON");
+  const std::string python = chosen && *chosen ? chosen : WEIGHTED_ICP_PYTHON;
+  const std::string script = WEIGHTED_ICP_PLOT_RESULTS_SCRIPT;
   try {
     if (!fs::exists(python)) throw std::runtime_error(python + " not found (Debian: python3 with python3-matplotlib)");
     if (!fs::exists(script)) throw std::runtime_error(script + " not found (it is in the source tree's scripts/)");
@@ -102,7 +106,8 @@ bool plotTrajectory(const std::string& tool, const Trajectory& groundtruth, cons
   try {
     ScratchFolder scratch;
     std::vector<std::vector<double>> truth_rows, pairs;
-    for (const auto& [t, pose] : groundtruth) truth_rows.push_back({t, pose.translation().x(), pose.translation().y(), pose.translation().z()});
+    for (const auto& [t, pose] : groundtruth)
+      truth_rows.push_back({t, pose.translation().x(), pose.translation().y(), pose.translation().z()});
     for (const auto& [g, e] : io::associate(groundtruth, estimate, max_difference)) {
       const Eigen::Vector3d truth = groundtruth[g].pose.translation();
       const Eigen::Vector3d moved = alignment * estimate[e].pose.translation();
@@ -130,7 +135,8 @@ bool plotAlignment(const std::string& tool, const std::vector<Eigen::Vector3d>& 
       source_rows.push_back({p.x(), p.y(), p.z(), q.x(), q.y(), q.z()});
     }
     for (std::size_t i = 0; i < target.size(); ++i)
-      target_rows.push_back({target[i].x(), target[i].y(), target[i].z(), i < target_weights.size() ? target_weights[i] : 1.0});
+      target_rows.push_back(
+          {target[i].x(), target[i].y(), target[i].z(), i < target_weights.size() ? target_weights[i] : 1.0});
     writeTable(scratch.path() / "source.csv", "x,y,z,aligned_x,aligned_y,aligned_z", source_rows);
     writeTable(scratch.path() / "target.csv", "x,y,z,weight", target_rows);
     return draw(tool, "alignment", scratch.path(), png, title);

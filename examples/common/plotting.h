@@ -1,7 +1,8 @@
 #pragma once
 // The tools' pictures: tables of numbers handed to scripts/plot_results.py, run by the project's Python
 // (WEIGHTED_ICP_PYTHON) with matplotlib. A picture is a bonus, never the result: when Python, matplotlib or
-// the script is missing or fails, the tool prints a warning saying why and carries on.
+// the script is missing or fails, the tool prints a warning saying why and carries on. The environment
+// variable WEIGHTED_ICP_PLOT_PYTHON, when set, replaces the Python the build chose.
 
 #include <string>
 #include <vector>
@@ -16,7 +17,8 @@ namespace weighted_icp::tools {
 
 /// @brief Runs a program and waits for it.
 /// @param argv  the program (an absolute path: no PATH lookup) and its arguments
-/// @throws std::runtime_error when it cannot start, is killed or exits non-zero, naming argv[1] (the script)
+/// @throws std::runtime_error when it cannot start, is killed or exits non-zero, naming argv[1] (the script);
+///         exit status 3 reads "matplotlib is not installed", scripts/plot_results.py's way of saying so
 void runProcess(const std::vector<std::string>& argv);
 
 /// @brief The estimate against the ground truth, as evo and the TUM tools draw them: top view, x / y / z

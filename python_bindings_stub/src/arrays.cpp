@@ -18,7 +18,8 @@ namespace {
 /// A numpy array of float64 or float32 for `handle` (lists are converted, their dtype then checked).
 py::array floatArray(const py::handle& handle, const char* name, const char* expected) {
   py::array array = py::array::ensure(handle);
-  if (!array) fail(std::string(name) + " must be " + expected + " (got " + std::string(py::str(handle.get_type())) + ")");
+  if (!array)
+    fail(std::string(name) + " must be " + expected + " (got " + std::string(py::str(handle.get_type())) + ")");
   if (!array.dtype().is(py::dtype::of<double>()) && !array.dtype().is(py::dtype::of<float>()))
     fail(std::string(name) + " must be " + expected + " of float64 or float32 (got dtype " +
          std::string(py::str(array.dtype())) + ")");
@@ -37,13 +38,13 @@ std::string shapeText(const py::array& array) {
 double at2(const py::array& array, py::ssize_t i, py::ssize_t j) {
   const char* p = static_cast<const char*>(array.data()) + i * array.strides(0) + j * array.strides(1);
   return array.dtype().is(py::dtype::of<double>()) ? *reinterpret_cast<const double*>(p)
-                                                    : *reinterpret_cast<const float*>(p);
+                                                   : *reinterpret_cast<const float*>(p);
 }
 
 double at1(const py::array& array, py::ssize_t i) {
   const char* p = static_cast<const char*>(array.data()) + i * array.strides(0);
   return array.dtype().is(py::dtype::of<double>()) ? *reinterpret_cast<const double*>(p)
-                                                    : *reinterpret_cast<const float*>(p);
+                                                   : *reinterpret_cast<const float*>(p);
 }
 
 }  // namespace

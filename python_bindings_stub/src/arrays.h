@@ -6,9 +6,9 @@
 #include <string>
 #include <vector>
 
-#include <Eigen/Core>
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
+#include <Eigen/Core>
 
 #include "weighted_icp/core/trajectory.h"
 #include "weighted_icp/registration/landmark_map.h"

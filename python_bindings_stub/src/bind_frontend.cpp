@@ -4,9 +4,9 @@
 #include <optional>
 #include <string>
 
-#include <opencv2/imgproc.hpp>
 #include <pybind11/functional.h>
 #include <pybind11/stl.h>
+#include <opencv2/imgproc.hpp>
 
 #include "arrays.h"
 #include "bindings.h"
@@ -55,7 +55,8 @@ PinholeCamera cameraOfFolder(const std::string& folder) {
     if (name.find("freiburg" + std::to_string(sensor)) != std::string::npos ||
         name.find("fr" + std::to_string(sensor)) != std::string::npos)
       return tumCamera(sensor);
-  throw py::value_error("cannot tell the camera of " + folder + " from its name; pass camera='fr1'|'fr2'|'fr3'|FILE.yaml");
+  throw py::value_error("cannot tell the camera of " + folder +
+                        " from its name; pass camera='fr1'|'fr2'|'fr3'|FILE.yaml");
 }
 
 PinholeCamera toCamera(const py::handle& camera) {
@@ -206,9 +207,11 @@ py::tuple keyframes(const PythonSlam& slam) {
 }
 
 void bindCamera(py::module_& m) {
-  py::class_<PinholeCamera>(m, "Camera", "A pinhole RGB-D camera: intrinsics, distortion (k1 k2 p1 p2 k3), depth scale.")
+  py::class_<PinholeCamera>(m, "Camera",
+                            "A pinhole RGB-D camera: intrinsics, distortion (k1 k2 p1 p2 k3), depth scale.")
       .def(py::init<>(), "All zero; set the fields.")
-      .def_static("load", &io::loadCamera, py::arg("spec"), "'fr1', 'fr2', 'fr3' (TUM's calibrations) or a camera YAML.")
+      .def_static("load", &io::loadCamera, py::arg("spec"),
+                  "'fr1', 'fr2', 'fr3' (TUM's calibrations) or a camera YAML.")
       .def_static("tum", &tumCamera, py::arg("freiburg"), "The published calibration of TUM RGB-D freiburg 1, 2 or 3.")
       .def_readwrite("fx", &PinholeCamera::fx, "Focal length in x (pixels).")
       .def_readwrite("fy", &PinholeCamera::fy, "Focal length in y (pixels).")
@@ -230,7 +233,8 @@ void bindTrackResult(py::module_& m) {
       .def_readonly("reason", &TrackResult::reason, "Why, when lost or skipped.")
       .def_readonly("has_pose", &TrackResult::has_pose, "Whether the frame got a pose.")
       .def_property_readonly(
-          "pose", [](const TrackResult& r) -> py::object { return r.has_pose ? py::object(toArray(r.pose)) : py::none(); },
+          "pose",
+          [](const TrackResult& r) -> py::object { return r.has_pose ? py::object(toArray(r.pose)) : py::none(); },
           "(4, 4) camera-to-world pose, or None.")
       .def_readonly("keyframe", &TrackResult::keyframe, "Whether it became a keyframe.")
       .def_readonly("refused_by_quality_gate", &TrackResult::refused_by_quality_gate, "Refused by the BRISQUE gate.")
@@ -268,7 +272,9 @@ void bindFrontend(py::module_& m) {
           "camera", [](const PythonSlam& s) { return s.camera(); }, "The camera.")
       .def_property_readonly(
           "trajectory",
-          [](const PythonSlam& s) { return toTumRows(s.locked([](const frontend::RgbdSlam& r) { return r.trajectory(); })); },
+          [](const PythonSlam& s) {
+            return toTumRows(s.locked([](const frontend::RgbdSlam& r) { return r.trajectory(); }));
+          },
           "(N, 8) TUM rows (timestamp tx ty tz qx qy qz qw), one per frame with a pose.")
       .def_property_readonly(
           "ground_truth",
@@ -287,10 +293,14 @@ void bindFrontend(py::module_& m) {
             }));
           },
           "(F,) float64: time of each tracked frame in the C++ tracker (milliseconds).")
-      .def("session_map", [](const PythonSlam& s) { return s.locked([](const frontend::RgbdSlam& r) { return r.sessionMap(); }); },
-           "The whole map as a LandmarkMap.")
-      .def("mini_maps", [](const PythonSlam& s) { return s.locked([](const frontend::RgbdSlam& r) { return r.miniMaps(); }); },
-           "The mini-maps (as wicp_rgbd_slam writes them) as LandmarkMaps.")
+      .def(
+          "session_map",
+          [](const PythonSlam& s) { return s.locked([](const frontend::RgbdSlam& r) { return r.sessionMap(); }); },
+          "The whole map as a LandmarkMap.")
+      .def(
+          "mini_maps",
+          [](const PythonSlam& s) { return s.locked([](const frontend::RgbdSlam& r) { return r.miniMaps(); }); },
+          "The mini-maps (as wicp_rgbd_slam writes them) as LandmarkMaps.")
       .def(
           "landmarks",
           [](const PythonSlam& s, const std::string& strategy) {
@@ -299,10 +309,25 @@ void bindFrontend(py::module_& m) {
             std::vector<Eigen::Vector3d> xyz;
             for (const auto& l : map.landmarks) xyz.push_back(l.position);
             Eigen::MatrixXd positions(static_cast<Eigen::Index>(xyz.size()), 3);
-            for (std::size_t i = 0; i < xyz.size(); ++i) positions.row(static_cast<Eigen::Index>(i)) = xyz[i].transpose();
+            for (std::size_t i = 0; i < xyz.size(); ++i)
+              positions.row(static_cast<Eigen::Index>(i)) = xyz[i].transpose();
             return py::make_tuple(toArray(positions), toArray(computeWeights(map, weight)));
           },
           py::arg("strategy") = "covariance", "The landmark cloud with weights: ((N, 3) positions, (N,) weights).");
+  m.def(
+      "tum_frames",
+      [](const std::string& folder) {
+        const io::TumSequence sequence = io::TumSequence::open(folder);
+        py::list frames;
+        for (std::size_t i = 0; i < sequence.size(); ++i) {
+          const io::TumFrame& frame = sequence.frame(i);
+          frames.append(py::make_tuple(frame.rgb_timestamp, frame.rgb_path, frame.depth_path));
+        }
+        return frames;
+      },
+      py::arg("folder"),
+      "The frames of a TUM folder as run() reads them: [(timestamp, rgb path, depth path)], rgb.txt and "
+      "depth.txt associated as associate.py does (each depth image used once).");
   m.def(
       "run_tum",
       [](const std::string& folder, const py::object& camera, std::size_t max_frames, const py::object& progress,

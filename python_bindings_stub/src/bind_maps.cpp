@@ -64,8 +64,9 @@ LandmarkMap fromPositions(const py::handle& points, const py::object& covariance
   const std::vector<Eigen::Vector3d> xyz = toPositions(points, "positions");
   LandmarkMap map;
   map.landmarks.resize(xyz.size());
+  const bool has_covariances = !covariance_array.is_none();
   py::array_t<double, py::array::forcecast> cov;
-  if (!covariance_array.is_none()) {
+  if (has_covariances) {
     cov = py::array_t<double, py::array::forcecast>::ensure(covariance_array);
     if (!cov || cov.ndim() != 3 || static_cast<std::size_t>(cov.shape(0)) != xyz.size() || cov.shape(1) != 3 ||
         cov.shape(2) != 3)
@@ -74,9 +75,9 @@ LandmarkMap fromPositions(const py::handle& points, const py::object& covariance
   for (std::size_t i = 0; i < xyz.size(); ++i) {
     map.landmarks[i].id = i;
     map.landmarks[i].position = xyz[i];
-    if (cov)
-      for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c) map.landmarks[i].covariance(r, c) = cov.at(static_cast<py::ssize_t>(i), r, c);
+    if (!has_covariances) continue;
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) map.landmarks[i].covariance(r, c) = cov.at(static_cast<py::ssize_t>(i), r, c);
   }
   return map;
 }
@@ -84,7 +85,8 @@ LandmarkMap fromPositions(const py::handle& points, const py::object& covariance
 void transformMap(LandmarkMap& map, const py::handle& matrix) {
   const Eigen::Matrix4d m = toMatrix4(matrix, "matrix");
   const Eigen::Matrix3d r = m.topLeftCorner<3, 3>();
-  if (!(r.transpose() * r).isIdentity(1e-6) || r.determinant() < 0.0 || !m.row(3).isApprox(Eigen::RowVector4d(0, 0, 0, 1)))
+  if (!(r.transpose() * r).isIdentity(1e-6) || r.determinant() < 0.0 ||
+      !m.row(3).isApprox(Eigen::RowVector4d(0, 0, 0, 1)))
     throw py::value_error("matrix must be a rigid motion (rotation and translation, last row 0 0 0 1)");
   Eigen::Isometry3d motion(m);
   map.transform(motion);
@@ -107,12 +109,15 @@ void bindMaps(py::module_& m) {
                   "A map of bare landmarks (ids 0..N-1, no frames, no observations) from an (N, 3) array and "
                   "optional (N, 3, 3) covariances.")
       .def(
-          "save", [](const LandmarkMap& map, const py::object& path) {
+          "save",
+          [](const LandmarkMap& map, const py::object& path) {
             io::writeLandmarkMap(map, py::str(py::module_::import("os").attr("fspath")(path)));
           },
           py::arg("path"), "Writes the map in the paper's format, atomically (a temporary file, then a rename).")
-      .def("copy", [](const LandmarkMap& map) { return LandmarkMap(map); }, "An independent copy.")
-      .def("__len__", [](const LandmarkMap& map) { return map.landmarks.size(); }, "The number of landmarks.")
+      .def(
+          "copy", [](const LandmarkMap& map) { return LandmarkMap(map); }, "An independent copy.")
+      .def(
+          "__len__", [](const LandmarkMap& map) { return map.landmarks.size(); }, "The number of landmarks.")
       .def("__repr__",
            [](const LandmarkMap& map) {
              return "<LandmarkMap: " + std::to_string(map.landmarks.size()) + " landmarks, " +
@@ -127,7 +132,10 @@ void bindMaps(py::module_& m) {
           },
           "(N,) int64: how many times each landmark was observed.")
       .def_property_readonly(
-          "ids", [](const LandmarkMap& map) { return perLandmark<std::uint64_t>(map, [](const Landmark& l) { return l.id; }); },
+          "ids",
+          [](const LandmarkMap& map) {
+            return perLandmark<std::uint64_t>(map, [](const Landmark& l) { return l.id; });
+          },
           "(N,) uint64: landmark ids.")
       .def_property_readonly(
           "mean_observation_distances",

@@ -37,8 +37,8 @@ void bindMetrics(py::module_& m) {
       .def_property_readonly(
           "alignment", [](const metrics::AbsoluteTrajectoryError& a) { return toArray(a.alignment.matrix()); },
           "(4, 4) float64: the rigid motion mapping the estimate onto the ground truth.");
-  py::class_<metrics::RelativePoseError>(m, "RelativePoseError",
-                                         "The RPE as evaluate_rpe.py --fixed_delta computes it (wicp_evaluate's rpe_*).")
+  py::class_<metrics::RelativePoseError>(
+      m, "RelativePoseError", "The RPE as evaluate_rpe.py --fixed_delta computes it (wicp_evaluate's rpe_*).")
       .def_readonly("pairs", &metrics::RelativePoseError::pairs, "Compared pose pairs.")
       .def_readonly("translation", &metrics::RelativePoseError::translation, "Translation errors (metres).")
       .def_readonly("rotation_deg", &metrics::RelativePoseError::rotation_deg, "Rotation errors (degrees).");
@@ -59,17 +59,18 @@ void bindMetrics(py::module_& m) {
   m.def(
       "rpe",
       [](const py::object& groundtruth, const py::object& estimate, double delta, const std::string& unit) {
-        if (unit != "s" && unit != "f") throw py::value_error("unit must be 's' (seconds) or 'f' (frames), got '" + unit + "'");
+        if (unit != "s" && unit != "f")
+          throw py::value_error("unit must be 's' (seconds) or 'f' (frames), got '" + unit + "'");
         const Trajectory truth = toTrajectory(groundtruth, "gt");
         const Trajectory est = toTrajectory(estimate, "est");
         py::gil_scoped_release unlocked;
-        return metrics::computeRpe(truth, est, delta, unit == "s" ? metrics::DeltaUnit::Seconds : metrics::DeltaUnit::Frames);
+        return metrics::computeRpe(truth, est, delta,
+                                   unit == "s" ? metrics::DeltaUnit::Seconds : metrics::DeltaUnit::Frames);
       },
       py::arg("gt"), py::arg("est"), py::arg("delta") = 1.0, py::arg("unit") = "s",
       "Relative pose error over pose pairs delta apart (unit 's' seconds or 'f' frames), as wicp_evaluate.");
   m.def(
-      "read_trajectory",
-      [](const py::object& path) { return toTumRows(toTrajectory(path, "path")); }, py::arg("path"),
+      "read_trajectory", [](const py::object& path) { return toTumRows(toTrajectory(path, "path")); }, py::arg("path"),
       "A TUM trajectory file as an (N, 8) array (timestamp tx ty tz qx qy qz qw); ValueError naming file and line.");
   m.def(
       "write_trajectory",

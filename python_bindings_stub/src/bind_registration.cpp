@@ -74,13 +74,13 @@ AlignmentResult align(const py::object& source, const py::object& target, const 
   return aligner.align(toCloud(source_xyz, {}), guess);
 }
 
-py::tuple weightedCorrespondences(const py::object& source, const py::object& target, const py::object& weights,
-                                  int k, const std::optional<double>& max_distance, int threads) {
+py::tuple weightedCorrespondences(const py::object& source, const py::object& target, const py::object& weights, int k,
+                                  const std::optional<double>& max_distance, int threads) {
   const std::vector<Eigen::Vector3d> source_xyz = positionsOf(source, "source");
   const std::vector<Eigen::Vector3d> target_xyz = positionsOf(target, "target");
   if (target_xyz.empty()) throw py::value_error("target has no points");
-  std::vector<double> target_weights =
-      weights.is_none() ? std::vector<double>(target_xyz.size(), 1.0) : toWeights(weights, "weights", target_xyz.size());
+  std::vector<double> target_weights = weights.is_none() ? std::vector<double>(target_xyz.size(), 1.0)
+                                                         : toWeights(weights, "weights", target_xyz.size());
   if (max_distance && !(*max_distance > 0.0))
     throw py::value_error("max_distance must be > 0 (got " + std::to_string(*max_distance) + ")");
   WeightedCorrespondenceEstimation<LandmarkPoint, LandmarkPoint, double> rule(checkedK(k));
@@ -128,8 +128,8 @@ void bindRegistration(py::module_& m) {
                (r.degenerate ? " degenerate: " + r.reason : std::string()) + ">";
       });
 
-  m.def("align", &align, py::arg("source"), py::arg("target"), py::arg("target_weights") = py::none(),
-        py::arg("k") = 5, py::arg("strategy") = py::none(), py::arg("max_iterations") = 150,
+  m.def("align", &align, py::arg("source"), py::arg("target"), py::arg("target_weights") = py::none(), py::arg("k") = 5,
+        py::arg("strategy") = py::none(), py::arg("max_iterations") = 150,
         py::arg("max_correspondence_distance") = py::none(), py::arg("refine") = false,
         py::arg("initial_guess") = py::none(), py::arg("threads") = 0,
         "Aligns source onto target with the confidence-weighted ICP; the same numbers as wicp_align.\n\n"
@@ -139,8 +139,7 @@ void bindRegistration(py::module_& m) {
         "strategy: 'base' (plain ICP, k = 1), 'covariance', 'observations', 'mean-distance', or None.\n"
         "The GIL is released while ICP runs.");
   m.def("weighted_correspondences", &weightedCorrespondences, py::arg("source"), py::arg("target"),
-        py::arg("weights") = py::none(), py::arg("k") = 5, py::arg("max_distance") = py::none(),
-        py::arg("threads") = 0,
+        py::arg("weights") = py::none(), py::arg("k") = 5, py::arg("max_distance") = py::none(), py::arg("threads") = 0,
         "The weighted correspondence rule: for each source point, among its k nearest target points within "
         "max_distance, the heaviest (ties to the nearer).\n\n"
         "Returns (source_idx int64, target_idx int64, sq_dist float64) arrays, one entry per source point that "

@@ -12,20 +12,12 @@ FRAMES = 8
 
 
 def read_frames(folder: Path, count: int) -> List[Tuple[float, np.ndarray, np.ndarray]]:
-    """(timestamp, RGB uint8, raw depth uint16) of the first frames, associated as the C++ reader does."""
+    """(timestamp, RGB uint8, raw depth uint16) of the first frames, paired as run() pairs them."""
     image = pytest.importorskip("PIL.Image", reason="Pillow (python3-pil) reads the PNGs in this test")
-
-    def listing(name: str) -> List[Tuple[float, str]]:
-        rows = [line.split() for line in (folder / name).read_text().splitlines() if line and line[0] != "#"]
-        return [(float(t), f) for t, f in rows]
-
-    depth = listing("depth.txt")
     frames = []
-    for t, rgb_file in listing("rgb.txt")[:count]:
-        d_t, d_file = min(depth, key=lambda d: abs(d[0] - t))
-        assert abs(d_t - t) < 0.02
-        rgb = np.asarray(image.open(folder / rgb_file).convert("RGB"))
-        raw = np.asarray(image.open(folder / d_file)).astype(np.uint16)
+    for t, rgb_path, depth_path in wi.tum_frames(str(folder))[:count]:
+        rgb = np.asarray(image.open(rgb_path).convert("RGB"))
+        raw = np.asarray(image.open(depth_path)).astype(np.uint16)
         frames.append((t, rgb, raw))
     return frames
 

@@ -44,7 +44,7 @@ def test_min_observations_and_cuts(small_map: Path) -> None:
     assert len(m.with_min_observations(3)) == 1
     first = m.mini_map(0, 0)
     assert list(first.frame_ids) == [0] and list(first.observation_counts) == [1, 2]
-    assert [len(x) for x in m.split_into_mini_maps(1)] == [2, 2]
+    assert [len(x) for x in m.split_into_mini_maps(1)] == [2, 3]
     a, b = m.alternate_halves()
     assert len(a) + len(b) == 3
 

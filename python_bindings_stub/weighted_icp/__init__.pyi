@@ -238,6 +238,9 @@ class RgbdSlam:
     def mini_maps(self) -> List[LandmarkMap]: ...
     def landmarks(self, strategy: str = "covariance") -> Tuple[FloatArray, FloatArray]: ...
 
+def tum_frames(folder: str) -> List[Tuple[float, str, str]]:
+    """[(timestamp, rgb path, depth path)] of a TUM folder, associated as run() does."""
+
 def run_tum(
     folder: str,
     camera: Optional[Union[Camera, str]] = None,
