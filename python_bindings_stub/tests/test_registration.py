@@ -20,9 +20,9 @@ def displacement(x: float, y: float, yaw_deg: float) -> np.ndarray:
 
 @pytest.fixture(scope="module")
 def halves(real_map_path: Path, tmp_path_factory: pytest.TempPathFactory) -> tuple:
-    """Alternate halves of the real map, the source displaced, saved for wicp_align."""
-    whole = wi.LandmarkMap.load(real_map_path)
-    source, target = whole.alternate_halves()
+    """Alternate halves of the real map's first 80 frames, the source displaced, saved for wicp_align."""
+    part = wi.LandmarkMap.load(real_map_path).mini_map(0, 79)
+    source, target = part.alternate_halves()
     source.transform(displacement(0.05, -0.03, 4.0))
     folder = tmp_path_factory.mktemp("halves")
     source.save(folder / "a.txt")
@@ -151,11 +151,11 @@ def test_weighted_correspondences_match_the_aligners_choice(real_map_path: Path)
     source32 = a.positions.astype(np.float32).astype(np.float64)
     target32 = b.positions.astype(np.float32).astype(np.float64)
     checked = 0
-    for i in range(0, len(a), 37):
+    for i in range(0, len(a), 17):
         distances = np.linalg.norm(target32 - source32[i], axis=1)
         order = np.argsort(distances, kind="stable")
         if distances[order[5]] - distances[order[4]] < 1e-6:
             continue
         assert w[t[i]] == w[order[:5]].max()
         checked += 1
-    assert checked > 100
+    assert checked > 150
