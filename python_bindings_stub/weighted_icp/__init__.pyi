@@ -8,31 +8,31 @@ import numpy.typing as npt
 
 __version__: str
 
-PathLike = Union[str, "os.PathLike[str]"]
-FloatArray = npt.NDArray[np.float64]
-Points = Union["LandmarkMap", npt.NDArray[np.float64], npt.NDArray[np.float32]]
-TrajectoryLike = Union[PathLike, npt.NDArray[np.float64], Tuple[npt.ArrayLike, npt.ArrayLike]]
+_PathLike = Union[str, "os.PathLike[str]"]
+_FloatArray = npt.NDArray[np.float64]
+_Points = Union["LandmarkMap", npt.NDArray[np.float64], npt.NDArray[np.float32]]
+_TrajectoryLike = Union[_PathLike, npt.NDArray[np.float64], Tuple[npt.ArrayLike, npt.ArrayLike]]
 
 class LandmarkMap:
     """A landmark map: frame poses and, per landmark, position, covariance and observations."""
 
     def __init__(self) -> None: ...
     @staticmethod
-    def load(path: PathLike, min_observations: int = 0) -> LandmarkMap:
+    def load(path: _PathLike, min_observations: int = 0) -> LandmarkMap:
         """Reads a map in the paper's format; ValueError naming file and line when malformed."""
     @staticmethod
     def from_positions(positions: npt.ArrayLike, covariances: Optional[npt.ArrayLike] = None) -> LandmarkMap:
         """A map of bare landmarks from an (N, 3) array and optional (N, 3, 3) covariances."""
-    def save(self, path: PathLike) -> None:
+    def save(self, path: _PathLike) -> None:
         """Writes the map in the paper's format, atomically."""
     def copy(self) -> LandmarkMap:
         """An independent copy."""
     def __len__(self) -> int: ...
     @property
-    def positions(self) -> FloatArray:
+    def positions(self) -> _FloatArray:
         """(N, 3) float64 landmark positions."""
     @property
-    def covariances(self) -> FloatArray:
+    def covariances(self) -> _FloatArray:
         """(N, 3, 3) float64 position covariances."""
     @property
     def observation_counts(self) -> npt.NDArray[np.int64]:
@@ -41,10 +41,10 @@ class LandmarkMap:
     def ids(self) -> npt.NDArray[np.uint64]:
         """(N,) uint64 landmark ids."""
     @property
-    def mean_observation_distances(self) -> FloatArray:
+    def mean_observation_distances(self) -> _FloatArray:
         """(N,) float64 mean distance to the observing cameras."""
     @property
-    def frames(self) -> Dict[int, FloatArray]:
+    def frames(self) -> Dict[int, _FloatArray]:
         """{frame id: (4, 4) camera-to-world pose}."""
     @property
     def frame_ids(self) -> npt.NDArray[np.uint64]:
@@ -60,7 +60,7 @@ class LandmarkMap:
     def transform(self, matrix: npt.ArrayLike) -> None:
         """Moves the map in place by a (4, 4) rigid motion."""
 
-def weights(map: LandmarkMap, strategy: str) -> FloatArray:
+def weights(map: LandmarkMap, strategy: str) -> _FloatArray:
     """(N,) weights: 'base', 'covariance', 'observations' or 'mean-distance'."""
 
 def strategies() -> List[str]:
@@ -70,7 +70,7 @@ class AlignmentResult:
     """What align() found, as wicp_align --json reports it."""
 
     @property
-    def transformation(self) -> FloatArray:
+    def transformation(self) -> _FloatArray:
         """(4, 4) source -> target."""
     @property
     def fitness_score(self) -> float: ...
@@ -90,8 +90,8 @@ class AlignmentResult:
     def reason(self) -> str: ...
 
 def align(
-    source: Points,
-    target: Points,
+    source: _Points,
+    target: _Points,
     target_weights: Optional[npt.ArrayLike] = None,
     k: int = 5,
     strategy: Optional[str] = None,
@@ -104,13 +104,13 @@ def align(
     """Aligns source onto target with the confidence-weighted ICP (wicp_align's numbers)."""
 
 def weighted_correspondences(
-    source: Points,
-    target: Points,
+    source: _Points,
+    target: _Points,
     weights: Optional[npt.ArrayLike] = None,
     k: int = 5,
     max_distance: Optional[float] = None,
     threads: int = 0,
-) -> Tuple[npt.NDArray[np.int64], npt.NDArray[np.int64], FloatArray]:
+) -> Tuple[npt.NDArray[np.int64], npt.NDArray[np.int64], _FloatArray]:
     """(source_idx, target_idx, sq_dist) of the weighted correspondence rule."""
 
 class ErrorStatistics:
@@ -135,7 +135,7 @@ class AbsoluteTrajectoryError:
     @property
     def rmse(self) -> float: ...
     @property
-    def alignment(self) -> FloatArray: ...
+    def alignment(self) -> _FloatArray: ...
 
 class RelativePoseError:
     """The RPE as evaluate_rpe.py --fixed_delta computes it."""
@@ -147,16 +147,16 @@ class RelativePoseError:
     @property
     def rotation_deg(self) -> ErrorStatistics: ...
 
-def ate(gt: TrajectoryLike, est: TrajectoryLike, max_difference: float = 0.02) -> AbsoluteTrajectoryError:
+def ate(gt: _TrajectoryLike, est: _TrajectoryLike, max_difference: float = 0.02) -> AbsoluteTrajectoryError:
     """Absolute trajectory error of est against gt."""
 
-def rpe(gt: TrajectoryLike, est: TrajectoryLike, delta: float = 1.0, unit: str = "s") -> RelativePoseError:
+def rpe(gt: _TrajectoryLike, est: _TrajectoryLike, delta: float = 1.0, unit: str = "s") -> RelativePoseError:
     """Relative pose error over pose pairs delta apart."""
 
-def read_trajectory(path: PathLike) -> FloatArray:
+def read_trajectory(path: _PathLike) -> _FloatArray:
     """A TUM trajectory file as (N, 8) rows."""
 
-def write_trajectory(trajectory: TrajectoryLike, path: PathLike) -> None:
+def write_trajectory(trajectory: _TrajectoryLike, path: _PathLike) -> None:
     """Writes a trajectory in TUM format, atomically."""
 
 class Camera:
@@ -188,7 +188,7 @@ class TrackResult:
     @property
     def has_pose(self) -> bool: ...
     @property
-    def pose(self) -> Optional[FloatArray]: ...
+    def pose(self) -> Optional[_FloatArray]: ...
     @property
     def keyframe(self) -> bool: ...
     @property
@@ -226,17 +226,17 @@ class RgbdSlam:
     @property
     def camera(self) -> Camera: ...
     @property
-    def trajectory(self) -> FloatArray:
+    def trajectory(self) -> _FloatArray:
         """(N, 8) TUM rows."""
     @property
-    def ground_truth(self) -> Optional[FloatArray]: ...
+    def ground_truth(self) -> Optional[_FloatArray]: ...
     @property
-    def keyframes(self) -> Tuple[npt.NDArray[np.uint64], FloatArray, FloatArray]: ...
+    def keyframes(self) -> Tuple[npt.NDArray[np.uint64], _FloatArray, _FloatArray]: ...
     @property
-    def tracking_ms(self) -> FloatArray: ...
+    def tracking_ms(self) -> _FloatArray: ...
     def session_map(self) -> LandmarkMap: ...
     def mini_maps(self) -> List[LandmarkMap]: ...
-    def landmarks(self, strategy: str = "covariance") -> Tuple[FloatArray, FloatArray]: ...
+    def landmarks(self, strategy: str = "covariance") -> Tuple[_FloatArray, _FloatArray]: ...
 
 def tum_frames(folder: str) -> List[Tuple[float, str, str]]:
     """[(timestamp, rgb path, depth path)] of a TUM folder, associated as run() does."""
