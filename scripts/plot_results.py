@@ -84,7 +84,7 @@ def alignment_figure(plt, data, title):
                               label="target (colour: weight)")
         panel.scatter(source[prefix + "x"], source[prefix + "y"], s=6, facecolors="none", edgecolors="#d62728",
                       linewidths=0.6, label="source")
-        panel.set_aspect("equal", adjustable="datalim")
+        panel.set_aspect("equal", adjustable="box")  # shared axes: the box adapts, not the limits
         panel.set(xlabel="x (m)", ylabel="y (m)", title=f"{label} alignment (top view)")
         panel.legend(loc="best", fontsize="small")
     figure.colorbar(cloud, ax=panels, label="target weight", shrink=0.7)

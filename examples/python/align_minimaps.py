@@ -80,7 +80,7 @@ def plot(source: wi.LandmarkMap, target: wi.LandmarkMap, results: List[Tuple[str
         panel.scatter(moved[:, 0], moved[:, 1], s=3, c="#d62728")
         panel.set_title(f"after: {strategy} ({result.iterations} it.)")
     for panel in panels:
-        panel.set_aspect("equal", adjustable="datalim")
+        panel.set_aspect("equal", adjustable="box")  # shared axes: the box adapts, not the limits
         panel.set_xlabel("x (m)")
     panels[0].set_ylabel("y (m)")
     figure.savefig(out, dpi=100)
