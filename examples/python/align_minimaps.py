@@ -5,10 +5,10 @@
         [SOURCE.txt TARGET.txt | --map ../shared/data/map_fr1_desk.txt] [--out align_minimaps.png]
 
 With two map files (e.g. wicp_rgbd_slam's minimaps/minimap_000.txt and _001.txt) they are aligned as they
-are. With --map (the default: the shared data set's real map) the map is cut into mini-maps of
---frames-per-minimap frames, the first two are taken, and the source is displaced by --displace so the error
-of each strategy against the known motion can be printed. Mini-maps of one session share its world frame,
-so the true relation of the two (before the displacement) is the identity.
+are. With --map (the default: the shared data set's real map) the map's first mini-map of
+--frames-per-minimap frames is split into its alternate landmarks (two disjoint clouds of one scene, whose
+true relation is the identity: consecutive mini-maps of one session may share little of the scene), and the
+source is displaced by --displace, so the error of each strategy against the known motion can be printed.
 """
 
 import argparse
@@ -46,11 +46,8 @@ def load_pair(args: argparse.Namespace) -> Tuple[wi.LandmarkMap, wi.LandmarkMap,
         return (wi.LandmarkMap.load(args.maps[0], min_observations=args.min_observations),
                 wi.LandmarkMap.load(args.maps[1], min_observations=args.min_observations), None)
     session = wi.LandmarkMap.load(args.map)
-    minimaps = [m.with_min_observations(args.min_observations)
-                for m in session.split_into_mini_maps(args.frames_per_minimap)]
-    if len(minimaps) < 2:
-        sys.exit(f"{args.map}: fewer than two mini-maps of {args.frames_per_minimap} frames")
-    source, target = minimaps[0], minimaps[1]
+    first = session.split_into_mini_maps(args.frames_per_minimap)[0].with_min_observations(args.min_observations)
+    source, target = first.alternate_halves()
     displacement = motion(*args.displace)
     source.transform(displacement)
     return source, target, np.linalg.inv(displacement)
@@ -91,7 +88,7 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("maps", nargs="*", help="SOURCE.txt TARGET.txt (two mini-maps)")
     parser.add_argument("--map", default=str(DEFAULT_MAP), help="a session map to cut into mini-maps")
-    parser.add_argument("--frames-per-minimap", type=int, default=60)
+    parser.add_argument("--frames-per-minimap", type=int, default=80)
     parser.add_argument("--min-observations", type=int, default=2)
     parser.add_argument("--displace", type=float, nargs=3, default=[0.1, -0.05, 5.0], metavar=("X", "Y", "YAW"),
                         help="move the source first (metres, metres, degrees)")
