@@ -12,6 +12,7 @@
 
 #include <boost/program_options.hpp>
 
+#include "plotting.h"
 #include "tool_support.h"
 #include "weighted_icp/io/map_format.h"
 #include "weighted_icp/registration/landmark_alignment.h"
@@ -22,7 +23,7 @@ using namespace weighted_icp;
 
 int main(int argc, char** argv) {
   return tools::runTool("wicp_align", [&] {
-    std::string source_path, target_path, strategy_name = "covariance", displacement_text;
+    std::string source_path, target_path, strategy_name = "covariance", displacement_text, plot_path;
     AlignmentSettings settings;
     std::size_t min_observations = 2;
     po::options_description options(
@@ -53,7 +54,9 @@ int main(int argc, char** argv) {
         ("refine", po::bool_switch(&settings.refine), "finish with nearest-neighbour ICP after the weighted stage")
         ("threads", tools::rangedValue(&settings.threads, 0u, 1024u)->default_value(settings.threads),
          "search threads, 0 = all (at most 1024)")
-        ("json", "print the result as one JSON object on the last line of stdout");
+        ("json", "print the result as one JSON object on the last line of stdout")
+        ("plot", po::value(&plot_path), "also draw the clouds before and after, top view, target coloured by weight, "
+                                        "into this PNG (needs matplotlib; a warning without it)");
     // clang-format on
     po::variables_map vm;
     if (!tools::parseCommandLine(argc, argv, options, vm)) return 0;
@@ -104,6 +107,10 @@ int main(int argc, char** argv) {
           .add("target_landmarks", target.landmarks.size());
       std::cout << json.str() << std::endl;
     }
+    if (!plot_path.empty())
+      tools::plotAlignment(
+          "wicp_align", source, target, weight, result.transformation, plot_path,
+          source_path + " onto " + target_path + " (" + toString(strategy) + ", k " + std::to_string(settings.k) + ")");
     if (result.degenerate) return 4;
     return result.converged ? 0 : 3;
   });

@@ -14,6 +14,7 @@
 
 #include <boost/program_options.hpp>
 
+#include "plotting.h"
 #include "tool_support.h"
 #include "weighted_icp/io/trajectory.h"
 #include "weighted_icp/metrics/trajectory_error.h"
@@ -42,7 +43,7 @@ void printStatistics(const char* label, const ErrorStatistics& s, std::string (*
 
 int main(int argc, char** argv) {
   return tools::runTool("wicp_evaluate", [&] {
-    std::string groundtruth_path, estimate_path, rpe_unit_name = "s";
+    std::string groundtruth_path, estimate_path, rpe_unit_name = "s", plot_path;
     double max_difference = 0.02, rpe_delta = 1.0;
     po::options_description options(
         "wicp_evaluate GROUNDTRUTH.txt ESTIMATE.txt [options]\n"
@@ -58,7 +59,9 @@ int main(int argc, char** argv) {
         ("rpe-delta", tools::positiveValue(&rpe_delta)->default_value(rpe_delta), "RPE: compare poses this far apart")
         ("rpe-unit", po::value(&rpe_unit_name)->default_value(rpe_unit_name),
          "unit of --rpe-delta: s (seconds) or f (frames)")
-        ("json", "print the result as one JSON object on the last line of stdout");
+        ("json", "print the result as one JSON object on the last line of stdout")
+        ("plot", po::value(&plot_path), "also draw both trajectories (top view, x/y/z against time) and the error "
+                                        "along them into this PNG (needs matplotlib; a warning without it)");
     // clang-format on
     po::positional_options_description positional;
     positional.add("groundtruth", 1).add("estimate", 1);
@@ -105,6 +108,9 @@ int main(int argc, char** argv) {
           .add("rpe_rotation_max_deg", rpe.rotation_deg.max);
       std::cout << json.str() << std::endl;
     }
+    if (!plot_path.empty())
+      tools::plotTrajectory("wicp_evaluate", groundtruth, estimate, ate.alignment, max_difference, plot_path,
+                            estimate_path + " against " + groundtruth_path);
     return 0;
   });
 }

@@ -20,6 +20,7 @@
 #include <boost/program_options.hpp>
 
 #include "interrupt.h"
+#include "plotting.h"
 #include "tool_support.h"
 #include "weighted_icp/core/statistics.h"
 #include "weighted_icp/frontend/slam/rgbd_slam.h"
@@ -255,6 +256,10 @@ int writeAndPublish(io::AtomicFolder& folder, const FrameSource& source, std::si
   tools::JsonObject report = makeReport(source, frames, slam, counts, minimaps.size());
   std::optional<metrics::AbsoluteTrajectoryError> ate;
   addAte(source.groundTruth(), trajectory, report, ate);
+  // The picture beside trajectory.txt; a missing matplotlib is a warning, not a failed run.
+  if (ate)
+    tools::plotTrajectory("wicp_rgbd_slam", source.groundTruth(), trajectory, ate->alignment, 0.02,
+                          (folder.path() / "trajectory.png").string(), source.describe());
   tools::writeTextFile((folder.path() / "report.json").string(), report.str() + "\n");
   if (tools::interrupted()) return discardInterrupted(folder, frames, frames);  // while writing: all tracked
   folder.publish();

@@ -16,17 +16,13 @@
 #include <tuple>
 #include <utility>
 
-#include <spawn.h>
-#include <sys/wait.h>
-
 #include <boost/program_options.hpp>
 
 #include "interrupt.h"
+#include "plotting.h"
 #include "tool_support.h"
 #include "weighted_icp/io/map_format.h"
 #include "weighted_icp/registration/landmark_point.h"
-
-extern char** environ;
 
 namespace weighted_icp::sweep {
 
@@ -322,24 +318,6 @@ std::string formatResultsCsv(const std::string& sweep_name, const std::vector<Sw
 namespace {
 constexpr const char* kDefaultSessionMap = "../shared/data/map_fr1_desk.txt";
 
-/// Runs `argv` (no shell, so paths need no quoting) and waits; throws
-/// saying why when it cannot start or does not exit with 0.
-void runProcess(const std::vector<std::string>& argv) {
-  std::vector<char*> args;
-  for (const std::string& a : argv) args.push_back(const_cast<char*>(a.c_str()));
-  args.push_back(nullptr);
-  pid_t pid = 0;
-  if (const int error = posix_spawn(&pid, args[0], nullptr, nullptr, args.data(), environ))
-    throw std::runtime_error("cannot start " + argv[0] + ": " + std::strerror(error));
-  int status = 0;
-  if (waitpid(pid, &status, 0) < 0) throw std::runtime_error("lost " + argv[0] + ": " + std::strerror(errno));
-  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
-    throw std::runtime_error(
-        argv[1] + " failed (" +
-        (WIFEXITED(status) ? "exit status " + std::to_string(WEXITSTATUS(status)) : std::string("killed by a signal")) +
-        ")");
-}
-
 /// A sweep stopped by SIGINT/SIGTERM between runs: a partial results.csv
 /// would read as a finished sweep, so nothing is written (and the --out
 /// folder, if this run created it, removed while still empty). Returns the
@@ -467,7 +445,7 @@ int runSweepTool(const std::string& tool, const SweepDefinition& sweep, int argc
 
     const std::vector<std::string> plot_command{WEIGHTED_ICP_PYTHON, WEIGHTED_ICP_PLOT_SCRIPT, csv_path};
     try {
-      runProcess(plot_command);
+      tools::runProcess(plot_command);  // no shell, so paths need no quoting
     } catch (const std::exception& e) {
       if (const int signal = tools::interruptSignal()) {  // the plotter got the signal too
         std::cerr << tool << ": interrupted by " << tools::signalName(signal) << " while plotting; the results are "

@@ -1,0 +1,167 @@
+// The tools' pictures through scripts/plot_results.py: tables in a scratch folder, the script, an atomic rename.
+#include "plotting.h"
+
+#include <spawn.h>
+#include <sys/wait.h>
+
+#include <cerrno>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <limits>
+#include <stdexcept>
+
+#include "weighted_icp/io/atomic_file.h"
+#include "weighted_icp/io/trajectory.h"
+
+extern char** environ;
+
+namespace weighted_icp::tools {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+/// The script's exit status when matplotlib cannot be imported (scripts/plot_results.py says so too).
+constexpr int kNoMatplotlib = 3;
+
+/// A table for the script: a header line, then one line of numbers per row, at round-trip precision.
+void writeTable(const fs::path& path, const std::string& header, const std::vector<std::vector<double>>& rows) {
+  std::ofstream out(path);
+  out << header << '\n' << std::setprecision(std::numeric_limits<double>::max_digits10);
+  for (const auto& row : rows) {
+    for (std::size_t c = 0; c < row.size(); ++c) out << (c ? "," : "") << row[c];
+    out << '\n';
+  }
+  if (!out) throw std::runtime_error("cannot write " + path.string());
+}
+
+/// A fresh scratch folder for the tables, removed when this goes out of scope.
+class ScratchFolder {
+ public:
+  ScratchFolder() {
+    std::string pattern = (fs::temp_directory_path() / "wicp_plot_XXXXXX").string();
+    if (!::mkdtemp(pattern.data()))
+      throw std::runtime_error("cannot create a scratch folder: " + std::string(std::strerror(errno)));
+    path_ = pattern;
+  }
+  ~ScratchFolder() {
+    std::error_code ignored;
+    fs::remove_all(path_, ignored);
+  }
+  ScratchFolder(const ScratchFolder&) = delete;
+  ScratchFolder& operator=(const ScratchFolder&) = delete;
+  const fs::path& path() const { return path_; }
+
+ private:
+  fs::path path_;
+};
+
+/// Runs the script on the tables in `data` and publishes the picture; a warning and false on any failure.
+bool draw(const std::string& tool, const std::string& kind, const fs::path& data, const std::string& png,
+          const std::string& title) {
+  // WEIGHTED_ICP_PLOT_PYTHON picks another interpreter (and lets the tests take matplotlib away).
+  const char* chosen = std::getenv("WEIGHTED_ICP_PLOT_PYTHON");
+  const std::string python = chosen && *chosen ? chosen : WEIGHTED_ICP_PYTHON;
+  const std::string script = WEIGHTED_ICP_PLOT_RESULTS_SCRIPT;
+  try {
+    if (!fs::exists(python)) throw std::runtime_error(python + " not found (Debian: python3 with python3-matplotlib)");
+    if (!fs::exists(script)) throw std::runtime_error(script + " not found (it is in the source tree's scripts/)");
+    io::writeAtomically(png, [&](const std::string& temporary) {
+      runProcess({python, script, kind, "--data", data.string(), "--out", temporary, "--title", title});
+    });
+    return true;
+  } catch (const std::exception& e) {
+    std::cerr << tool << ": warning: no plot " << png << ": " << e.what() << '\n';
+    return false;
+  }
+}
+
+}  // namespace
+
+void runProcess(const std::vector<std::string>& argv) {
+  std::vector<char*> args;
+  for (const std::string& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+  args.push_back(nullptr);
+  pid_t pid = 0;
+  if (const int error = posix_spawn(&pid, args[0], nullptr, nullptr, args.data(), environ))
+    throw std::runtime_error("cannot start " + argv[0] + ": " + std::strerror(error));
+  int status = 0;
+  if (waitpid(pid, &status, 0) < 0) throw std::runtime_error("lost " + argv[0] + ": " + std::strerror(errno));
+  if (WIFEXITED(status) && WEXITSTATUS(status) == kNoMatplotlib && argv.size() > 1)
+    throw std::runtime_error("matplotlib is not installed for " + argv[0] + " (Debian: python3-matplotlib)");
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
+    throw std::runtime_error(
+        (argv.size() > 1 ? argv[1] : argv[0]) + " failed (" +
+        (WIFEXITED(status) ? "exit status " + std::to_string(WEXITSTATUS(status)) : std::string("killed by a signal")) +
+        ")");
+}
+
+bool plotTrajectory(const std::string& tool, const Trajectory& groundtruth, const Trajectory& estimate,
+                    const Eigen::Isometry3d& alignment, double max_difference, const std::string& png,
+                    const std::string& title) {
+  try {
+    ScratchFolder scratch;
+    std::vector<std::vector<double>> truth_rows, pairs;
+    for (const auto& [t, pose] : groundtruth)
+      truth_rows.push_back({t, pose.translation().x(), pose.translation().y(), pose.translation().z()});
+    for (const auto& [g, e] : io::associate(groundtruth, estimate, max_difference)) {
+      const Eigen::Vector3d truth = groundtruth[g].pose.translation();
+      const Eigen::Vector3d moved = alignment * estimate[e].pose.translation();
+      pairs.push_back({estimate[e].timestamp, truth.x(), truth.y(), truth.z(), moved.x(), moved.y(), moved.z(),
+                       (moved - truth).norm()});
+    }
+    writeTable(scratch.path() / "groundtruth.csv", "t,x,y,z", truth_rows);
+    writeTable(scratch.path() / "pairs.csv", "t,gt_x,gt_y,gt_z,est_x,est_y,est_z,error", pairs);
+    return draw(tool, "trajectory", scratch.path(), png, title);
+  } catch (const std::exception& e) {
+    std::cerr << tool << ": warning: no plot " << png << ": " << e.what() << '\n';
+    return false;
+  }
+}
+
+bool plotAlignment(const std::string& tool, const std::vector<Eigen::Vector3d>& source,
+                   const std::vector<Eigen::Vector3d>& target, const std::vector<double>& target_weights,
+                   const Eigen::Matrix4d& transformation, const std::string& png, const std::string& title) {
+  try {
+    ScratchFolder scratch;
+    const Eigen::Isometry3d motion(transformation);
+    std::vector<std::vector<double>> source_rows, target_rows;
+    for (const Eigen::Vector3d& p : source) {
+      const Eigen::Vector3d q = motion * p;
+      source_rows.push_back({p.x(), p.y(), p.z(), q.x(), q.y(), q.z()});
+    }
+    for (std::size_t i = 0; i < target.size(); ++i)
+      target_rows.push_back(
+          {target[i].x(), target[i].y(), target[i].z(), i < target_weights.size() ? target_weights[i] : 1.0});
+    writeTable(scratch.path() / "source.csv", "x,y,z,aligned_x,aligned_y,aligned_z", source_rows);
+    writeTable(scratch.path() / "target.csv", "x,y,z,weight", target_rows);
+    return draw(tool, "alignment", scratch.path(), png, title);
+  } catch (const std::exception& e) {
+    std::cerr << tool << ": warning: no plot " << png << ": " << e.what() << '\n';
+    return false;
+  }
+}
+
+bool plotAlignment(const std::string& tool, const LandmarkMap& source, const LandmarkMap& target,
+                   const WeightFunction& weight, const Eigen::Matrix4d& transformation, const std::string& png,
+                   const std::string& title) {
+  std::vector<double> weights;
+  try {
+    weights = computeWeights(target, weight);
+  } catch (const std::exception& e) {
+    std::cerr << tool << ": warning: no plot " << png << ": " << e.what() << '\n';
+    return false;
+  }
+  const auto positions = [](const LandmarkMap& map) {
+    std::vector<Eigen::Vector3d> out;
+    for (const Landmark& landmark : map.landmarks) out.push_back(landmark.position);
+    return out;
+  };
+  return plotAlignment(tool, positions(source), positions(target), weights, transformation, png, title);
+}
+
+}  // namespace weighted_icp::tools

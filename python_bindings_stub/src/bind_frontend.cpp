@@ -1,0 +1,345 @@
+// The RGB-D front end for Python: RgbdSlam on a TUM folder or frame by frame, the GIL released while it works.
+#include <filesystem>
+#include <mutex>
+#include <optional>
+#include <string>
+
+#include <pybind11/functional.h>
+#include <pybind11/stl.h>
+#include <opencv2/imgproc.hpp>
+
+#include "arrays.h"
+#include "bindings.h"
+#include "weighted_icp/frontend/slam/rgbd_slam.h"
+#include "weighted_icp/io/camera.h"
+#include "weighted_icp/io/tum_sequence.h"
+#include "weighted_icp/registration/weight_strategies.h"
+
+namespace weighted_icp::python {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+/// What track() reports for one frame.
+struct TrackResult {
+  std::string status;
+  std::string reason;
+  bool has_pose = false;
+  Eigen::Matrix4d pose = Eigen::Matrix4d::Identity();
+  bool keyframe = false;
+  bool refused_by_quality_gate = false;
+  std::size_t features = 0, matches = 0, inliers = 0;
+  double tracking_ms = 0.0;
+};
+
+TrackResult toTrackResult(const frontend::FrameRecord& record) {
+  TrackResult out;
+  out.status = frontend::toString(record.result.status);
+  out.reason = record.result.reason;
+  out.has_pose = record.result.hasPose();
+  out.pose = record.result.pose_wc.matrix();
+  out.keyframe = record.result.keyframe;
+  out.refused_by_quality_gate = record.result.refused_by_quality_gate;
+  out.features = record.result.features;
+  out.matches = record.result.matches;
+  out.inliers = record.result.inliers;
+  out.tracking_ms = record.tracking_ms;
+  return out;
+}
+
+/// The camera of a TUM folder from its name (freiburg1 / fr1 ...), as wicp_rgbd_slam guesses it.
+PinholeCamera cameraOfFolder(const std::string& folder) {
+  const std::string name = fs::weakly_canonical(fs::absolute(folder)).filename().string();
+  for (int sensor : {1, 2, 3})
+    if (name.find("freiburg" + std::to_string(sensor)) != std::string::npos ||
+        name.find("fr" + std::to_string(sensor)) != std::string::npos)
+      return tumCamera(sensor);
+  throw py::value_error("cannot tell the camera of " + folder +
+                        " from its name; pass camera='fr1'|'fr2'|'fr3'|FILE.yaml");
+}
+
+PinholeCamera toCamera(const py::handle& camera) {
+  if (py::isinstance<PinholeCamera>(camera)) return camera.cast<PinholeCamera>();
+  if (py::isinstance<py::str>(camera)) return io::loadCamera(camera.cast<std::string>());
+  throw py::value_error("camera must be a Camera or 'fr1', 'fr2', 'fr3' or a camera YAML path");
+}
+
+/// RgbdSlam with what Python needs around it: a lock (the GIL is released while it runs, so two Python
+/// threads could otherwise enter it at once), the arrays the current frame views, the ground truth of run().
+class PythonSlam {
+ public:
+  PythonSlam(const PinholeCamera& camera, const frontend::RgbdSlamOptions& options)
+      : camera_(camera), slam_(std::make_unique<frontend::RgbdSlam>(camera, options)) {}
+
+  TrackResult track(const py::array& color, const py::array& depth, double timestamp, bool bgr) {
+    RgbdFrame frame;
+    frame.timestamp = timestamp;
+    frame.color = colorImage(color, bgr);
+    frame.depth = depthImage(depth, frame.color.size());
+    // The front end keeps a header of the image until the next frame: the arrays stay alive that long.
+    color_owner_ = color;
+    depth_owner_ = depth;
+    py::gil_scoped_release unlocked;
+    std::lock_guard<std::mutex> lock(mutex_);
+    return toTrackResult(slam_->process(frame));
+  }
+
+  void run(const std::string& folder, std::size_t max_frames, const py::object& progress) {
+    const io::TumSequence sequence = io::TumSequence::open(folder);
+    groundtruth_ = sequence.groundTruth();
+    const std::size_t frames = max_frames > 0 ? std::min(max_frames, sequence.size()) : sequence.size();
+    try {
+      for (std::size_t i = 0; i < frames; ++i) {
+        std::string status = step(sequence, i);
+        if (PyErr_CheckSignals() != 0) throw py::error_already_set();  // Ctrl-C between frames
+        if (!progress.is_none()) progress(i + 1, frames, status);
+      }
+    } catch (...) {
+      finish();  // the bundle-adjustment thread stops before the error reaches Python
+      throw;
+    }
+    finish();
+  }
+
+  void finish() {
+    py::gil_scoped_release unlocked;
+    std::lock_guard<std::mutex> lock(mutex_);
+    slam_->finish();
+  }
+
+  template <typename F>
+  auto locked(F f) const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return f(*slam_);
+  }
+
+  const PinholeCamera& camera() const { return camera_; }
+  const Trajectory& groundTruth() const { return groundtruth_; }
+
+ private:
+  /// Reads and tracks frame i of the sequence; an unreadable frame is a warning and skipped, as in the tool.
+  std::string step(const io::TumSequence& sequence, std::size_t i) {
+    RgbdFrame frame;
+    std::string error;
+    {
+      py::gil_scoped_release unlocked;
+      try {
+        frame = sequence.loadFrame(i, camera_);
+      } catch (const std::runtime_error& e) {
+        error = e.what();
+      }
+    }
+    if (!error.empty()) {
+      PyErr_WarnEx(PyExc_RuntimeWarning, ("frame " + std::to_string(i) + " skipped: " + error).c_str(), 1);
+      return "unreadable";
+    }
+    py::gil_scoped_release unlocked;
+    std::lock_guard<std::mutex> lock(mutex_);
+    return frontend::toString(slam_->process(frame).result.status);
+  }
+
+  cv::Mat colorImage(const py::array& color, bool bgr) const {
+    const bool grey = color.ndim() == 2;
+    if (!color.dtype().is(py::dtype::of<std::uint8_t>()) || !(grey || (color.ndim() == 3 && color.shape(2) == 3)))
+      throw py::value_error("rgb must be an (H, W, 3) or (H, W) uint8 array");
+    requireCameraSize(color, "rgb");
+    const py::array contiguous = py::array::ensure(color, py::array::c_style);
+    cv::Mat view(static_cast<int>(color.shape(0)), static_cast<int>(color.shape(1)), grey ? CV_8UC1 : CV_8UC3,
+                 const_cast<void*>(contiguous.data()));
+    if (grey || bgr) return contiguous.ptr() == color.ptr() ? view : view.clone();
+    cv::Mat converted;
+    cv::cvtColor(view, converted, cv::COLOR_RGB2BGR);  // the front end reads OpenCV's BGR order
+    return converted;
+  }
+
+  cv::Mat depthImage(const py::array& depth, const cv::Size& size) const {
+    const bool raw = depth.dtype().is(py::dtype::of<std::uint16_t>());
+    if (depth.ndim() != 2 || !(raw || depth.dtype().is(py::dtype::of<float>())))
+      throw py::value_error("depth must be an (H, W) uint16 (raw, depth_factor units) or float32 (metres) array");
+    requireCameraSize(depth, "depth");
+    if (depth.shape(0) != size.height || depth.shape(1) != size.width)
+      throw py::value_error("depth and rgb differ in size");
+    const py::array contiguous = py::array::ensure(depth, py::array::c_style);
+    cv::Mat view(size, raw ? CV_16UC1 : CV_32F, const_cast<void*>(contiguous.data()));
+    if (raw) return depthFromRaw(view, camera_.depth_factor);
+    return contiguous.ptr() == depth.ptr() ? view : view.clone();
+  }
+
+  void requireCameraSize(const py::array& image, const char* name) const {
+    if (image.shape(0) != camera_.height || image.shape(1) != camera_.width)
+      throw py::value_error(std::string(name) + " is " + std::to_string(image.shape(1)) + "x" +
+                            std::to_string(image.shape(0)) + " but the camera's images are " +
+                            std::to_string(camera_.width) + "x" + std::to_string(camera_.height));
+  }
+
+  PinholeCamera camera_;
+  std::unique_ptr<frontend::RgbdSlam> slam_;
+  mutable std::mutex mutex_;
+  py::object color_owner_, depth_owner_;
+  Trajectory groundtruth_;
+};
+
+std::unique_ptr<PythonSlam> makeSlam(const py::object& camera, std::size_t minimap_keyframes,
+                                     const std::string& matcher, bool quality_gate, bool deterministic) {
+  if (minimap_keyframes < 1) throw py::value_error("minimap_keyframes must be >= 1");
+  frontend::RgbdSlamOptions options;
+  options.minimap_keyframes = minimap_keyframes;
+  options.frontend.matcher.kind = frontend::parseMatcherKind(matcher);
+  options.frontend.quality_gate = quality_gate;
+  options.backend.background_thread = !deterministic;
+  return std::make_unique<PythonSlam>(toCamera(camera), options);
+}
+
+py::tuple keyframes(const PythonSlam& slam) {
+  const auto all = slam.locked([](const frontend::RgbdSlam& s) { return s.map().keyframes(); });
+  std::vector<std::uint64_t> ids;
+  std::vector<double> stamps;
+  py::array_t<double> poses({static_cast<py::ssize_t>(all.size()), py::ssize_t{4}, py::ssize_t{4}});
+  auto view = poses.mutable_unchecked<3>();
+  for (std::size_t i = 0; i < all.size(); ++i) {
+    ids.push_back(all[i].id);
+    stamps.push_back(all[i].timestamp);
+    for (int r = 0; r < 4; ++r)
+      for (int c = 0; c < 4; ++c) view(static_cast<py::ssize_t>(i), r, c) = all[i].pose_wc.matrix()(r, c);
+  }
+  return py::make_tuple(toArray(ids), toArray(stamps), poses);
+}
+
+void bindCamera(py::module_& m) {
+  py::class_<PinholeCamera>(m, "Camera",
+                            "A pinhole RGB-D camera: intrinsics, distortion (k1 k2 p1 p2 k3), depth scale.")
+      .def(py::init<>(), "All zero; set the fields.")
+      .def_static("load", &io::loadCamera, py::arg("spec"),
+                  "'fr1', 'fr2', 'fr3' (TUM's calibrations) or a camera YAML.")
+      .def_static("tum", &tumCamera, py::arg("freiburg"), "The published calibration of TUM RGB-D freiburg 1, 2 or 3.")
+      .def_readwrite("fx", &PinholeCamera::fx, "Focal length in x (pixels).")
+      .def_readwrite("fy", &PinholeCamera::fy, "Focal length in y (pixels).")
+      .def_readwrite("cx", &PinholeCamera::cx, "Principal point x (pixels).")
+      .def_readwrite("cy", &PinholeCamera::cy, "Principal point y (pixels).")
+      .def_readwrite("width", &PinholeCamera::width, "Image width (pixels).")
+      .def_readwrite("height", &PinholeCamera::height, "Image height (pixels).")
+      .def_readwrite("depth_factor", &PinholeCamera::depth_factor, "Raw depth value per metre.")
+      .def_readwrite("distortion", &PinholeCamera::distortion, "k1 k2 p1 p2 k3.")
+      .def("__repr__", [](const PinholeCamera& c) {
+        return "<Camera fx=" + std::to_string(c.fx) + " fy=" + std::to_string(c.fy) + " cx=" + std::to_string(c.cx) +
+               " cy=" + std::to_string(c.cy) + " " + std::to_string(c.width) + "x" + std::to_string(c.height) + ">";
+      });
+}
+
+void bindTrackResult(py::module_& m) {
+  py::class_<TrackResult>(m, "TrackResult", "What track() did with one frame.")
+      .def_readonly("status", &TrackResult::status, "'initialized', 'tracked', ... as wicp_rgbd_slam prints it.")
+      .def_readonly("reason", &TrackResult::reason, "Why, when lost or skipped.")
+      .def_readonly("has_pose", &TrackResult::has_pose, "Whether the frame got a pose.")
+      .def_property_readonly(
+          "pose",
+          [](const TrackResult& r) -> py::object { return r.has_pose ? py::object(toArray(r.pose)) : py::none(); },
+          "(4, 4) camera-to-world pose, or None.")
+      .def_readonly("keyframe", &TrackResult::keyframe, "Whether it became a keyframe.")
+      .def_readonly("refused_by_quality_gate", &TrackResult::refused_by_quality_gate, "Refused by the BRISQUE gate.")
+      .def_readonly("features", &TrackResult::features, "Features detected.")
+      .def_readonly("matches", &TrackResult::matches, "Descriptor matches.")
+      .def_readonly("inliers", &TrackResult::inliers, "Pose inliers.")
+      .def_readonly("tracking_ms", &TrackResult::tracking_ms, "Time inside the C++ tracker (milliseconds).")
+      .def("__repr__", [](const TrackResult& r) {
+        return "<TrackResult " + r.status + ", " + std::to_string(r.inliers) + " inliers>";
+      });
+}
+
+}  // namespace
+
+void bindFrontend(py::module_& m) {
+  bindCamera(m);
+  bindTrackResult(m);
+  py::class_<PythonSlam>(m, "RgbdSlam",
+                         "The RGB-D SLAM front end (wicp_rgbd_slam's): feed frames with track(), or a TUM folder "
+                         "with run(); read the trajectory, keyframes and landmarks.")
+      .def(py::init(&makeSlam), py::arg("camera") = "fr1", py::arg("minimap_keyframes") = 10,
+           py::arg("matcher") = "flann", py::arg("quality_gate") = true, py::arg("deterministic") = false,
+           "camera: a Camera, 'fr1'|'fr2'|'fr3' or a YAML path. deterministic runs bundle adjustment inline "
+           "(reproducible) instead of in its own thread.")
+      .def("track", &PythonSlam::track, py::arg("rgb"), py::arg("depth"), py::arg("timestamp"), py::arg("bgr") = false,
+           "Tracks one frame: rgb (H, W, 3) uint8 in RGB order (bgr=True: OpenCV's order, not copied) or (H, W) "
+           "grey; depth (H, W) uint16 raw (divided by the camera's depth_factor) or float32 metres. The GIL is "
+           "released while it runs.")
+      .def("run", &PythonSlam::run, py::arg("folder"), py::arg("max_frames") = 0, py::arg("progress") = py::none(),
+           "Tracks the frames of a TUM RGB-D folder (max_frames 0: all), then finish(). progress(done, total, "
+           "status) is called after each frame; an exception from it, or Ctrl-C, stops the run. Unreadable frames "
+           "are skipped with a RuntimeWarning, as the tool does.")
+      .def("finish", &PythonSlam::finish, "Waits for the pending bundle adjustment.")
+      .def_property_readonly(
+          "camera", [](const PythonSlam& s) { return s.camera(); }, "The camera.")
+      .def_property_readonly(
+          "trajectory",
+          [](const PythonSlam& s) {
+            return toTumRows(s.locked([](const frontend::RgbdSlam& r) { return r.trajectory(); }));
+          },
+          "(N, 8) TUM rows (timestamp tx ty tz qx qy qz qw), one per frame with a pose.")
+      .def_property_readonly(
+          "ground_truth",
+          [](const PythonSlam& s) -> py::object {
+            return s.groundTruth().empty() ? py::none() : py::object(toTumRows(s.groundTruth()));
+          },
+          "The TUM folder's ground truth as (N, 8) rows after run(), else None.")
+      .def_property_readonly("keyframes", &keyframes, "(ids (K,) uint64, timestamps (K,), poses (K, 4, 4)).")
+      .def_property_readonly(
+          "tracking_ms",
+          [](const PythonSlam& s) {
+            return toArray(s.locked([](const frontend::RgbdSlam& r) {
+              std::vector<double> ms;
+              for (const auto& f : r.frames()) ms.push_back(f.tracking_ms);
+              return ms;
+            }));
+          },
+          "(F,) float64: time of each tracked frame in the C++ tracker (milliseconds).")
+      .def(
+          "session_map",
+          [](const PythonSlam& s) { return s.locked([](const frontend::RgbdSlam& r) { return r.sessionMap(); }); },
+          "The whole map as a LandmarkMap.")
+      .def(
+          "mini_maps",
+          [](const PythonSlam& s) { return s.locked([](const frontend::RgbdSlam& r) { return r.miniMaps(); }); },
+          "The mini-maps (as wicp_rgbd_slam writes them) as LandmarkMaps.")
+      .def(
+          "landmarks",
+          [](const PythonSlam& s, const std::string& strategy) {
+            const WeightFunction weight = weightFunction(parseWeightStrategy(strategy));
+            const LandmarkMap map = s.locked([](const frontend::RgbdSlam& r) { return r.sessionMap(); });
+            std::vector<Eigen::Vector3d> xyz;
+            for (const auto& l : map.landmarks) xyz.push_back(l.position);
+            Eigen::MatrixXd positions(static_cast<Eigen::Index>(xyz.size()), 3);
+            for (std::size_t i = 0; i < xyz.size(); ++i)
+              positions.row(static_cast<Eigen::Index>(i)) = xyz[i].transpose();
+            return py::make_tuple(toArray(positions), toArray(computeWeights(map, weight)));
+          },
+          py::arg("strategy") = "covariance", "The landmark cloud with weights: ((N, 3) positions, (N,) weights).");
+  m.def(
+      "tum_frames",
+      [](const std::string& folder) {
+        const io::TumSequence sequence = io::TumSequence::open(folder);
+        py::list frames;
+        for (std::size_t i = 0; i < sequence.size(); ++i) {
+          const io::TumFrame& frame = sequence.frame(i);
+          frames.append(py::make_tuple(frame.rgb_timestamp, frame.rgb_path, frame.depth_path));
+        }
+        return frames;
+      },
+      py::arg("folder"),
+      "The frames of a TUM folder as run() reads them: [(timestamp, rgb path, depth path)], rgb.txt and "
+      "depth.txt associated as associate.py does (each depth image used once).");
+  m.def(
+      "run_tum",
+      [](const std::string& folder, const py::object& camera, std::size_t max_frames, const py::object& progress,
+         std::size_t minimap_keyframes, bool deterministic) {
+        const PinholeCamera cam = camera.is_none() ? cameraOfFolder(folder) : toCamera(camera);
+        auto slam = makeSlam(py::cast(cam), minimap_keyframes, "flann", true, deterministic);
+        slam->run(folder, max_frames, progress);
+        return slam;
+      },
+      py::arg("folder"), py::arg("camera") = py::none(), py::arg("max_frames") = 0, py::arg("progress") = py::none(),
+      py::arg("minimap_keyframes") = 10, py::arg("deterministic") = false,
+      "A new RgbdSlam run over a TUM folder; the camera, when not given, from the folder's name (fr1 ...).");
+}
+
+}  // namespace weighted_icp::python

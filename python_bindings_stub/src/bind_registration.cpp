@@ -1,0 +1,149 @@
+// align(), its result and the weighted correspondence rule for Python, on the same path as wicp_align.
+#include <limits>
+#include <optional>
+#include <string>
+
+#include <pybind11/stl.h>
+
+#include "arrays.h"
+#include "bindings.h"
+#include "weighted_icp/registration/landmark_alignment.h"
+#include "weighted_icp/registration/weighted_correspondence_estimation.h"
+
+namespace weighted_icp::python {
+
+namespace {
+
+unsigned int checkedK(int k) {
+  if (k < 1 || k > 1000) throw py::value_error("k must be between 1 and 1000 (got " + std::to_string(k) + ")");
+  return static_cast<unsigned int>(k);
+}
+
+unsigned int checkedThreads(int threads) {
+  if (threads < 0 || threads > 1024)
+    throw py::value_error("threads must be between 0 (all) and 1024 (got " + std::to_string(threads) + ")");
+  return static_cast<unsigned int>(threads);
+}
+
+/// The target's weights, from target_weights, or the strategy applied to a LandmarkMap target, or 1 each.
+std::vector<double> targetWeights(const py::handle& target, const py::handle& target_weights,
+                                  const std::optional<WeightStrategy>& strategy, std::size_t target_points) {
+  const bool base = strategy && *strategy == WeightStrategy::Base;
+  if (!target_weights.is_none()) {
+    if (base) throw py::value_error("strategy 'base' is plain ICP: it takes no target_weights");
+    return toWeights(target_weights, "target_weights", target_points);
+  }
+  if (!strategy || base) return {};
+  if (!py::isinstance<LandmarkMap>(target))
+    throw py::value_error("strategy '" + toString(*strategy) +
+                          "' computes weights from a LandmarkMap target; pass the map, or target_weights");
+  return computeWeights(target.cast<const LandmarkMap&>(), weightFunction(*strategy));
+}
+
+AlignmentResult align(const py::object& source, const py::object& target, const py::object& target_weights, int k,
+                      const std::optional<std::string>& strategy_name, int max_iterations,
+                      const std::optional<double>& max_correspondence_distance, bool refine,
+                      const py::object& initial_guess, int threads) {
+  std::optional<WeightStrategy> strategy;
+  if (strategy_name) strategy = parseWeightStrategy(*strategy_name);
+  AlignmentSettings settings;
+  settings.k = strategy ? neighboursFor(*strategy, checkedK(k)) : checkedK(k);
+  if (max_iterations < 1)
+    throw py::value_error("max_iterations must be >= 1 (got " + std::to_string(max_iterations) + ")");
+  settings.max_iterations = max_iterations;
+  if (max_correspondence_distance) {
+    if (!(*max_correspondence_distance > 0.0) || !std::isfinite(*max_correspondence_distance))
+      throw py::value_error("max_correspondence_distance must be finite and > 0 (got " +
+                            std::to_string(*max_correspondence_distance) + ")");
+    settings.max_correspondence_distance = *max_correspondence_distance;
+  }
+  settings.refine = refine;
+  settings.threads = checkedThreads(threads);
+  const Eigen::Matrix4d guess =
+      initial_guess.is_none() ? Eigen::Matrix4d::Identity() : toMatrix4(initial_guess, "initial_guess");
+
+  const std::vector<Eigen::Vector3d> source_xyz = positionsOf(source, "source");
+  const std::vector<Eigen::Vector3d> target_xyz = positionsOf(target, "target");
+  const std::vector<double> weights = targetWeights(target, target_weights, strategy, target_xyz.size());
+  if (source_xyz.empty()) throw py::value_error("source has no points");
+  if (target_xyz.empty()) throw py::value_error("target has no points");
+
+  py::gil_scoped_release unlocked;
+  LandmarkAligner aligner(settings);
+  aligner.setTarget(toCloud(target_xyz, weights));
+  return aligner.align(toCloud(source_xyz, {}), guess);
+}
+
+py::tuple weightedCorrespondences(const py::object& source, const py::object& target, const py::object& weights, int k,
+                                  const std::optional<double>& max_distance, int threads) {
+  const std::vector<Eigen::Vector3d> source_xyz = positionsOf(source, "source");
+  const std::vector<Eigen::Vector3d> target_xyz = positionsOf(target, "target");
+  if (target_xyz.empty()) throw py::value_error("target has no points");
+  std::vector<double> target_weights = weights.is_none() ? std::vector<double>(target_xyz.size(), 1.0)
+                                                         : toWeights(weights, "weights", target_xyz.size());
+  if (max_distance && !(*max_distance > 0.0))
+    throw py::value_error("max_distance must be > 0 (got " + std::to_string(*max_distance) + ")");
+  WeightedCorrespondenceEstimation<LandmarkPoint, LandmarkPoint, double> rule(checkedK(k));
+  rule.setNumberOfThreads(checkedThreads(threads));
+  rule.setTargetWeights(std::move(target_weights));
+  pcl::Correspondences pairs;
+  if (!source_xyz.empty()) {
+    py::gil_scoped_release unlocked;
+    rule.setInputSource(toCloud(source_xyz, {}));
+    rule.setInputTarget(toCloud(target_xyz, {}));
+    rule.determineCorrespondences(pairs, max_distance.value_or(std::numeric_limits<double>::max()));
+  }
+  std::vector<std::int64_t> source_index, target_index;
+  std::vector<double> squared;
+  for (const auto& pair : pairs) {
+    source_index.push_back(pair.index_query);
+    target_index.push_back(pair.index_match);
+    squared.push_back(pair.distance);
+  }
+  return py::make_tuple(toArray(source_index), toArray(target_index), toArray(squared));
+}
+
+}  // namespace
+
+void bindRegistration(py::module_& m) {
+  py::class_<AlignmentResult>(m, "AlignmentResult", "What align() found, as wicp_align --json reports it.")
+      .def_property_readonly(
+          "transformation", [](const AlignmentResult& r) { return toArray(r.transformation); },
+          "(4, 4) float64: maps the source (as given) onto the target.")
+      .def_readonly("fitness_score", &AlignmentResult::fitness_score,
+                    "Mean squared distance from each moved source point to its nearest target point (NaN when "
+                    "degenerate).")
+      .def_readonly("iterations", &AlignmentResult::iterations, "Iterations of the weighted stage.")
+      .def_readonly("refine_iterations", &AlignmentResult::refine_iterations,
+                    "Iterations of the nearest-neighbour refinement (0 when refine was off).")
+      .def_readonly("converged", &AlignmentResult::converged, "Whether the last stage run converged.")
+      .def_readonly("correspondences", &AlignmentResult::correspondences, "Pairs used by the last iteration.")
+      .def_readonly("time_ms", &AlignmentResult::time_ms, "Time of the ICP stages (milliseconds).")
+      .def_readonly("degenerate", &AlignmentResult::degenerate,
+                    "True when the problem has no unique rigid solution, so ICP was not run.")
+      .def_readonly("reason", &AlignmentResult::reason, "Why it is degenerate; empty otherwise.")
+      .def("__repr__", [](const AlignmentResult& r) {
+        return "<AlignmentResult converged=" + std::string(r.converged ? "True" : "False") +
+               " iterations=" + std::to_string(r.iterations) + " fitness_score=" + std::to_string(r.fitness_score) +
+               (r.degenerate ? " degenerate: " + r.reason : std::string()) + ">";
+      });
+
+  m.def("align", &align, py::arg("source"), py::arg("target"), py::arg("target_weights") = py::none(), py::arg("k") = 5,
+        py::arg("strategy") = py::none(), py::arg("max_iterations") = 150,
+        py::arg("max_correspondence_distance") = py::none(), py::arg("refine") = false,
+        py::arg("initial_guess") = py::none(), py::arg("threads") = 0,
+        "Aligns source onto target with the confidence-weighted ICP; the same numbers as wicp_align.\n\n"
+        "source, target: (N, 3) float64/float32 arrays or LandmarkMaps.\n"
+        "target_weights: (M,) weights of the target points; else strategy's weights of a LandmarkMap target; "
+        "else 1 each.\n"
+        "strategy: 'base' (plain ICP, k = 1), 'covariance', 'observations', 'mean-distance', or None.\n"
+        "The GIL is released while ICP runs.");
+  m.def("weighted_correspondences", &weightedCorrespondences, py::arg("source"), py::arg("target"),
+        py::arg("weights") = py::none(), py::arg("k") = 5, py::arg("max_distance") = py::none(), py::arg("threads") = 0,
+        "The weighted correspondence rule: for each source point, among its k nearest target points within "
+        "max_distance, the heaviest (ties to the nearer).\n\n"
+        "Returns (source_idx int64, target_idx int64, sq_dist float64) arrays, one entry per source point that "
+        "found a partner.");
+}
+
+}  // namespace weighted_icp::python

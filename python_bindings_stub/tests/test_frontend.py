@@ -1,0 +1,70 @@
+"""RgbdSlam from Python: a TUM folder, frame by frame (the same poses), progress, errors."""
+
+from pathlib import Path
+from typing import List, Tuple
+
+import numpy as np
+import pytest
+
+import weighted_icp as wi
+
+FRAMES = 8
+
+
+def read_frames(folder: Path, count: int) -> List[Tuple[float, np.ndarray, np.ndarray]]:
+    """(timestamp, RGB uint8, raw depth uint16) of the first frames, paired as run() pairs them."""
+    image = pytest.importorskip("PIL.Image", reason="Pillow (python3-pil) reads the PNGs in this test")
+    frames = []
+    for t, rgb_path, depth_path in wi.tum_frames(str(folder))[:count]:
+        rgb = np.asarray(image.open(rgb_path).convert("RGB"))
+        raw = np.asarray(image.open(depth_path)).astype(np.uint16)
+        frames.append((t, rgb, raw))
+    return frames
+
+
+def test_track_frame_by_frame_equals_run(tum_folder: Path) -> None:
+    whole = wi.RgbdSlam("fr1", deterministic=True)
+    calls = []
+    whole.run(str(tum_folder), max_frames=FRAMES, progress=lambda done, total, status: calls.append((done, total)))
+    assert calls[-1] == (FRAMES, FRAMES) and len(calls) == FRAMES
+
+    stepwise = wi.RgbdSlam(wi.Camera.tum(1), deterministic=True)
+    results = [stepwise.track(rgb, depth, t) for t, rgb, depth in read_frames(tum_folder, FRAMES)]
+    stepwise.finish()
+    assert results[0].status == "initialized" and results[0].has_pose
+    assert np.array_equal(whole.trajectory, stepwise.trajectory)
+    assert whole.trajectory.shape[1] == 8
+    ids, stamps, poses = whole.keyframes
+    assert len(ids) == len(stamps) == len(poses) >= 1 and poses.shape[1:] == (4, 4)
+    xyz, weights = whole.landmarks("observations")
+    assert xyz.shape[0] == weights.shape[0] == len(whole.session_map()) > 0
+    assert whole.ground_truth is not None
+    assert wi.ate(whole.ground_truth, whole.trajectory).pairs >= 3
+
+
+def test_run_tum_guesses_the_camera_and_stops_on_a_callback_error(tum_folder: Path) -> None:
+    def stop(done: int, total: int, status: str) -> None:
+        if done == 2:
+            raise KeyboardInterrupt("stop here")
+
+    with pytest.raises(KeyboardInterrupt):
+        wi.run_tum(str(tum_folder), max_frames=FRAMES, progress=stop)
+    slam = wi.run_tum(str(tum_folder), max_frames=3, deterministic=True)
+    assert slam.camera.fx == pytest.approx(517.306408)
+    assert len(slam.tracking_ms) == 3
+
+
+def test_track_refuses_wrong_images() -> None:
+    slam = wi.RgbdSlam("fr1")
+    rgb = np.zeros((480, 640, 3), dtype=np.uint8)
+    depth = np.zeros((480, 640), dtype=np.uint16)
+    with pytest.raises(ValueError, match="rgb must be"):
+        slam.track(rgb.astype(np.float32), depth, 0.0)  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match="rgb is 320x240"):
+        slam.track(rgb[:240, :320], depth, 0.0)
+    with pytest.raises(ValueError, match="depth must be"):
+        slam.track(rgb, depth.astype(np.int32), 0.0)
+    with pytest.raises(ValueError, match="camera"):
+        wi.RgbdSlam(camera=5)  # type: ignore[arg-type]
+    # A black frame without depth is not an error: the tracker reports it.
+    assert not slam.track(rgb, depth, 0.0).has_pose

@@ -1,0 +1,252 @@
+"""Type stubs of weighted_icp (the compiled module weighted_icp._weighted_icp, re-exported)."""
+
+import os
+from typing import Callable, Dict, List, Optional, Tuple, Union
+
+import numpy as np
+import numpy.typing as npt
+
+__version__: str
+
+_PathLike = Union[str, "os.PathLike[str]"]
+_FloatArray = npt.NDArray[np.float64]
+_Points = Union["LandmarkMap", npt.NDArray[np.float64], npt.NDArray[np.float32]]
+_TrajectoryLike = Union[_PathLike, npt.NDArray[np.float64], Tuple[npt.ArrayLike, npt.ArrayLike]]
+
+class LandmarkMap:
+    """A landmark map: frame poses and, per landmark, position, covariance and observations."""
+
+    def __init__(self) -> None: ...
+    @staticmethod
+    def load(path: _PathLike, min_observations: int = 0) -> LandmarkMap:
+        """Reads a map in the paper's format; ValueError naming file and line when malformed."""
+    @staticmethod
+    def from_positions(positions: npt.ArrayLike, covariances: Optional[npt.ArrayLike] = None) -> LandmarkMap:
+        """A map of bare landmarks from an (N, 3) array and optional (N, 3, 3) covariances."""
+    def save(self, path: _PathLike) -> None:
+        """Writes the map in the paper's format, atomically."""
+    def copy(self) -> LandmarkMap:
+        """An independent copy."""
+    def __len__(self) -> int: ...
+    @property
+    def positions(self) -> _FloatArray:
+        """(N, 3) float64 landmark positions."""
+    @property
+    def covariances(self) -> _FloatArray:
+        """(N, 3, 3) float64 position covariances."""
+    @property
+    def observation_counts(self) -> npt.NDArray[np.int64]:
+        """(N,) int64 observation counts."""
+    @property
+    def ids(self) -> npt.NDArray[np.uint64]:
+        """(N,) uint64 landmark ids."""
+    @property
+    def mean_observation_distances(self) -> _FloatArray:
+        """(N,) float64 mean distance to the observing cameras."""
+    @property
+    def frames(self) -> Dict[int, _FloatArray]:
+        """{frame id: (4, 4) camera-to-world pose}."""
+    @property
+    def frame_ids(self) -> npt.NDArray[np.uint64]:
+        """(F,) uint64 frame ids, ascending."""
+    def with_min_observations(self, min_observations: int) -> LandmarkMap:
+        """The landmarks observed at least min_observations times."""
+    def mini_map(self, first: int, last: int) -> LandmarkMap:
+        """The mini-map of frames [first, last]."""
+    def split_into_mini_maps(self, frames_per_minimap: int) -> List[LandmarkMap]:
+        """Consecutive mini-maps of frames_per_minimap frames each."""
+    def alternate_halves(self) -> Tuple[LandmarkMap, LandmarkMap]:
+        """Two maps with alternate landmarks, related by the identity."""
+    def transform(self, matrix: npt.ArrayLike) -> None:
+        """Moves the map in place by a (4, 4) rigid motion."""
+
+def weights(map: LandmarkMap, strategy: str) -> _FloatArray:
+    """(N,) weights: 'base', 'covariance', 'observations' or 'mean-distance'."""
+
+def strategies() -> List[str]:
+    """The weight strategies' names."""
+
+class AlignmentResult:
+    """What align() found, as wicp_align --json reports it."""
+
+    @property
+    def transformation(self) -> _FloatArray:
+        """(4, 4) source -> target."""
+    @property
+    def fitness_score(self) -> float: ...
+    @property
+    def iterations(self) -> int: ...
+    @property
+    def refine_iterations(self) -> int: ...
+    @property
+    def converged(self) -> bool: ...
+    @property
+    def correspondences(self) -> int: ...
+    @property
+    def time_ms(self) -> float: ...
+    @property
+    def degenerate(self) -> bool: ...
+    @property
+    def reason(self) -> str: ...
+
+def align(
+    source: _Points,
+    target: _Points,
+    target_weights: Optional[npt.ArrayLike] = None,
+    k: int = 5,
+    strategy: Optional[str] = None,
+    max_iterations: int = 150,
+    max_correspondence_distance: Optional[float] = None,
+    refine: bool = False,
+    initial_guess: Optional[npt.ArrayLike] = None,
+    threads: int = 0,
+) -> AlignmentResult:
+    """Aligns source onto target with the confidence-weighted ICP (wicp_align's numbers)."""
+
+def weighted_correspondences(
+    source: _Points,
+    target: _Points,
+    weights: Optional[npt.ArrayLike] = None,
+    k: int = 5,
+    max_distance: Optional[float] = None,
+    threads: int = 0,
+) -> Tuple[npt.NDArray[np.int64], npt.NDArray[np.int64], _FloatArray]:
+    """(source_idx, target_idx, sq_dist) of the weighted correspondence rule."""
+
+class ErrorStatistics:
+    """RMSE, mean, median and maximum."""
+
+    @property
+    def rmse(self) -> float: ...
+    @property
+    def mean(self) -> float: ...
+    @property
+    def median(self) -> float: ...
+    @property
+    def max(self) -> float: ...
+
+class AbsoluteTrajectoryError:
+    """The ATE as evaluate_ate.py computes it."""
+
+    @property
+    def pairs(self) -> int: ...
+    @property
+    def translation(self) -> ErrorStatistics: ...
+    @property
+    def rmse(self) -> float: ...
+    @property
+    def alignment(self) -> _FloatArray: ...
+
+class RelativePoseError:
+    """The RPE as evaluate_rpe.py --fixed_delta computes it."""
+
+    @property
+    def pairs(self) -> int: ...
+    @property
+    def translation(self) -> ErrorStatistics: ...
+    @property
+    def rotation_deg(self) -> ErrorStatistics: ...
+
+def ate(gt: _TrajectoryLike, est: _TrajectoryLike, max_difference: float = 0.02) -> AbsoluteTrajectoryError:
+    """Absolute trajectory error of est against gt."""
+
+def rpe(gt: _TrajectoryLike, est: _TrajectoryLike, delta: float = 1.0, unit: str = "s") -> RelativePoseError:
+    """Relative pose error over pose pairs delta apart."""
+
+def read_trajectory(path: _PathLike) -> _FloatArray:
+    """A TUM trajectory file as (N, 8) rows."""
+
+def write_trajectory(trajectory: _TrajectoryLike, path: _PathLike) -> None:
+    """Writes a trajectory in TUM format, atomically."""
+
+class Camera:
+    """A pinhole RGB-D camera."""
+
+    fx: float
+    fy: float
+    cx: float
+    cy: float
+    width: int
+    height: int
+    depth_factor: float
+    distortion: List[float]
+    def __init__(self) -> None: ...
+    @staticmethod
+    def load(spec: str) -> Camera:
+        """'fr1', 'fr2', 'fr3' or a camera YAML."""
+    @staticmethod
+    def tum(freiburg: int) -> Camera:
+        """TUM RGB-D freiburg 1, 2 or 3."""
+
+class TrackResult:
+    """What track() did with one frame."""
+
+    @property
+    def status(self) -> str: ...
+    @property
+    def reason(self) -> str: ...
+    @property
+    def has_pose(self) -> bool: ...
+    @property
+    def pose(self) -> Optional[_FloatArray]: ...
+    @property
+    def keyframe(self) -> bool: ...
+    @property
+    def refused_by_quality_gate(self) -> bool: ...
+    @property
+    def features(self) -> int: ...
+    @property
+    def matches(self) -> int: ...
+    @property
+    def inliers(self) -> int: ...
+    @property
+    def tracking_ms(self) -> float: ...
+
+class RgbdSlam:
+    """The RGB-D SLAM front end."""
+
+    def __init__(
+        self,
+        camera: Union[Camera, str] = "fr1",
+        minimap_keyframes: int = 10,
+        matcher: str = "flann",
+        quality_gate: bool = True,
+        deterministic: bool = False,
+    ) -> None: ...
+    def track(
+        self, rgb: npt.NDArray[np.uint8], depth: npt.NDArray[np.generic], timestamp: float, bgr: bool = False
+    ) -> TrackResult:
+        """Tracks one frame (the GIL released)."""
+    def run(
+        self, folder: str, max_frames: int = 0, progress: Optional[Callable[[int, int, str], object]] = None
+    ) -> None:
+        """Tracks the frames of a TUM folder, then finish()."""
+    def finish(self) -> None:
+        """Waits for the pending bundle adjustment."""
+    @property
+    def camera(self) -> Camera: ...
+    @property
+    def trajectory(self) -> _FloatArray:
+        """(N, 8) TUM rows."""
+    @property
+    def ground_truth(self) -> Optional[_FloatArray]: ...
+    @property
+    def keyframes(self) -> Tuple[npt.NDArray[np.uint64], _FloatArray, _FloatArray]: ...
+    @property
+    def tracking_ms(self) -> _FloatArray: ...
+    def session_map(self) -> LandmarkMap: ...
+    def mini_maps(self) -> List[LandmarkMap]: ...
+    def landmarks(self, strategy: str = "covariance") -> Tuple[_FloatArray, _FloatArray]: ...
+
+def tum_frames(folder: str) -> List[Tuple[float, str, str]]:
+    """[(timestamp, rgb path, depth path)] of a TUM folder, associated as run() does."""
+
+def run_tum(
+    folder: str,
+    camera: Optional[Union[Camera, str]] = None,
+    max_frames: int = 0,
+    progress: Optional[Callable[[int, int, str], object]] = None,
+    minimap_keyframes: int = 10,
+    deterministic: bool = False,
+) -> RgbdSlam:
+    """A new RgbdSlam run over a TUM folder."""

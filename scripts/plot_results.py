@@ -1,0 +1,117 @@
+#!/usr/bin/python3
+"""The command-line tools' pictures, from the tables they write (examples/common/plotting.cpp):
+
+    plot_results.py trajectory --data DIR --out trajectory.png [--title T]
+        DIR/groundtruth.csv (t,x,y,z) and DIR/pairs.csv (t,gt_x..gt_z,est_x..est_z,error): the estimate
+        (already aligned onto the ground truth) against it, as evo and the TUM tools draw them: top view
+        coloured by the error, x / y / z against time, and the error along the trajectory.
+    plot_results.py alignment --data DIR --out alignment.png [--title T]
+        DIR/source.csv (x,y,z,aligned_x,aligned_y,aligned_z) and DIR/target.csv (x,y,z,weight): the two
+        landmark clouds before and after alignment, top view, the target coloured by weight.
+
+Exit status: 0 written, 1 bad input, 3 matplotlib is not installed (the tools turn that into a warning).
+"""
+
+import argparse
+import csv
+import os
+import sys
+
+NO_MATPLOTLIB = 3
+
+
+def load(path):
+    """A CSV of numbers as a dict of column name -> list of floats."""
+    try:
+        with open(path, newline="") as handle:
+            rows = list(csv.DictReader(handle))
+    except OSError as error:
+        sys.exit(f"plot_results.py: {path}: {error.strerror}")
+    if not rows:
+        return {}
+    return {name: [float(row[name]) for row in rows] for name in rows[0]}
+
+
+def trajectory_figure(plt, data, title):
+    """Top view, per-axis against time and the error along the trajectory."""
+    truth = load(os.path.join(data, "groundtruth.csv"))
+    pairs = load(os.path.join(data, "pairs.csv"))
+    if not pairs:
+        sys.exit("plot_results.py: no estimated pose pairs with the ground truth; nothing to draw")
+    figure = plt.figure(figsize=(15, 7.5), constrained_layout=True)
+    grid = figure.add_gridspec(3, 3)
+    top = figure.add_subplot(grid[:, 0])
+    top.plot(truth["x"], truth["y"], color="0.5", linestyle="--", linewidth=1, label="ground truth")
+    points = top.scatter(pairs["est_x"], pairs["est_y"], c=pairs["error"], cmap="viridis", s=8,
+                         label="estimate (aligned)")
+    figure.colorbar(points, ax=top, label="position error (m)", shrink=0.7)
+    top.set_aspect("equal", adjustable="datalim")
+    top.set(xlabel="x (m)", ylabel="y (m)", title="top view")
+    top.legend(loc="best", fontsize="small")
+    start = pairs["t"][0]
+    seconds = [t - start for t in pairs["t"]]
+    truth_seconds = [t - start for t in truth["t"]]
+    for row, axis in enumerate("xyz"):
+        panel = figure.add_subplot(grid[row, 1])
+        panel.plot(truth_seconds, truth[axis], color="0.5", linestyle="--", linewidth=1, label="ground truth")
+        panel.plot(seconds, pairs["est_" + axis], color="#1f77b4", linewidth=1, label="estimate")
+        panel.set_ylabel(f"{axis} (m)")
+        panel.set_xlim(min(seconds), max(seconds))
+        if row == 0:
+            panel.set_title("position against time")
+            panel.legend(loc="best", fontsize="small")
+        if row == 2:
+            panel.set_xlabel("time (s)")
+    error = figure.add_subplot(grid[:, 2])
+    error.plot(seconds, pairs["error"], color="#d62728", linewidth=1)
+    rmse = (sum(e * e for e in pairs["error"]) / len(pairs["error"])) ** 0.5
+    error.axhline(rmse, color="k", linestyle=":", label=f"RMSE {rmse * 100:.2f} cm")
+    error.set(xlabel="time (s)", ylabel="position error (m)", title="ATE along the trajectory")
+    error.legend(loc="best", fontsize="small")
+    figure.suptitle(title)
+    return figure
+
+
+def alignment_figure(plt, data, title):
+    """The two clouds, top view, before and after: target coloured by weight, source in red."""
+    source = load(os.path.join(data, "source.csv"))
+    target = load(os.path.join(data, "target.csv"))
+    if not source or not target:
+        sys.exit("plot_results.py: an empty cloud; nothing to draw")
+    figure, panels = plt.subplots(1, 2, figsize=(14, 6.5), sharex=True, sharey=True, constrained_layout=True)
+    for panel, (prefix, label) in zip(panels, [("", "before"), ("aligned_", "after")]):
+        cloud = panel.scatter(target["x"], target["y"], c=target["weight"], cmap="viridis", s=6,
+                              label="target (colour: weight)")
+        panel.scatter(source[prefix + "x"], source[prefix + "y"], s=6, facecolors="none", edgecolors="#d62728",
+                      linewidths=0.6, label="source")
+        panel.set_aspect("equal", adjustable="box")  # shared axes: the box adapts, not the limits
+        panel.set(xlabel="x (m)", ylabel="y (m)", title=f"{label} alignment (top view)")
+        panel.legend(loc="best", fontsize="small")
+    figure.colorbar(cloud, ax=panels, label="target weight", shrink=0.7)
+    figure.suptitle(title)
+    return figure
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("kind", choices=["trajectory", "alignment"])
+    parser.add_argument("--data", required=True, help="folder with the tables")
+    parser.add_argument("--out", required=True, help="the PNG to write")
+    parser.add_argument("--title", default="")
+    args = parser.parse_args()
+    try:
+        import matplotlib
+        matplotlib.use("Agg")  # no display needed
+        import matplotlib.pyplot as plt
+    except ImportError:
+        print(f"plot_results.py: matplotlib is not installed for {sys.executable} (Debian: python3-matplotlib)",
+              file=sys.stderr)
+        return NO_MATPLOTLIB
+    draw = trajectory_figure if args.kind == "trajectory" else alignment_figure
+    figure = draw(plt, args.data, args.title)
+    figure.savefig(args.out, dpi=110, format="png")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

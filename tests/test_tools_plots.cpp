@@ -1,0 +1,107 @@
+// The tools' pictures: wicp_evaluate --plot and wicp_align --plot write a PNG, and without a usable Python
+// (or matplotlib) they warn and still succeed, leaving no file.
+
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "test_support.h"
+#include "tool_runner.h"
+#include "weighted_icp/io/map_format.h"
+#include "weighted_icp/io/trajectory.h"
+
+using namespace weighted_icp;
+using weighted_icp::testing::runBuiltTool;
+namespace fs = std::filesystem;
+
+namespace {
+
+/// True when `path` starts with the PNG signature.
+bool isPng(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  char magic[8] = {};
+  in.read(magic, 8);
+  return in && std::string(magic + 1, 3) == "PNG";
+}
+
+/// A ground truth along a curve and an estimate off it by a growing error.
+void writeTrajectories(const fs::path& dir) {
+  Trajectory truth, estimate;
+  for (int i = 0; i < 60; ++i) {
+    StampedPose pose;
+    pose.timestamp = 0.05 * i;
+    pose.pose.translation() = Eigen::Vector3d(0.02 * i, std::sin(0.1 * i), 0.5);
+    truth.push_back(pose);
+    pose.pose.translation() += Eigen::Vector3d(0.0, 0.001 * i, -0.0005 * i);
+    estimate.push_back(pose);
+  }
+  io::writeTrajectory(truth, (dir / "gt.txt").string());
+  io::writeTrajectory(estimate, (dir / "est.txt").string());
+}
+
+/// A map of scattered landmarks, and the same moved a little, as the two maps of an alignment.
+void writeMaps(const fs::path& dir) {
+  LandmarkMap map;
+  map.frames[0] = Eigen::Isometry3d::Identity();
+  for (LandmarkId id = 0; id < 300; ++id) {
+    Landmark landmark;
+    landmark.id = id;
+    landmark.position = Eigen::Vector3d(std::sin(1.3 * id), std::cos(0.7 * id), 0.01 * static_cast<double>(id % 50));
+    landmark.covariance = Eigen::Matrix3d::Identity() * (1e-4 * static_cast<double>(1 + id % 7));
+    landmark.observations = {{0, 1.0, 1.0}, {0, 2.0, 2.0}};
+    map.landmarks.push_back(landmark);
+  }
+  io::writeLandmarkMap(map, (dir / "b.txt").string());
+  map.transform(Eigen::Isometry3d(Eigen::Translation3d(0.03, -0.02, 0.0)));
+  io::writeLandmarkMap(map, (dir / "a.txt").string());
+}
+
+/// Skips the test when the tool said matplotlib is missing: the picture cannot be checked here.
+#define SKIP_WITHOUT_MATPLOTLIB(run)                                      \
+  if ((run).err.find("matplotlib is not installed") != std::string::npos) \
+  GTEST_SKIP() << "matplotlib is not installed for the build's Python: " << (run).err
+
+}  // namespace
+
+TEST(ToolsPlots, EvaluateDrawsTheTrajectoriesAndErrors) {
+  const fs::path dir = weighted_icp::testing::scratchDir("evaluate");
+  writeTrajectories(dir);
+  const auto run = runBuiltTool(
+      "wicp_evaluate",
+      (dir / "gt.txt").string() + " " + (dir / "est.txt").string() + " --plot " + (dir / "ate.png").string(), dir, 120);
+  EXPECT_EQ(run.status, 0) << run.err;
+  SKIP_WITHOUT_MATPLOTLIB(run);
+  EXPECT_EQ(run.err.find("warning"), std::string::npos) << run.err;
+  EXPECT_TRUE(isPng(dir / "ate.png"));
+}
+
+TEST(ToolsPlots, AlignDrawsTheCloudsBeforeAndAfter) {
+  const fs::path dir = weighted_icp::testing::scratchDir("align");
+  writeMaps(dir);
+  const auto run = runBuiltTool("wicp_align",
+                                "--source " + (dir / "a.txt").string() + " --target " + (dir / "b.txt").string() +
+                                    " --k 3 --plot " + (dir / "align.png").string(),
+                                dir, 120);
+  EXPECT_EQ(run.status, 0) << run.err;
+  SKIP_WITHOUT_MATPLOTLIB(run);
+  EXPECT_TRUE(isPng(dir / "align.png")) << run.err;
+}
+
+TEST(ToolsPlots, WithoutPythonTheToolWarnsAndSucceeds) {
+  const fs::path dir = weighted_icp::testing::scratchDir("no_python");
+  writeTrajectories(dir);
+  ::setenv("WEIGHTED_ICP_PLOT_PYTHON", (dir / "no_such_python").c_str(), 1);
+  const auto run = runBuiltTool("wicp_evaluate",
+                                (dir / "gt.txt").string() + " " + (dir / "est.txt").string() + " --plot " +
+                                    (dir / "ate.png").string() + " --json",
+                                dir, 120);
+  ::unsetenv("WEIGHTED_ICP_PLOT_PYTHON");
+  EXPECT_EQ(run.status, 0) << run.err;
+  EXPECT_NE(run.err.find("wicp_evaluate: warning: no plot"), std::string::npos) << run.err;
+  EXPECT_NE(run.err.find("no_such_python"), std::string::npos) << run.err;
+  EXPECT_FALSE(fs::exists(dir / "ate.png"));
+  EXPECT_NE(run.out.find("\"ate_rmse_m\""), std::string::npos);  // the numbers are still there
+}
