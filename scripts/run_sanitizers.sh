@@ -37,5 +37,7 @@ done
 cmake --build "$build" -j "$(nproc)" --target "${targets[@]}"
 export ASAN_OPTIONS="detect_leaks=1:abort_on_error=1:strict_string_checks=1"
 export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
+# Only Debian's libraries are suppressed, each with its reason in the file.
+export TSAN_OPTIONS="suppressions=$root/scripts/tsan.supp:halt_on_error=1:second_deadlock_stack=1"
 ctest --test-dir "$build" -j "$(nproc)" --output-on-failure --timeout 900 -R "^($regex)\\." \
   -E 'AnalyticJacobiansMatchNumericDifferentiation'
