@@ -90,10 +90,10 @@ void requireConsistentBlob(const pcl::PCLPointCloud2& blob, const std::string& p
   const std::uint64_t points = std::uint64_t{blob.width} * blob.height;
   bool consistent = points > 0 && std::uint64_t{blob.row_step} >= std::uint64_t{blob.width} * blob.point_step &&
                     blob.data.size() >= std::uint64_t{blob.row_step} * blob.height;
-  for (const auto& field : blob.fields)
-    consistent =
-        consistent &&
-        std::uint64_t{field.offset} + std::uint64_t{pcl::getFieldSize(field.datatype)} * field.count <= blob.point_step;
+  for (const auto& field : blob.fields) {
+    const auto bytes = static_cast<std::uint64_t>(pcl::getFieldSize(field.datatype)) * field.count;
+    consistent = consistent && std::uint64_t{field.offset} + bytes <= blob.point_step;
+  }
   if (!consistent)
     throw std::runtime_error(path + ": the point data does not match the header (" + std::to_string(points) +
                              " points of " + std::to_string(blob.point_step) + " bytes, " +
