@@ -7,7 +7,8 @@
 //
 // Writes to --out: session.txt (the estimated map), session_truth.txt (the
 // same landmarks and frames, true), minimaps/minimap_NNN.txt and results.csv
-// (one row per alignment). Mini-maps are written unfiltered: wicp_align
+// (one row per alignment), all published together (io::AtomicFolder): --out
+// holds one whole run or is left as it was. Mini-maps are written unfiltered: wicp_align
 // --source minimaps/minimap_001.txt --target minimaps/minimap_000.txt with the
 // same --displace, --strategy and --k reproduces a row.
 
@@ -152,7 +153,8 @@ int main(int argc, char** argv) {
          "align only landmarks observed this often within the mini-map (the paper uses 2)")
         ("threads", tools::rangedValue(&thread_count, 0u, 1024u)->default_value(thread_count),
          "search threads, 0 = all (at most 1024)")
-        ("out", po::value(&out_dir)->default_value(out_dir), "output folder");
+        ("out", po::value(&out_dir)->default_value(out_dir), "output folder (refused if not empty)")
+        ("overwrite", "replace --out if it is not empty (nothing of an earlier run is left in it)");
     // clang-format on
     po::variables_map vm;
     if (!tools::parseCommandLine(argc, argv, options, vm)) return 0;
@@ -164,6 +166,8 @@ int main(int argc, char** argv) {
     const std::size_t minimap_frames = frames_per_minimap;
     if (out_dir.empty()) throw std::invalid_argument("--out must name a folder");
     const Displacement displacement = Displacement::parse(displacement_text);
+    // Opened before the long run, so a refused --out costs nothing.
+    io::AtomicFolder folder = tools::openOutputFolder(out_dir, vm.count("overwrite") > 0);
     const Eigen::Isometry3d true_alignment = displacement.toIsometry().inverse();
 
     const auto generation_start = std::chrono::steady_clock::now();
@@ -243,21 +247,18 @@ int main(int argc, char** argv) {
       return tools::interruptExitCode(signal);
     }
 
-    // Written only now, so that an error above leaves no mix of this run's
-    // and an earlier run's files.
-    const fs::path out(out_dir);
+    // Written into the temporary folder, published in one rename.
+    const fs::path out = folder.path();
     fs::create_directories(out / "minimaps");
     io::writeLandmarkMap(session.estimated, (out / "session.txt").string());
     io::writeLandmarkMap(session.truth, (out / "session_truth.txt").string());
     for (std::size_t i = 0; i < minimaps.size(); ++i)
       io::writeLandmarkMap(minimaps[i], (out / "minimaps" / minimapFileName(i)).string());
-    // Nor may a previous run with more mini-maps leave files that look like this run's.
-    for (std::size_t i = minimaps.size(); fs::exists(out / "minimaps" / minimapFileName(i)); ++i)
-      fs::remove(out / "minimaps" / minimapFileName(i));
     tools::writeTextFile((out / "results.csv").string(), resultsCsv(records));
+    folder.publish();
     printSummaryTable(records, pairs);
     const double total_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    std::cout << "\nwrote " << (out / "session.txt").string() << ", session_truth.txt, " << minimaps.size()
+    std::cout << "\nwrote " << (folder.target() / "session.txt").string() << ", session_truth.txt, " << minimaps.size()
               << " mini-maps in minimaps/, results.csv\n"
               << "total " << std::fixed << std::setprecision(1) << total_s << " s\n";
     return 0;

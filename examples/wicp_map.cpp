@@ -168,32 +168,23 @@ std::string miniMapName(std::size_t index) {
   return name.str();
 }
 
-/// A mini-map file left by an earlier cut into more pieces would be taken for
-/// one of this cut's, so the folder may hold no minimap_*.txt but ours.
-void requireNoStaleMiniMaps(const fs::path& folder, const std::set<std::string>& names) {
-  if (!fs::is_directory(folder)) return;
-  for (const auto& entry : fs::directory_iterator(folder)) {
-    const std::string name = entry.path().filename().string();
-    if (name.rfind("minimap_", 0) == 0 && entry.path().extension() == ".txt" && !names.count(name))
-      throw std::runtime_error((folder / name).string() +
-                               " is left from an earlier cut; remove it or choose another --out folder");
-  }
-}
-
 int cut(int argc, char** argv) {
   std::string map_path, out_dir, ranges_text;
   std::size_t frames_per_minimap = 0, min_count = 1;
   const std::string usage =
-      "wicp_map cut MAP --out DIR (--frames-per-minimap N | --ranges \"0-119,120-239\") [--min-observations N]";
+      "wicp_map cut MAP --out DIR (--frames-per-minimap N | --ranges \"0-119,120-239\") [--min-observations N] "
+      "[--overwrite]";
   po::options_description visible(
       usage +
       "\n"
       "Writes DIR/minimap_000.txt, ... in the map format: the frames of each mini-map and every landmark\n"
-      "they saw, with only their observations (LandmarkMap::miniMap). Options");
+      "they saw, with only their observations (LandmarkMap::miniMap). DIR holds one whole cut: it is written\n"
+      "under a temporary name and renamed, so a failed cut leaves it as it was. Options");
   // One option per line reads as a table: not reflowed.
   // clang-format off
   visible.add_options()
-      ("out", po::value(&out_dir)->required(), "output folder (created if missing)")
+      ("out", po::value(&out_dir)->required(), "output folder (created if missing; refused if not empty)")
+      ("overwrite", "replace DIR if it is not empty (no earlier mini-map is left in it)")
       ("frames-per-minimap", tools::rangedValue(&frames_per_minimap, std::size_t{1}),
        "consecutive frames per mini-map, in frame-id order; the last may be shorter")
       ("ranges", po::value(&ranges_text), "frame-id ranges FIRST-LAST, comma separated; may overlap")
@@ -229,17 +220,18 @@ int cut(int argc, char** argv) {
     return 0;
   }
 
-  std::set<std::string> names;
-  for (std::size_t i = 0; i < minis.size(); ++i) names.insert(miniMapName(i));
-  requireNoStaleMiniMaps(out_dir, names);
-  fs::create_directories(out_dir);
+  // Every mini-map is written before any is shown: the folder appears whole or not at all.
+  io::AtomicFolder folder = tools::openOutputFolder(out_dir, vm.count("overwrite") > 0);
+  std::ostringstream written;
   for (std::size_t i = 0; i < minis.size(); ++i) {
     const LandmarkMap mini = minis[i].withMinObservations(min_count);
-    const std::string path = (fs::path(out_dir) / miniMapName(i)).string();
-    io::writeLandmarkMap(mini, path);
-    std::cout << path << "  frames " << mini.frames.begin()->first << '-' << mini.frames.rbegin()->first << " ("
-              << mini.frames.size() << " frames)  " << mini.landmarks.size() << " landmarks\n";
+    io::writeLandmarkMap(mini, (folder.path() / miniMapName(i)).string());
+    written << (folder.target() / miniMapName(i)).string() << "  frames " << mini.frames.begin()->first << '-'
+            << mini.frames.rbegin()->first << " (" << mini.frames.size() << " frames)  " << mini.landmarks.size()
+            << " landmarks\n";
   }
+  folder.publish();
+  std::cout << written.str();
   return 0;
 }
 

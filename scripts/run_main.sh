@@ -15,4 +15,4 @@ echo "== 1/2  RGB-D front end on the synthetic sequence (build/examples/wicp_rgb
 echo "report: $(cat out/main/slam/report.json)"
 echo
 echo "== 2/2  Mini-map alignment with the weighted ICP (build/examples/wicp_demo)"
-"$root/build/examples/wicp_demo"
+"$root/build/examples/wicp_demo" --out "$root/out/demo" --overwrite

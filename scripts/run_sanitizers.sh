@@ -3,10 +3,12 @@
 # under them. Usage:
 #   bash scripts/run_sanitizers.sh [address,undefined|thread] [AREA ...]
 # AREA is a test area (core, registration, io, metrics, tools, synthetic,
-# sweeps, perception, geometry, frontend); only those test programs (and the
-# tools they run) are built. Default: address,undefined over core,
-# registration, io and metrics (the parsers and the registration core; the
-# whole suite under ASan takes about 12 minutes on 2 cores after a long build).
+# sweeps, perception, geometry, frontend, mapping) or fuzz (the replay of the
+# fuzz targets' committed seeds and crashers, ctest fuzz.*); only those test
+# programs (and the tools they run) are built. Default: address,undefined over
+# core, registration, io, metrics and fuzz (the parsers and the registration
+# core; the whole suite under ASan takes about 12 minutes on 2 cores after a
+# long build). CI runs the default (.ci/run).
 #
 # Excluded, with the reason:
 #   geometry.ReprojectionResiduals.AnalyticJacobiansMatchNumericDifferentiation
@@ -18,18 +20,24 @@ root="$(cd "$(dirname "$0")/.." && pwd)"
 sanitizers="${1:-address,undefined}"
 shift || true
 areas=("$@")
-[ ${#areas[@]} -gt 0 ] || areas=(core registration io metrics)
-targets=() regex=""
-for area in "${areas[@]}"; do
-  targets+=("weighted_icp_${area}_tests")
-  regex="${regex:+$regex|}$area"
-done
+[ ${#areas[@]} -gt 0 ] || areas=(core registration io metrics fuzz)
 build="$root/build-$(echo "$sanitizers" | tr ',' '-')"
 "$root/scripts/install_deps.sh"
 cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DWEIGHTED_ICP_SANITIZE="$sanitizers" \
   -DWEIGHTED_ICP_BUILD_BENCHMARKS=OFF > "$build.configure.log" 2>&1 || { cat "$build.configure.log"; exit 1; }
+targets=() regex=""
+for area in "${areas[@]}"; do
+  if [ "$area" = fuzz ]; then
+    while read -r name; do targets+=("fuzz_replay_$name"); done < "$build/fuzz/fuzzers.txt"
+  else
+    targets+=("weighted_icp_${area}_tests")
+  fi
+  regex="${regex:+$regex|}$area"
+done
 cmake --build "$build" -j "$(nproc)" --target "${targets[@]}"
 export ASAN_OPTIONS="detect_leaks=1:abort_on_error=1:strict_string_checks=1"
 export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
+# Only Debian's libraries are suppressed, each with its reason in the file.
+export TSAN_OPTIONS="suppressions=$root/scripts/tsan.supp:halt_on_error=1:second_deadlock_stack=1"
 ctest --test-dir "$build" -j "$(nproc)" --output-on-failure --timeout 900 -R "^($regex)\\." \
   -E 'AnalyticJacobiansMatchNumericDifferentiation'

@@ -116,6 +116,23 @@ TEST(Camera, UnreadableFilesAreNamed) {
   EXPECT_NE(errorOf(empty.string()).find(empty.string()), std::string::npos);
 }
 
+// Found by fuzz/fuzz_camera: OpenCV's YAML parser loops forever on this text; it is refused by line first.
+TEST(Camera, TextOpenCvCannotParseIsRefusedByLine) {
+  const auto dir = weighted_icp::testing::scratchDir("camera_layout");
+  const fs::path hang = dir / "hang.yaml";
+  writeFile(hang, "%YAML:1.0\n---<:p\na: -\n");
+  const std::string error = errorOf(hang.string());
+  EXPECT_NE(error.find(hang.string() + ":2: not a camera file"), std::string::npos) << error;
+  EXPECT_NE(error.find("'---<:p'"), std::string::npos) << error;
+  // What OpenCV writes is of the plain layout, indented matrices of other keys included.
+  const fs::path opencv = dir / "opencv.yaml";
+  writeFile(opencv,
+            "%YAML:1.0\n---\n# calibration\nfx: 517.3\nfy: 516.5\ncx: 318.6\ncy: 255.3\nk1: 0\nk2: 0\np1: 0\n"
+            "p2: 0\nk3: 0\nwidth: 640\nheight: 480\ndepth_factor: 5000.\nK: !!opencv-matrix\n   rows: 1\n   cols: 1\n"
+            "   dt: d\n   data: [ 1. ]\n");
+  EXPECT_EQ(io::loadCamera(opencv.string()).fx, 517.3);
+}
+
 TEST(Camera, InvalidCamerasAreNotSaved) {
   const auto dir = weighted_icp::testing::scratchDir("camera_save_invalid");
   PinholeCamera camera = tumCamera(3);

@@ -209,6 +209,16 @@ TEST(CloudIo, NegativePointCountIsNamed) {
   expectError([&] { io::loadLandmarkCloud(path.string()); }, path, "number of points");
 }
 
+// Found by fuzz/fuzz_cloud_pcd: PCL's header parser let std::out_of_range escape on a DATA line without a type.
+TEST(CloudIo, DataLineWithoutATypeIsRefused) {
+  const fs::path path = pcdDeclaring(scratchDir("cloud_data_without_type") / "no_type.pcd", "3");
+  std::string text = readFile(path);
+  const std::size_t at = text.find("DATA binary\n");
+  ASSERT_NE(at, std::string::npos);
+  writeFile(path, text.replace(at, 12, "DATA\n"));
+  expectError([&] { io::loadLandmarkCloud(path.string()); }, path, "malformed header line");
+}
+
 // Issue #10: PCL printed "[pcl::PCDReader::...]" lines besides our one message.
 TEST(CloudIo, PclPrintsNothingOnABrokenFile) {
   const fs::path scratch = scratchDir("cloud_pcl_quiet");

@@ -179,6 +179,15 @@ TEST(TrajectoryAssociate, MatchesALiteralTranscriptionOfAssociatePy) {
   }
 }
 
+// Found by fuzz/fuzz_trajectory: with a limit below the spacing of doubles
+// at the timestamps (1e-9 s at 1.3e9 s), equal timestamps were not paired.
+TEST(TrajectoryAssociate, PairsEqualTimestampsWhateverTheLimit) {
+  const std::vector<double> stamps{1305031101.1759, 1305031101.1858, 0.5, 1e300};
+  for (const double limit : {1e-9, 1e-300, 0.02})
+    EXPECT_EQ(io::associate(stamps, stamps, limit), bruteForceAssociate(stamps, stamps, limit)) << limit;
+  EXPECT_EQ(io::associate(stamps, stamps, 1e-9).size(), stamps.size());
+}
+
 TEST(TrajectoryAssociate, RefusesBadInput) {
   const std::vector<double> stamps{1.0, 2.0};
   EXPECT_THROW(io::associate(stamps, stamps, 0.0), std::invalid_argument);

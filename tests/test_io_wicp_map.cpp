@@ -3,6 +3,7 @@
 
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -129,13 +130,13 @@ TEST(WicpMapCut, ByFrameCount) {
 
 TEST(WicpMapCut, ByRangesWithMinObservations) {
   const fs::path scratch = scratchDir("wicp_map_cut_ranges");
+  const fs::path out = scratch / "minis";
   const ToolRun run = wicpMap(
-      "cut " + quoted(smallMap(scratch)) + " --out " + quoted(scratch) + " --ranges 0-2,2-4 --min-observations 2",
-      scratch);
+      "cut " + quoted(smallMap(scratch)) + " --out " + quoted(out) + " --ranges 0-2,2-4 --min-observations 2", scratch);
   ASSERT_EQ(run.exit_code, 0) << run.err;
-  const LandmarkMap first = io::readLandmarkMap((scratch / "minimap_000.txt").string());
-  const LandmarkMap second = io::readLandmarkMap((scratch / "minimap_001.txt").string());
-  EXPECT_FALSE(fs::exists(scratch / "minimap_002.txt"));
+  const LandmarkMap first = io::readLandmarkMap((out / "minimap_000.txt").string());
+  const LandmarkMap second = io::readLandmarkMap((out / "minimap_001.txt").string());
+  EXPECT_FALSE(fs::exists(out / "minimap_002.txt"));
   using Counts = std::vector<std::pair<LandmarkId, std::size_t>>;
   EXPECT_EQ(frameIds(first), (std::vector<FrameId>{0, 1, 2}));
   EXPECT_EQ(landmarkCounts(first), (Counts{{10, 2}, {11, 2}}));
@@ -143,14 +144,52 @@ TEST(WicpMapCut, ByRangesWithMinObservations) {
   EXPECT_EQ(landmarkCounts(second), (Counts{{11, 2}, {14, 2}}));  // 12 is seen once only
 }
 
-TEST(WicpMapCut, RefusesToLeaveStaleMiniMapsBeside) {
-  const fs::path scratch = scratchDir("wicp_map_cut_stale");
-  writeFile(scratch / "minimap_007.txt", "FRAME 0  0 0 0  1 0 0 0\n");
+/// Every name in `dir`, sorted.
+std::vector<std::string> entries(const fs::path& dir) {
+  std::vector<std::string> names;
+  for (const auto& entry : fs::directory_iterator(dir)) names.push_back(entry.path().filename().string());
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+TEST(WicpMapCut, ANonEmptyOutIsRefusedWithoutOverwrite) {
+  const fs::path scratch = scratchDir("wicp_map_cut_non_empty");
+  const fs::path out = scratch / "minis";
+  fs::create_directories(out);
+  writeFile(out / "minimap_007.txt", "FRAME 0  0 0 0  1 0 0 0\n");
   const ToolRun run =
-      wicpMap("cut " + quoted(smallMap(scratch)) + " --out " + quoted(scratch) + " --frames-per-minimap 2", scratch);
+      wicpMap("cut " + quoted(smallMap(scratch)) + " --out " + quoted(out) + " --frames-per-minimap 2", scratch);
   EXPECT_EQ(run.exit_code, 1);
-  EXPECT_TRUE(contains(run.err, "minimap_007.txt")) << run.err;
-  EXPECT_FALSE(fs::exists(scratch / "minimap_000.txt"));
+  EXPECT_TRUE(contains(run.err, "not empty") && contains(run.err, "--overwrite")) << run.err;
+  EXPECT_EQ(entries(out), std::vector<std::string>{"minimap_007.txt"});
+  EXPECT_EQ(entries(scratch), (std::vector<std::string>{"minis", "small.txt"})) << "temporary left";
+}
+
+// A re-run into the same folder holds this cut's mini-maps only, whatever the earlier one wrote.
+TEST(WicpMapCut, ARerunWithOverwriteLeavesNoStaleMiniMap) {
+  const fs::path scratch = scratchDir("wicp_map_cut_rerun");
+  const fs::path out = scratch / "minis";
+  const std::string cut = "cut " + quoted(smallMap(scratch)) + " --out " + quoted(out);
+  ASSERT_EQ(wicpMap(cut + " --frames-per-minimap 1", scratch).exit_code, 0);
+  ASSERT_EQ(entries(out).size(), 5u);
+  const ToolRun rerun = wicpMap(cut + " --frames-per-minimap 2 --overwrite", scratch);
+  ASSERT_EQ(rerun.exit_code, 0) << rerun.err;
+  EXPECT_EQ(entries(out), (std::vector<std::string>{"minimap_000.txt", "minimap_001.txt", "minimap_002.txt"}));
+  EXPECT_EQ(frameIds(io::readLandmarkMap((out / "minimap_001.txt").string())), (std::vector<FrameId>{2, 3}));
+}
+
+// A cut that fails after reading the map leaves the earlier cut whole, even with --overwrite.
+TEST(WicpMapCut, AFailedCutLeavesTheEarlierOneWhole) {
+  const fs::path scratch = scratchDir("wicp_map_cut_failed");
+  const fs::path out = scratch / "minis";
+  const std::string cut = "cut " + quoted(smallMap(scratch)) + " --out " + quoted(out);
+  ASSERT_EQ(wicpMap(cut + " --frames-per-minimap 2", scratch).exit_code, 0);
+  const std::string before = readFile(out / "minimap_000.txt");
+  const ToolRun failed = wicpMap(cut + " --ranges 0-1,7-9 --overwrite", scratch);
+  EXPECT_EQ(failed.exit_code, 1);
+  EXPECT_EQ(entries(out), (std::vector<std::string>{"minimap_000.txt", "minimap_001.txt", "minimap_002.txt"}));
+  EXPECT_EQ(readFile(out / "minimap_000.txt"), before);
+  EXPECT_EQ(entries(scratch), (std::vector<std::string>{"minis", "small.txt"})) << "temporary left";
 }
 
 TEST(WicpMapCut, RangeWithoutFramesIsAnError) {

@@ -53,6 +53,14 @@ std::vector<std::string> entries(const fs::path& dir) {
   return names;
 }
 
+/// Waits until a tool writing its stderr to `err` shows a progress line ("... (N%)"), so that a signal sent
+/// now reaches the running work, not a process still loading its libraries (seconds on a loaded machine,
+/// before the handlers are installed); gives up after a minute.
+void waitForProgress(const fs::path& err) {
+  for (int i = 0; i < 3000 && !contains(readFile(err), "%)"); ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+}
+
 /// A short synthetic sequence in the TUM layout, which wicp_rgbd_slam tracks
 /// completely with the fr1 camera; the tests spoil one part of it.
 fs::path exportSequence(const fs::path& scratch, int frames) {
@@ -172,7 +180,7 @@ TEST(WicpRgbdSlamOutputs, SigintStopsCleanlyAndWritesNothing) {
       ::execl(path.c_str(), path.c_str(), "--out", out_text.c_str(), static_cast<char*>(nullptr));
       std::_Exit(127);
     }
-    std::this_thread::sleep_for(std::chrono::seconds(1));
+    waitForProgress(err);
     ::kill(pid, signal);
     int status = 0;
     ::waitpid(pid, &status, 0);
@@ -195,12 +203,12 @@ TEST(WicpDemo, SigintStopsCleanlyAndWritesNothing) {
     std::freopen(err.c_str(), "w", stderr);
     std::freopen("/dev/null", "w", stdout);
     const std::string path = tool("wicp_demo").string(), out_text = out.string();
-    // A session larger than the default, so that 1 s is surely mid-run.
+    // A session larger than the default, so that its first progress line is surely mid-run.
     ::execl(path.c_str(), path.c_str(), "--frames", "1200", "--landmarks", "20000", "--out", out_text.c_str(),
             static_cast<char*>(nullptr));
     std::_Exit(127);
   }
-  std::this_thread::sleep_for(std::chrono::seconds(1));
+  waitForProgress(err);
   ::kill(pid, SIGINT);
   int status = 0;
   ::waitpid(pid, &status, 0);
@@ -208,6 +216,93 @@ TEST(WicpDemo, SigintStopsCleanlyAndWritesNothing) {
   EXPECT_EQ(WEXITSTATUS(status), 130);
   EXPECT_TRUE(contains(readFile(err), "wicp_demo: interrupted by SIGINT")) << readFile(err);
   EXPECT_EQ(entries(scratch), std::vector<std::string>{"err.txt"}) << "partial outputs left";
+}
+
+/// A small demo run (4 mini-maps of 20 frames), with `extra` options.
+std::string demoArgs(const fs::path& out, const std::string& extra) {
+  return "--frames 80 --landmarks 2000 --out '" + out.string() + "' " + extra;
+}
+
+TEST(WicpDemoOutputs, AReRunNeedsOverwriteAndLeavesNoStaleFile) {
+  const fs::path scratch = scratchDir("demo_rerun");
+  const fs::path out = scratch / "out";
+  ASSERT_EQ(run("wicp_demo", demoArgs(out, "--frames-per-minimap 20"), scratch / "err.txt").status, 0);
+  ASSERT_EQ(entries(out / "minimaps").size(), 4u);
+
+  ToolRun r = run("wicp_demo", demoArgs(out, "--frames-per-minimap 40"), scratch / "err.txt");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_TRUE(contains(r.err, "not empty") && contains(r.err, "--overwrite")) << r.err;
+  EXPECT_EQ(entries(out / "minimaps").size(), 4u) << "refused, yet changed";
+
+  r = run("wicp_demo", demoArgs(out, "--frames-per-minimap 40 --overwrite"), scratch / "err.txt");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(entries(out / "minimaps"), (std::vector<std::string>{"minimap_000.txt", "minimap_001.txt"}));
+  EXPECT_EQ(entries(scratch), (std::vector<std::string>{"err.txt", "out"})) << "a temporary folder was left";
+}
+
+TEST(WicpDemoOutputs, AFailedRunLeavesTheEarlierOutputWhole) {
+  const fs::path scratch = scratchDir("demo_failed");
+  const fs::path out = scratch / "out";
+  ASSERT_EQ(run("wicp_demo", demoArgs(out, "--frames-per-minimap 20"), scratch / "err.txt").status, 0);
+  const std::string results = readFile(out / "results.csv");
+  // Fails after the session is generated: no mini-map has a landmark seen that often.
+  const ToolRun r = run("wicp_demo", demoArgs(out, "--min-observations 1000000 --overwrite"), scratch / "err.txt");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_TRUE(contains(r.err, "wicp_demo: error: ")) << r.err;
+  EXPECT_EQ(readFile(out / "results.csv"), results);
+  EXPECT_EQ(entries(out / "minimaps").size(), 4u);
+  EXPECT_EQ(entries(scratch), (std::vector<std::string>{"err.txt", "out"})) << "a temporary folder was left";
+}
+
+/// A sweep stopped by Ctrl-C publishes nothing: an earlier sweep's folder stays whole even with --overwrite.
+TEST(WicpSweepOutputs, SigintLeavesTheEarlierSweepWhole) {
+  WEIGHTED_ICP_REQUIRE_FILE(weighted_icp::testing::realMapPath());
+  const fs::path scratch = scratchDir("sweep_sigint");
+  const fs::path out = scratch / "out", err = scratch / "err.txt";
+  fs::create_directories(out);
+  writeFile(out / "results.csv", "an earlier sweep\n");
+  const pid_t pid = ::fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    std::freopen(err.c_str(), "w", stderr);
+    std::freopen("/dev/null", "w", stdout);
+    const std::string path = tool("wicp_sweep_k").string(), map = weighted_icp::testing::realMapPath().string(),
+                      out_text = out.string();
+    // 110 runs on the real map: many seconds, so the first progress line is surely before the end.
+    ::execl(path.c_str(), path.c_str(), "--map", map.c_str(), "--threads", "1", "--no-plot", "--overwrite", "--out",
+            out_text.c_str(), static_cast<char*>(nullptr));
+    std::_Exit(127);
+  }
+  waitForProgress(err);
+  ::kill(pid, SIGINT);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  ASSERT_TRUE(WIFEXITED(status)) << "killed by the signal instead of stopping";
+  EXPECT_EQ(WEXITSTATUS(status), 130) << readFile(err);
+  EXPECT_TRUE(contains(readFile(err), "interrupted by SIGINT") && contains(readFile(err), "no outputs written"))
+      << readFile(err);
+  EXPECT_EQ(entries(out), std::vector<std::string>{"results.csv"});
+  EXPECT_EQ(readFile(out / "results.csv"), "an earlier sweep\n");
+  EXPECT_EQ(entries(scratch), (std::vector<std::string>{"err.txt", "out"})) << "a temporary folder was left";
+}
+
+/// A sweep re-run with --overwrite leaves no file of the earlier one (here a plot the new run does not draw).
+TEST(WicpSweepOutputs, AReRunWithOverwriteLeavesNoStaleFile) {
+  WEIGHTED_ICP_REQUIRE_FILE(weighted_icp::testing::realMapPath());
+  const fs::path scratch = scratchDir("sweep_rerun");
+  const fs::path out = scratch / "out";
+  fs::create_directories(out);
+  writeFile(out / "violin.png", "an earlier sweep's plot");
+  const std::string args = "--map '" + weighted_icp::testing::realMapPath().string() +
+                           "' --source-frames 0-59 --target-frames 40-99 --max-iterations 3 --threads 1 --no-plot "
+                           "--out '" +
+                           out.string() + "'";
+  ToolRun r = run("wicp_sweep_yaw", args, scratch / "err.txt");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_TRUE(contains(r.err, "--overwrite")) << r.err;
+  r = run("wicp_sweep_yaw", args + " --overwrite", scratch / "err.txt");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(entries(out), (std::vector<std::string>{"results.csv", "run.json"}));
 }
 
 }  // namespace

@@ -197,4 +197,15 @@ void writeTextFile(const std::string& path, const std::string& content) {
   });
 }
 
+io::AtomicFolder openOutputFolder(const std::string& out_dir, bool overwrite) {
+  try {
+    return io::AtomicFolder(out_dir, overwrite);
+  } catch (const std::runtime_error& e) {
+    const std::string what = e.what();
+    if (!overwrite && what.find("not empty") != std::string::npos)
+      throw std::runtime_error(what + " (--overwrite replaces it)");
+    throw;
+  }
+}
+
 }  // namespace weighted_icp::tools

@@ -16,6 +16,8 @@
 #include <Eigen/Core>
 #include <boost/program_options.hpp>
 
+#include "weighted_icp/io/atomic_folder.h"
+
 namespace weighted_icp::tools {
 
 /// Runs a tool's body: prints "<tool>: error: <what>" to stderr and returns 1
@@ -160,5 +162,13 @@ class JsonObject {
 
 /// Writes a text file atomically (temporary file, then rename).
 void writeTextFile(const std::string& path, const std::string& content);
+
+/// @brief A tool's --out folder, opened before the long work so that a refused folder costs nothing: outputs go
+/// into the returned folder's path() and appear together at publish(); a run that fails or is interrupted
+/// publishes nothing. A non-empty folder is refused (std::runtime_error naming it and --overwrite) unless
+/// `overwrite`, which replaces it whole, so no file of an earlier run is left beside the new ones.
+/// @param out_dir the --out option's value
+/// @param overwrite the --overwrite switch
+io::AtomicFolder openOutputFolder(const std::string& out_dir, bool overwrite);
 
 }  // namespace weighted_icp::tools

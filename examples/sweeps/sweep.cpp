@@ -24,6 +24,8 @@
 #include "weighted_icp/io/map_format.h"
 #include "weighted_icp/registration/landmark_point.h"
 
+extern char** environ;
+
 namespace weighted_icp::sweep {
 
 namespace po = boost::program_options;
@@ -319,17 +321,42 @@ namespace {
 constexpr const char* kDefaultSessionMap = "../shared/data/map_fr1_desk.txt";
 
 /// A sweep stopped by SIGINT/SIGTERM between runs: a partial results.csv
-/// would read as a finished sweep, so nothing is written (and the --out
-/// folder, if this run created it, removed while still empty). Returns the
-/// exit code (130/143).
-int discardInterrupted(const std::string& tool, const std::string& out_dir, bool created, std::size_t done,
-                       std::size_t total) {
-  std::error_code ignored;
-  if (created) fs::remove(out_dir, ignored);  // removes only an empty folder
+/// would read as a finished sweep, so nothing is published (the temporary
+/// folder goes with `folder`). Returns the exit code (130/143).
+int discardInterrupted(const std::string& tool, io::AtomicFolder& folder, std::size_t done, std::size_t total) {
+  folder.discard();
   const int signal = tools::interruptSignal();
   std::cerr << tool << ": interrupted by " << tools::signalName(signal) << " after " << done << " of " << total
-            << " runs; no outputs written\n";
+            << " runs; no outputs written, " << folder.target().string() << " left as it was\n";
   return tools::interruptExitCode(signal);
+}
+
+/// Draws DIR/violin.png from the CSV by the plotting script. The folder is
+/// published either way, since its results are complete; returns the exit
+/// code: 0, 4 when plotting failed, 130/143 when the plotter was interrupted.
+int plotAndPublish(const std::string& tool, io::AtomicFolder& folder) {
+  const std::string csv_path = (folder.path() / "results.csv").string();
+  const std::string published_csv = (folder.target() / "results.csv").string();
+  const std::vector<std::string> plot_command{WEIGHTED_ICP_PYTHON, WEIGHTED_ICP_PLOT_SCRIPT, csv_path};
+  try {
+    tools::runProcess(plot_command);  // no shell, so paths need no quoting
+  } catch (const std::exception& e) {
+    std::error_code ignored;
+    fs::remove(folder.path() / "violin.png", ignored);  // a plot the plotter may have left half-written
+    folder.publish();
+    if (const int signal = tools::interruptSignal()) {  // the plotter got the signal too
+      std::cerr << tool << ": interrupted by " << tools::signalName(signal) << " while plotting; the results are "
+                << "complete in " << published_csv << ", no plot\n";
+      return tools::interruptExitCode(signal);
+    }
+    std::cerr << tool << ": plotting failed: " << e.what() << "\n  the results are complete in " << published_csv
+              << "; plot them later with: " << plot_command[0] << ' ' << plot_command[1] << ' ' << published_csv
+              << '\n';
+    return 4;
+  }
+  folder.publish();
+  std::cout << tool << ": wrote " << (folder.target() / "violin.png").string() << std::endl;
+  return 0;
 }
 }  // namespace
 
@@ -374,7 +401,8 @@ int runSweepTool(const std::string& tool, const SweepDefinition& sweep, int argc
         ("refine", "finish each run with nearest-neighbour ICP (k = 1)")
         ("threads", tools::rangedValue(&settings.threads, 0u, 1024u)->default_value(settings.threads),
          "search threads, 0 = all (at most 1024); results do not depend on it")
-        ("out", po::value(&out_dir)->default_value(out_dir), "output folder")
+        ("out", po::value(&out_dir)->default_value(out_dir), "output folder (refused if not empty)")
+        ("overwrite", "replace --out if it is not empty (nothing of an earlier sweep is left in it)")
         ("no-plot", "write the CSV only");
     // clang-format on
     po::variables_map vm;
@@ -408,7 +436,8 @@ int runSweepTool(const std::string& tool, const SweepDefinition& sweep, int argc
     std::cout << tool << ": " << maps.description << " (" << maps.source.landmarks.size() << " onto "
               << maps.target.landmarks.size() << " landmarks), " << cases.size() << " cases, " << countRuns(cases)
               << " runs" << (settings.refine ? ", with refinement" : "") << std::endl;
-    const bool created = fs::create_directories(out_dir);  // early, so a bad --out fails before the runs
+    // Opened early, so a refused --out fails before the runs; published whole at the end.
+    io::AtomicFolder folder = tools::openOutputFolder(out_dir, vm.count("overwrite") > 0);
 
     const auto start = std::chrono::steady_clock::now();
     tools::Progress progress(tool, countRuns(cases));
@@ -420,11 +449,10 @@ int runSweepTool(const std::string& tool, const SweepDefinition& sweep, int argc
         },
         tools::interrupted);
     progress.finish();
-    if (tools::interrupted()) return discardInterrupted(tool, out_dir, created, runs.size(), countRuns(cases));
+    if (tools::interrupted()) return discardInterrupted(tool, folder, runs.size(), countRuns(cases));
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
-    const std::string csv_path = (fs::path(out_dir) / "results.csv").string();
-    tools::writeTextFile(csv_path, formatResultsCsv(sweep.name, runs));
+    tools::writeTextFile((folder.path() / "results.csv").string(), formatResultsCsv(sweep.name, runs));
     tools::JsonObject run_info;
     run_info.add("tool", tool)
         .add("sweep", sweep.name)
@@ -438,25 +466,12 @@ int runSweepTool(const std::string& tool, const SweepDefinition& sweep, int argc
         .add("runs", runs.size())
         .add("sweep_time_s", seconds);
     if (!sweep.sweeps_k) run_info.add("k", static_cast<std::size_t>(k));
-    tools::writeTextFile((fs::path(out_dir) / "run.json").string(), run_info.str() + "\n");
+    tools::writeTextFile((folder.path() / "run.json").string(), run_info.str() + "\n");
+    const std::string csv_path = (folder.target() / "results.csv").string();
     std::cout << tool << ": " << runs.size() << " runs in " << std::lround(seconds) << " s; wrote " << csv_path
               << std::endl;
-    if (!plot) return 0;
-
-    const std::vector<std::string> plot_command{WEIGHTED_ICP_PYTHON, WEIGHTED_ICP_PLOT_SCRIPT, csv_path};
-    try {
-      tools::runProcess(plot_command);  // no shell, so paths need no quoting
-    } catch (const std::exception& e) {
-      if (const int signal = tools::interruptSignal()) {  // the plotter got the signal too
-        std::cerr << tool << ": interrupted by " << tools::signalName(signal) << " while plotting; the results are "
-                  << "complete in " << csv_path << ", no plot\n";
-        return tools::interruptExitCode(signal);
-      }
-      std::cerr << tool << ": plotting failed: " << e.what() << "\n  the results are complete in " << csv_path
-                << "; plot them later with: " << plot_command[0] << ' ' << plot_command[1] << ' ' << csv_path << '\n';
-      return 4;
-    }
-    std::cout << tool << ": wrote " << (fs::path(out_dir) / "violin.png").string() << std::endl;
+    if (plot) return plotAndPublish(tool, folder);
+    folder.publish();
     return 0;
   });
 }

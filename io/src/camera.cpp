@@ -1,6 +1,8 @@
 // Camera files: TUM presets by name, OpenCV FileStorage YAML read and written.
 #include "weighted_icp/io/camera.h"
 
+#include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -9,6 +11,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "text_fields.h"
 #include "weighted_icp/io/atomic_file.h"
 
 namespace weighted_icp::io {
@@ -77,11 +80,45 @@ std::string describe(const std::vector<KeyProblem>& problems) {
   return text;
 }
 
+/// @brief Refuses a YAML camera file whose lines are not the plain layout camera files have: directives
+/// ("%YAML:1.0"), document markers ("---"), comments, "key: value" lines with a name for key, and indented
+/// lines below a key (an OpenCV matrix of another key). OpenCV's YAML parser can loop forever on malformed text
+/// (found by fuzz/fuzz_camera: "%YAML:1.0\n---<:p\na: -\n"), so it is given only text of this layout. XML and
+/// JSON files (first character '<' or '{') are left to FileStorage.
+/// @param path the camera file
+void requirePlainYamlLayout(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::string line;
+  std::size_t number = 0;
+  bool first = true;
+  while (std::getline(in, line)) {
+    ++number;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (first) {
+      const std::size_t start = line.find_first_not_of(" \t");
+      if (start == std::string::npos) continue;
+      if (line[start] == '<' || line[start] == '{') return;
+      first = false;
+    }
+    if (line.empty() || line[0] == ' ' || line[0] == '\t' || line[0] == '#' || line[0] == '%' || line == "---" ||
+        line == "...")
+      continue;
+    const std::size_t colon = line.find(':');
+    const bool named = colon != std::string::npos && colon > 0 &&
+                       std::all_of(line.begin(), line.begin() + static_cast<std::ptrdiff_t>(colon),
+                                   [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; });
+    if (!named || (colon + 1 < line.size() && line[colon + 1] != ' ' && line[colon + 1] != '\t'))
+      throw std::runtime_error(path + ":" + std::to_string(number) +
+                               ": not a camera file: expected \"key: value\", found " + detail::quoteToken(line));
+  }
+}
+
 PinholeCamera readCameraFile(const std::string& path) {
   // Checked first: FileStorage would log its own error on stderr, or say just "buf".
   if (!std::filesystem::is_regular_file(path))
     throw std::runtime_error(path + ": no such file (and not a camera preset fr1, fr2 or fr3)");
   if (std::filesystem::is_empty(path)) throw std::runtime_error(path + ": empty camera file");
+  requirePlainYamlLayout(path);
   cv::FileStorage storage;
   try {
     storage.open(path, cv::FileStorage::READ);

@@ -82,6 +82,24 @@ void requireValidPoints(const LandmarkCloud& cloud, const std::string& path) {
   }
 }
 
+/// fromPCLPointCloud2 trusts the blob: width x height points of point_step
+/// bytes, rows row_step apart, each field within a point. PCL's readers can
+/// return a blob that breaks this (a PLY header with a broken line gave points
+/// and no point count: fuzz/fuzz_cloud_ply), so it is checked first.
+void requireConsistentBlob(const pcl::PCLPointCloud2& blob, const std::string& path) {
+  const std::uint64_t points = std::uint64_t{blob.width} * blob.height;
+  bool consistent = points > 0 && std::uint64_t{blob.row_step} >= std::uint64_t{blob.width} * blob.point_step &&
+                    blob.data.size() >= std::uint64_t{blob.row_step} * blob.height;
+  for (const auto& field : blob.fields) {
+    const auto bytes = static_cast<std::uint64_t>(pcl::getFieldSize(field.datatype)) * field.count;
+    consistent = consistent && std::uint64_t{field.offset} + bytes <= blob.point_step;
+  }
+  if (!consistent)
+    throw std::runtime_error(path + ": the point data does not match the header (" + std::to_string(points) +
+                             " points of " + std::to_string(blob.point_step) + " bytes, " +
+                             std::to_string(blob.data.size()) + " bytes of data)");
+}
+
 pcl::PCLPointCloud2 readPcd(const std::string& path) {
   pcl::PCDReader reader;
   pcl::PCLPointCloud2 blob;
@@ -244,13 +262,16 @@ LandmarkCloud::Ptr loadLandmarkCloud(const std::string& path) {
     throw std::runtime_error(path + ": the header declares more points than fit in memory");
   } catch (const std::length_error&) {  // a negative count, read as a huge unsigned one
     throw std::runtime_error(path + ": the header declares an impossible number of points (negative or too large)");
+  } catch (const std::logic_error& e) {  // PCL's header parser indexes its tokens with at() (fuzz/fuzz_cloud_pcd)
+    throw std::runtime_error(path + ": not a readable " + ext.substr(1) + " point cloud (malformed header line)");
   } catch (const pcl::PCLException& e) {
     throw std::runtime_error(path + ": not a readable " + ext.substr(1) + " point cloud (" + pclMessage(e) + ")");
   }
   requireLandmarkFields(blob, path);
   // fromPCLPointCloud2 takes a reference to the first byte of the data, which
   // an empty cloud does not have (undefined behaviour).
-  if (blob.data.empty()) return cloud;
+  if (blob.data.empty() && std::uint64_t{blob.width} * blob.height == 0) return cloud;
+  requireConsistentBlob(blob, path);
   pcl::fromPCLPointCloud2(blob, *cloud);
   requireValidPoints(*cloud, path);
   return cloud;

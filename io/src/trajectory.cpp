@@ -154,7 +154,9 @@ std::vector<std::pair<std::size_t, std::size_t>> associate(const std::vector<dou
   std::sort(second_by_time.begin(), second_by_time.end(), [&](auto a, auto b) { return second[a] < second[b]; });
 
   // associate.py compares every pair; only the neighbours within the limit
-  // can qualify, so scan a window (widened, so rounding cannot drop one).
+  // can qualify, so scan a window (widened, so rounding cannot drop one; its
+  // end is inclusive, since a limit below the timestamps' spacing of doubles
+  // collapses it to the timestamp itself, which equal timestamps match).
   struct Candidate {
     double difference;
     std::size_t i, j;
@@ -163,7 +165,7 @@ std::vector<std::pair<std::size_t, std::size_t>> associate(const std::vector<dou
   for (std::size_t i = 0; i < first.size(); ++i) {
     auto k = std::lower_bound(second_by_time.begin(), second_by_time.end(), first[i] - 2.0 * max_difference,
                               [&](std::size_t j, double t) { return second[j] < t; });
-    for (; k != second_by_time.end() && second[*k] < first[i] + 2.0 * max_difference; ++k) {
+    for (; k != second_by_time.end() && second[*k] <= first[i] + 2.0 * max_difference; ++k) {
       const double difference = std::abs(first[i] - second[*k]);
       if (difference < max_difference) candidates.push_back({difference, i, *k});
     }
