@@ -24,8 +24,6 @@
 #include "weighted_icp/io/map_format.h"
 #include "weighted_icp/registration/landmark_point.h"
 
-extern char** environ;
-
 namespace weighted_icp::sweep {
 
 namespace po = boost::program_options;
