@@ -4,7 +4,9 @@
 
 #include "weighted_icp/mapping/loop_verifier.h"
 
+#include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <limits>
 #include <stdexcept>
 #include <vector>
@@ -144,6 +146,7 @@ Eigen::Matrix<double, 6, 6> icpInformation(const LandmarkMap& query_local, const
 
 LoopVerifier::LoopVerifier(const PinholeCamera& camera, LoopVerificationOptions options)
     : camera_(camera), options_(options) {
+  camera_.distortion = {};  // keyframe pixels are undistorted already
   const auto positive = [](double x) { return std::isfinite(x) && x > 0.0; };
   const auto fraction = [](double x) { return x >= 0.0 && x <= 1.0; };
   if (!(camera_.fx > 0.0 && camera_.fy > 0.0)) throw std::invalid_argument("LoopVerifier: camera fx, fy must be > 0");
@@ -156,8 +159,28 @@ LoopVerifier::LoopVerifier(const PinholeCamera& camera, LoopVerificationOptions 
   if (options_.k < 1) throw std::invalid_argument("LoopVerifier: k must be at least 1");
 }
 
+LoopPrior odometryPrior(const KeyframeSnapshot& map, frontend::KeyframeId query, frontend::KeyframeId match,
+                        const DriftBounds& bounds) {
+  const auto q = map.keyframes.find(query);
+  const auto m = map.keyframes.find(match);
+  if (q == map.keyframes.end() || m == map.keyframes.end())
+    throw std::invalid_argument("odometryPrior: unknown keyframe " +
+                                std::to_string(q == map.keyframes.end() ? query : match));
+  double path = 0.0;
+  const auto first = map.keyframes.find(std::min(query, match));
+  const auto last = map.keyframes.find(std::max(query, match));
+  for (auto it = first; it != last; ++it)
+    path += (std::next(it)->second.pose_wc.translation() - it->second.pose_wc.translation()).norm();
+  LoopPrior prior;
+  prior.expected_query_in_match = m->second.pose_wc.inverse() * q->second.pose_wc;
+  prior.max_translation_m = bounds.translation_floor_m + bounds.translation_per_metre * path;
+  prior.max_rotation_deg = bounds.rotation_floor_deg + bounds.rotation_per_metre_deg * path;
+  return prior;
+}
+
 LoopVerification LoopVerifier::verify(const KeyframeSnapshot& query_map, frontend::KeyframeId query,
-                                      const KeyframeSnapshot& match_map, frontend::KeyframeId match) const {
+                                      const KeyframeSnapshot& match_map, frontend::KeyframeId match,
+                                      const std::optional<LoopPrior>& prior) const {
   const auto query_keyframe = query_map.keyframes.find(query);
   const auto match_keyframe = match_map.keyframes.find(match);
   if (query_keyframe == query_map.keyframes.end())
@@ -206,6 +229,7 @@ LoopVerification LoopVerifier::verify(const KeyframeSnapshot& query_map, fronten
   LandmarkAligner aligner(settings);
   aligner.setTarget(match_cloud);
   const Eigen::Isometry3d guess = pnp.pose_wc * query_wc.inverse();
+  result.pnp_query_in_match = match_wc.inverse() * pnp.pose_wc;
   const AlignmentResult icp = aligner.align(query_cloud, guess.matrix());
   if (icp.degenerate) return refuse("ICP degenerate: " + icp.reason);
   Eigen::Isometry3d correction(icp.transformation);
@@ -225,6 +249,13 @@ LoopVerification LoopVerifier::verify(const KeyframeSnapshot& query_map, fronten
   if (overlap.fraction < options_.min_overlap)
     return refuse("too little overlap (" + std::to_string(overlap.fraction) + ")");
   if (!(overlap.fitness <= options_.max_fitness)) return refuse("fitness " + std::to_string(overlap.fitness));
+  if (prior) {
+    const Eigen::Isometry3d drift = prior->expected_query_in_match.inverse() * result.constraint.query_in_match;
+    const double drift_deg = Eigen::AngleAxisd(drift.linear()).angle() * kRadiansToDegrees;
+    if (drift.translation().norm() > prior->max_translation_m || drift_deg > prior->max_rotation_deg)
+      return refuse("implausible drift for one session (" + std::to_string(drift.translation().norm()) + " m, " +
+                    std::to_string(drift_deg) + " deg)");
+  }
 
   result.constraint.information = icpInformation(query_local, match_local, overlap, query_wc, match_wc, correction,
                                                  result.constraint.query_in_match);

@@ -5,6 +5,7 @@
 // between the two local landmark clouds to check and refine it.
 
 #include <cstddef>
+#include <optional>
 #include <string>
 
 #include "weighted_icp/core/camera.h"
@@ -45,6 +46,36 @@ struct LoopVerificationOptions {
   double max_icp_correction_deg = 5.0;
 };
 
+/// @brief What the odometry says of a loop in one session: the relative pose its (drifting) keyframe poses
+/// imply, and how far a true loop may differ from it. Repeated texture can fool both appearance and the local
+/// geometry (a room corner looks like every other corner), but it cannot make a loop that would need the
+/// odometry to have drifted by 90 degrees over a few metres.
+struct LoopPrior {
+  /// @brief match_wc^-1 * query_wc from the odometry.
+  Eigen::Isometry3d expected_query_in_match = Eigen::Isometry3d::Identity();
+  /// @brief Largest translation (metres) and rotation (degrees) between the verified and the expected pose.
+  double max_translation_m = 0.0, max_rotation_deg = 0.0;
+};
+
+/// @brief How much drift a loop may correct in one session: a floor plus a share of the path travelled
+/// between the two keyframes.
+struct DriftBounds {
+  /// Metres allowed whatever the path, and per metre of path.
+  double translation_floor_m = 0.3, translation_per_metre = 0.1;
+  /// Degrees allowed whatever the path, and per metre of path.
+  double rotation_floor_deg = 10.0, rotation_per_metre_deg = 1.0;
+};
+
+/// @brief The odometry prior of a loop between two keyframes of one snapshot: their relative pose, and bounds
+/// that grow with the path length (the sum of the translations between consecutive keyframes from `match` to
+/// `query`).
+/// @param map the session's keyframes
+/// @param query the newer keyframe; unknown throws std::invalid_argument
+/// @param match the older keyframe; unknown throws std::invalid_argument
+/// @param bounds the allowed drift
+LoopPrior odometryPrior(const KeyframeSnapshot& map, frontend::KeyframeId query, frontend::KeyframeId match,
+                        const DriftBounds& bounds = {});
+
 /// @brief The outcome of one verification, accepted or not, with what it measured.
 struct LoopVerification {
   /// @brief True when every test passed; `constraint` is then the loop.
@@ -57,6 +88,8 @@ struct LoopVerification {
   std::size_t matches = 0;
   /// @brief Fraction of the query cloud's points within inlier_distance_m after ICP.
   double overlap = 0.0;
+  /// @brief The relative pose PnP alone gave (before the ICP), as query_in_match.
+  Eigen::Isometry3d pnp_query_in_match = Eigen::Isometry3d::Identity();
   /// @brief How far ICP moved the PnP pose (metres, degrees).
   double icp_correction_m = 0.0, icp_correction_deg = 0.0;
 };
@@ -86,8 +119,11 @@ class LoopVerifier {
   /// @param query its id; unknown throws std::invalid_argument
   /// @param match_map the map holding the candidate
   /// @param match the candidate's id; unknown throws std::invalid_argument
+  /// @param prior for a loop within one session, odometryPrior(): a result farther from it is refused. None for
+  /// two sessions (their frames are unrelated), where geometry alone decides.
   LoopVerification verify(const KeyframeSnapshot& query_map, frontend::KeyframeId query,
-                          const KeyframeSnapshot& match_map, frontend::KeyframeId match) const;
+                          const KeyframeSnapshot& match_map, frontend::KeyframeId match,
+                          const std::optional<LoopPrior>& prior = std::nullopt) const;
 
  private:
   PinholeCamera camera_;
