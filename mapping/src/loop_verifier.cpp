@@ -214,7 +214,7 @@ LoopVerification LoopVerifier::verify(const KeyframeSnapshot& query_map, fronten
 
   // 2. The weighted ICP between the local landmark clouds, started where PnP put the query.
   const LandmarkMap query_local =
-      query_map.localLandmarks(query_map.neighbourhood(query, options_.neighbour_keyframes));
+      query_map.localLandmarks(query_map.neighbourhood(query, options_.query_neighbour_keyframes));
   const WeightFunction weight = weightFunction(options_.weight);
   const LandmarkCloud::Ptr query_cloud = toLandmarkCloud(query_local, weight);
   const LandmarkCloud::Ptr match_cloud = toLandmarkCloud(match_local, weight);
