@@ -129,6 +129,10 @@ int train(int argc, const char* const argv[]) {
   return 0;
 }
 
+constexpr double kDegree = 3.14159265358979323846 / 180.0;
+/// An accepted loop is true when its relative pose is this close to the truth.
+constexpr double kTrueLoopMetres = 0.10, kTrueLoopDegrees = 3.0;
+
 /// One query's best candidate by appearance alone, and the truth about it.
 struct Ranked {
   double normalised = 0.0;
@@ -145,7 +149,8 @@ int evaluate(int argc, const char* const argv[]) {
       "Precision and recall of place recognition on sequences with ground truth: a query's true revisits are\n"
       "the older keyframes (beyond --exclude-recent) seeing at least --min-overlap of its landmarks. Reports\n"
       "the top candidate by appearance over score thresholds, and the whole pipeline (temporal consistency,\n"
-      "verification with the odometry prior) as JSON. Options");
+      "verification with the odometry prior; a loop is false when its pose is off the truth by more than\n"
+      "10 cm or 3 degrees) as JSON. Options");
   // clang-format off
   description.add_options()
       ("help,h", "print this help")
@@ -162,10 +167,14 @@ int evaluate(int argc, const char* const argv[]) {
   if (!tools::parseCommandLine(argc, argv, description, vm)) return 0;
   if (vocabulary_path.empty() == !vm.count("self-trained"))
     throw po::error("give exactly one of --vocabulary and --self-trained");
+  // A bad vocabulary file fails before any frame is read.
+  mapping::BinaryVocabulary::ConstPtr vocabulary;
+  if (!vocabulary_path.empty())
+    vocabulary = std::make_shared<const mapping::BinaryVocabulary>(mapping::BinaryVocabulary::load(vocabulary_path));
   const std::vector<Keyframes> all = loadSources(sources);
-  const auto vocabulary = std::make_shared<const mapping::BinaryVocabulary>(
-      vm.count("self-trained") ? mapping::BinaryVocabulary::train(descriptorsOf(all))
-                               : mapping::BinaryVocabulary::load(vocabulary_path));
+  if (!vocabulary)
+    vocabulary =
+        std::make_shared<const mapping::BinaryVocabulary>(mapping::BinaryVocabulary::train(descriptorsOf(all)));
 
   std::vector<Ranked> ranked;
   std::size_t queries = 0, revisits = 0, accepted = 0, accepted_true = 0, queries_closed = 0;
@@ -193,7 +202,12 @@ int evaluate(int argc, const char* const argv[]) {
             verifier.verify(k.snapshot, id, k.snapshot, c.keyframe, mapping::odometryPrior(k.snapshot, id, c.keyframe));
         if (!result.accepted) continue;
         ++accepted;
-        const bool true_loop = mapping::viewOverlap(k.snapshot, id, c.keyframe, k.camera) >= min_overlap;
+        // A false loop is one whose relative pose is wrong: the poses are true, so the truth is known.
+        const Eigen::Isometry3d error =
+            (k.snapshot.keyframes.at(c.keyframe).pose_wc.inverse() * keyframe.pose_wc).inverse() *
+            result.constraint.query_in_match;
+        const bool true_loop = error.translation().norm() <= kTrueLoopMetres &&
+                               Eigen::AngleAxisd(error.linear()).angle() <= kTrueLoopDegrees * kDegree;
         accepted_true += true_loop;
         closed = closed || true_loop;
       }
