@@ -33,9 +33,10 @@ const BowVector& PlaceRecognizer::add(frontend::KeyframeId keyframe, BowVector b
   if (const auto old = database_.find(keyframe); old != database_.end())
     for (const auto& [word, value] : old->second) {
       auto& list = inverted_file_[word];
-      list.erase(std::remove(list.begin(), list.end(), keyframe), list.end());
+      list.erase(std::remove_if(list.begin(), list.end(), [&](const auto& entry) { return entry.first == keyframe; }),
+                 list.end());
     }
-  for (const auto& [word, value] : bow) inverted_file_[word].push_back(keyframe);
+  for (const auto& [word, value] : bow) inverted_file_[word].emplace_back(keyframe, value);
   return database_[keyframe] = std::move(bow);
 }
 
@@ -56,9 +57,8 @@ std::vector<PlaceCandidate> PlaceRecognizer::rank(frontend::KeyframeId query, co
   };
   for (const auto& [word, value] : bow) {
     if (word >= inverted_file_.size()) continue;
-    for (frontend::KeyframeId id : inverted_file_[word]) {
+    for (const auto& [id, other] : inverted_file_[word]) {
       if (recent(id) || excluded.count(id)) continue;
-      const double other = database_.at(id).at(word);
       common[id] += value + other - std::abs(value - other);
     }
   }

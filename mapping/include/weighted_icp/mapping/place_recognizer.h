@@ -119,7 +119,9 @@ class PlaceRecognizer {
   BinaryVocabulary::ConstPtr vocabulary_;
   PlaceRecognitionOptions options_;
   std::map<frontend::KeyframeId, BowVector> database_;
-  std::vector<std::vector<frontend::KeyframeId>> inverted_file_;  // word -> keyframes containing it
+  /// word -> (keyframe, its weight of the word) for the keyframes containing it: scoring reads weights
+  /// from here, never from the database's maps.
+  std::vector<std::vector<std::pair<frontend::KeyframeId, double>>> inverted_file_;
   struct Group {
     frontend::KeyframeId first = 0, last = 0;
     std::size_t count = 0;
