@@ -142,6 +142,43 @@ Eigen::Matrix<double, 6, 6> icpInformation(const LandmarkMap& query_local, const
   return 0.5 * (information + information.transpose());
 }
 
+/// The paper's weighted ICP with its refinement stage, from the PnP guess, correspondences limited so that
+/// the parts of the mini-maps without a counterpart do not pull.
+AlignmentResult alignMiniMaps(const LandmarkCloud::Ptr& query_cloud, const LandmarkCloud::Ptr& match_cloud,
+                              const Eigen::Isometry3d& guess, const LoopVerificationOptions& options) {
+  AlignmentSettings settings;
+  settings.k = neighboursFor(options.weight, options.k);
+  settings.max_iterations = 50;
+  settings.refine = true;
+  settings.refine_max_iterations = 50;
+  settings.max_correspondence_distance = options.icp_max_correspondence_m;
+  settings.threads = 1;  // the loop closer runs beside tracking: it must not take every core
+  LandmarkAligner aligner(settings);
+  aligner.setTarget(match_cloud);
+  return aligner.align(query_cloud, guess.matrix());
+}
+
+/// Why the measured loop is refused (empty when every test passes): PnP and ICP disagree, the clouds
+/// overlap too little or too loosely, or the result needs more drift than one session can have had.
+std::string disagreement(const LoopVerification& result, const LoopVerificationOptions& options,
+                         const std::optional<LoopPrior>& prior) {
+  if (result.icp_correction_m > options.max_icp_correction_m ||
+      result.icp_correction_deg > options.max_icp_correction_deg)
+    return "ICP moved the PnP pose too far (" + std::to_string(result.icp_correction_m) + " m, " +
+           std::to_string(result.icp_correction_deg) + " deg)";
+  if (result.overlap < options.min_overlap) return "too little overlap (" + std::to_string(result.overlap) + ")";
+  if (!(result.constraint.fitness <= options.max_fitness))
+    return "fitness " + std::to_string(result.constraint.fitness);
+  if (prior) {
+    const Eigen::Isometry3d drift = prior->expected_query_in_match.inverse() * result.constraint.query_in_match;
+    const double drift_deg = Eigen::AngleAxisd(drift.linear()).angle() * kRadiansToDegrees;
+    if (drift.translation().norm() > prior->max_translation_m || drift_deg > prior->max_rotation_deg)
+      return "implausible drift for one session (" + std::to_string(drift.translation().norm()) + " m, " +
+             std::to_string(drift_deg) + " deg)";
+  }
+  return "";
+}
+
 }  // namespace
 
 LoopVerifier::LoopVerifier(const PinholeCamera& camera, LoopVerificationOptions options)
@@ -219,18 +256,9 @@ LoopVerification LoopVerifier::verify(const KeyframeSnapshot& query_map, fronten
   const LandmarkCloud::Ptr query_cloud = toLandmarkCloud(query_local, weight);
   const LandmarkCloud::Ptr match_cloud = toLandmarkCloud(match_local, weight);
   if (query_cloud->size() < 3 || match_cloud->size() < 3) return refuse("too few landmarks for ICP");
-  AlignmentSettings settings;
-  settings.k = neighboursFor(options_.weight, options_.k);
-  settings.max_iterations = 50;
-  settings.refine = true;
-  settings.refine_max_iterations = 50;
-  settings.max_correspondence_distance = options_.icp_max_correspondence_m;
-  settings.threads = 1;  // the loop closer runs beside tracking: it must not take every core
-  LandmarkAligner aligner(settings);
-  aligner.setTarget(match_cloud);
   const Eigen::Isometry3d guess = pnp.pose_wc * query_wc.inverse();
   result.pnp_query_in_match = match_wc.inverse() * pnp.pose_wc;
-  const AlignmentResult icp = aligner.align(query_cloud, guess.matrix());
+  const AlignmentResult icp = alignMiniMaps(query_cloud, match_cloud, guess, options_);
   if (icp.degenerate) return refuse("ICP degenerate: " + icp.reason);
   Eigen::Isometry3d correction(icp.transformation);
 
@@ -242,20 +270,7 @@ LoopVerification LoopVerifier::verify(const KeyframeSnapshot& query_map, fronten
   result.overlap = overlap.fraction;
   result.constraint.fitness = overlap.fitness;
   result.constraint.query_in_match = match_wc.inverse() * correction * query_wc;
-  if (result.icp_correction_m > options_.max_icp_correction_m ||
-      result.icp_correction_deg > options_.max_icp_correction_deg)
-    return refuse("ICP moved the PnP pose too far (" + std::to_string(result.icp_correction_m) + " m, " +
-                  std::to_string(result.icp_correction_deg) + " deg)");
-  if (overlap.fraction < options_.min_overlap)
-    return refuse("too little overlap (" + std::to_string(overlap.fraction) + ")");
-  if (!(overlap.fitness <= options_.max_fitness)) return refuse("fitness " + std::to_string(overlap.fitness));
-  if (prior) {
-    const Eigen::Isometry3d drift = prior->expected_query_in_match.inverse() * result.constraint.query_in_match;
-    const double drift_deg = Eigen::AngleAxisd(drift.linear()).angle() * kRadiansToDegrees;
-    if (drift.translation().norm() > prior->max_translation_m || drift_deg > prior->max_rotation_deg)
-      return refuse("implausible drift for one session (" + std::to_string(drift.translation().norm()) + " m, " +
-                    std::to_string(drift_deg) + " deg)");
-  }
+  if (const std::string why = disagreement(result, options_, prior); !why.empty()) return refuse(why);
 
   result.constraint.information = icpInformation(query_local, match_local, overlap, query_wc, match_wc, correction,
                                                  result.constraint.query_in_match);
