@@ -19,6 +19,7 @@
 
 #include <boost/program_options.hpp>
 
+#include "dataset_camera.h"
 #include "interrupt.h"
 #include "tool_support.h"
 #include "weighted_icp/core/statistics.h"
@@ -92,17 +93,6 @@ class SyntheticSource : public FrameSource {
  private:
   simulation::SyntheticRgbdSequence sequence_;
 };
-
-/// TUM folders are named after their sensor (rgbd_dataset_freiburg3_teddy, tum_fr1_xyz_head).
-std::string cameraFromFolderName(const std::string& dir) {
-  // The folder's own name only ("data/", "data/." and "data" alike), not its parents'.
-  const std::string name = fs::weakly_canonical(fs::absolute(dir)).filename().string();
-  for (const char* sensor : {"1", "2", "3"})
-    if (name.find(std::string("freiburg") + sensor) != std::string::npos ||
-        name.find(std::string("fr") + sensor) != std::string::npos)
-      return std::string("fr") + sensor;
-  throw std::runtime_error("cannot tell the camera of " + dir + " from its name; pass --camera fr1|fr2|fr3|FILE.yaml");
-}
 
 /// A quantile of the per-frame times; 0 when no frame was timed.
 double percentile(const std::vector<double>& values, double q) { return values.empty() ? 0.0 : quantile(values, q); }
@@ -299,7 +289,7 @@ int main(int argc, char** argv) {
         ("help,h", "print this help")
         ("dataset", po::value(&dataset), "TUM RGB-D folder (rgb.txt, depth.txt, optional groundtruth.txt); "
                                          "default: the synthetic sequence")
-        ("camera", po::value(&camera_spec), "fr1, fr2, fr3 or a camera YAML; default: from the folder name")
+        ("camera", po::value(&camera_spec), "fr1, fr2, fr3 or a camera YAML; default: DIR/camera.yaml, else from the folder name")
         ("max-frames", tools::rangedValue(&max_frames, std::size_t{0})->default_value(0), "stop after N frames (0 = all)")
         ("minimap-keyframes", tools::rangedValue(&options.minimap_keyframes, std::size_t{1}, std::size_t{100000})
                                   ->default_value(options.minimap_keyframes),
@@ -326,8 +316,7 @@ int main(int argc, char** argv) {
     if (dataset.empty()) {
       source = std::make_unique<SyntheticSource>(synthetic);
     } else {
-      const std::string spec = camera_spec.empty() ? cameraFromFolderName(dataset) : camera_spec;
-      source = std::make_unique<TumSource>(dataset, io::loadCamera(spec));
+      source = std::make_unique<TumSource>(dataset, tools::datasetCamera(dataset, camera_spec));
     }
     const std::size_t frames = max_frames > 0 ? std::min(max_frames, source->size()) : source->size();
     // Checked and created before the long run, so a refused --out costs nothing.
