@@ -269,7 +269,7 @@ int main(int argc, char** argv) {
   // it between writing a file and publishing the folder.
   tools::installInterruptHandlers();
   return tools::runTool("wicp_rgbd_slam", [&] {
-    std::string dataset, camera_spec, out_dir, matcher_name = "flann";
+    std::string dataset, camera_spec, out_dir, matcher_name = "flann", gate_mode = "relative";
     std::size_t max_frames = 0;
     frontend::RgbdSlamOptions options;
     simulation::SyntheticRgbdOptions synthetic;
@@ -298,6 +298,8 @@ int main(int argc, char** argv) {
         ("overwrite", "replace --out if it exists and is not empty")
         ("matcher", po::value(&matcher_name)->default_value(matcher_name), "flann (LSH) or brute-force")
         ("no-quality-gate", "do not skip frames by BRISQUE score")
+        ("quality-gate", po::value(&gate_mode)->default_value(gate_mode),
+         "relative (BRISQUE against the sequence's recent scores), absolute (above 47) or paper (every frame, above 47)")
         ("deterministic", "run bundle adjustment inline instead of in its own thread (reproducible)")
         ("synthetic-frames", tools::rangedValue(&synthetic.frames, std::size_t{1}, std::size_t{100000})
                                  ->default_value(synthetic.frames),
@@ -310,6 +312,11 @@ int main(int argc, char** argv) {
     if (!tools::parseCommandLine(argc, argv, description, vm)) return 0;
     options.frontend.matcher.kind = frontend::parseMatcherKind(matcher_name);
     options.frontend.quality_gate = !vm.count("no-quality-gate");
+    try {
+      options.frontend.quality.mode = frontend::parseQualityGateMode(gate_mode);
+    } catch (const std::invalid_argument& e) {
+      throw po::error(std::string("--quality-gate: ") + e.what());
+    }
     options.backend.background_thread = !vm.count("deterministic");
 
     std::unique_ptr<FrameSource> source;
