@@ -21,7 +21,7 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/rgbd.hpp>
 
-#include "weighted_icp/core/statistics.h"
+#include "rgbd_odometry_runs.h"
 #include "weighted_icp/frontend/slam/rgbd_slam.h"
 #include "weighted_icp/io/trajectory.h"
 #include "weighted_icp/io/tum_sequence.h"
@@ -30,24 +30,9 @@
 
 namespace po = boost::program_options;
 using namespace weighted_icp;
+using benchmarks::Sequence;
 
 namespace {
-
-struct Sequence {
-  std::string name;
-  PinholeCamera camera;
-  std::vector<RgbdFrame> frames;
-  Trajectory truth;
-};
-
-struct Run {
-  double ate_rmse_m = 0.0;
-  double median_ms = 0.0;
-  std::size_t tracked = 0;
-};
-
-/// The median time; 0 when nothing was timed.
-double medianMs(const std::vector<double>& values) { return values.empty() ? 0.0 : median(values); }
 
 Sequence loadTum(const std::string& dir, const std::string& name, int freiburg) {
   const io::TumSequence tum = io::TumSequence::open(dir);
@@ -70,43 +55,6 @@ Sequence makeSynthetic(std::size_t frames, bool moving_object) {
     sequence.frames.push_back(std::move(frame.rgbd));
   }
   return sequence;
-}
-
-Run runFrontend(const Sequence& sequence) {
-  frontend::RgbdSlam slam(sequence.camera);
-  std::vector<double> ms;
-  for (const auto& frame : sequence.frames) ms.push_back(slam.process(frame).tracking_ms);
-  slam.finish();
-  const Trajectory estimate = slam.trajectory();
-  return {metrics::computeAte(sequence.truth, estimate).translation.rmse, medianMs(ms), estimate.size()};
-}
-
-Run runOpenCvOdometry(const Sequence& sequence) {
-  const cv::Mat camera_matrix(sequence.camera.cameraMatrix());
-  cv::Ptr<cv::rgbd::RgbdOdometry> odometry = cv::rgbd::RgbdOdometry::create(camera_matrix);
-  cv::Ptr<cv::rgbd::OdometryFrame> previous, current;
-  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-  Trajectory estimate;
-  std::vector<double> ms;
-  for (const auto& frame : sequence.frames) {
-    const auto start = std::chrono::steady_clock::now();
-    cv::Mat gray;
-    cv::cvtColor(frame.color, gray, cv::COLOR_BGR2GRAY);
-    current = cv::rgbd::OdometryFrame::create(gray, frame.depth);
-    if (previous) {
-      cv::Mat rt;  // maps points of the previous camera into the current one
-      if (odometry->compute(current, previous, rt)) {
-        Eigen::Matrix4d motion;
-        for (int r = 0; r < 4; ++r)
-          for (int c = 0; c < 4; ++c) motion(r, c) = rt.at<double>(r, c);
-        pose = pose * Eigen::Isometry3d(motion);
-      }
-    }
-    ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
-    estimate.push_back({frame.timestamp, pose});
-    previous = current;
-  }
-  return {metrics::computeAte(sequence.truth, estimate).translation.rmse, medianMs(ms), estimate.size()};
 }
 
 }  // namespace
@@ -145,11 +93,11 @@ int main(int argc, char** argv) {
               << std::fixed;
     for (const auto& make : sequences) {
       const Sequence sequence = make();
-      const Run ours = runFrontend(sequence);
-      const Run opencv = runOpenCvOdometry(sequence);
+      const benchmarks::Run ours = benchmarks::runFrontend(sequence);
+      const benchmarks::Run opencv = benchmarks::runOpenCvOdometry(sequence);
       std::cout << "| " << sequence.name << " | " << sequence.frames.size() << " | " << std::setprecision(2)
                 << ours.ate_rmse_m * 100 << " | " << opencv.ate_rmse_m * 100 << " | " << std::setprecision(1)
-                << ours.median_ms << " | " << opencv.median_ms << " |" << std::endl;
+                << ours.medianMs() << " | " << opencv.medianMs() << " |" << std::endl;
     }
     return 0;
   } catch (const std::exception& e) {

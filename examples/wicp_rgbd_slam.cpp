@@ -19,6 +19,7 @@
 
 #include <boost/program_options.hpp>
 
+#include "dataset_camera.h"
 #include "interrupt.h"
 #include "plotting.h"
 #include "tool_support.h"
@@ -273,7 +274,7 @@ int main(int argc, char** argv) {
   // it between writing a file and publishing the folder.
   tools::installInterruptHandlers();
   return tools::runTool("wicp_rgbd_slam", [&] {
-    std::string dataset, camera_spec, out_dir, matcher_name = "flann";
+    std::string dataset, camera_spec, out_dir, matcher_name = "flann", gate_mode = "relative";
     std::size_t max_frames = 0;
     frontend::RgbdSlamOptions options;
     simulation::SyntheticRgbdOptions synthetic;
@@ -293,7 +294,7 @@ int main(int argc, char** argv) {
         ("help,h", "print this help")
         ("dataset", po::value(&dataset), "TUM RGB-D folder (rgb.txt, depth.txt, optional groundtruth.txt); "
                                          "default: the synthetic sequence")
-        ("camera", po::value(&camera_spec), "fr1, fr2, fr3 or a camera YAML; default: from the folder name")
+        ("camera", po::value(&camera_spec), "fr1, fr2, fr3 or a camera YAML; default: DIR/camera.yaml, else from the folder name")
         ("max-frames", tools::rangedValue(&max_frames, std::size_t{0})->default_value(0), "stop after N frames (0 = all)")
         ("minimap-keyframes", tools::rangedValue(&options.minimap_keyframes, std::size_t{1}, std::size_t{100000})
                                   ->default_value(options.minimap_keyframes),
@@ -302,6 +303,8 @@ int main(int argc, char** argv) {
         ("overwrite", "replace --out if it exists and is not empty")
         ("matcher", po::value(&matcher_name)->default_value(matcher_name), "flann (LSH) or brute-force")
         ("no-quality-gate", "do not skip frames by BRISQUE score")
+        ("quality-gate", po::value(&gate_mode)->default_value(gate_mode),
+         "relative (BRISQUE against the sequence's recent scores), absolute (above 47) or paper (every frame, above 47)")
         ("deterministic", "run bundle adjustment inline instead of in its own thread (reproducible)")
         ("synthetic-frames", tools::rangedValue(&synthetic.frames, std::size_t{1}, std::size_t{100000})
                                  ->default_value(synthetic.frames),
@@ -314,14 +317,18 @@ int main(int argc, char** argv) {
     if (!tools::parseCommandLine(argc, argv, description, vm)) return 0;
     options.frontend.matcher.kind = frontend::parseMatcherKind(matcher_name);
     options.frontend.quality_gate = !vm.count("no-quality-gate");
+    try {
+      options.frontend.quality.mode = frontend::parseQualityGateMode(gate_mode);
+    } catch (const std::invalid_argument& e) {
+      throw po::error(std::string("--quality-gate: ") + e.what());
+    }
     options.backend.background_thread = !vm.count("deterministic");
 
     std::unique_ptr<FrameSource> source;
     if (dataset.empty()) {
       source = std::make_unique<SyntheticSource>(synthetic);
     } else {
-      const std::string spec = camera_spec.empty() ? tools::cameraFromFolderName(dataset) : camera_spec;
-      source = std::make_unique<TumSource>(dataset, io::loadCamera(spec));
+      source = std::make_unique<TumSource>(dataset, tools::datasetCamera(dataset, camera_spec));
     }
     const std::size_t frames = max_frames > 0 ? std::min(max_frames, source->size()) : source->size();
     // Checked and created before the long run, so a refused --out costs nothing.

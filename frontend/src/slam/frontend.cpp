@@ -110,6 +110,19 @@ TrackingResult Frontend::track(const RgbdFrame& image) {
   result.features = frame.size();
   current_color_ = image.color;
   followMapCorrection();
+  frame_quality_.reset();
+  if (quality_gate_ && quality_gate_->assessesEveryFrame()) {
+    // Cheap measures (and the paper's gate) see every frame: the history is the whole sequence.
+    frame_quality_ = quality_gate_->assess(current_color_);
+    result.quality_score = frame_quality_->score;
+    if (options_.quality.mode == QualityGateMode::PaperEveryFrame && frame_quality_->refused) {
+      // The front-end paper's gate: a bad frame is dropped before tracking.
+      result.refused_by_quality_gate = true;
+      result.status = TrackingStatus::SkippedLowQuality;
+      result.reason = "BRISQUE " + std::to_string(frame_quality_->score);
+      return result;
+    }
+  }
   if (state_ != FrontendState::Tracking) return initialize(frame, result);
   return trackFrame(frame, result);
 }
@@ -138,10 +151,13 @@ void Frontend::transitionTo(FrontendState next) {
   state_ = next;
 }
 
-bool Frontend::refusedByQualityGate(TrackingResult& result) {
-  if (!quality_gate_) return false;
-  result.quality_score = quality_gate_->score(current_color_);
-  result.refused_by_quality_gate = result.quality_score > options_.quality.max_brisque_score;
+bool Frontend::refusedByQualityGate(TrackingResult& result, bool must_keep) {
+  // The paper's mode dropped bad frames in track() already.
+  if (!quality_gate_ || options_.quality.mode == QualityGateMode::PaperEveryFrame) return false;
+  QualityJudgement judgement = frame_quality_ ? *frame_quality_ : quality_gate_->assess(current_color_);
+  quality_gate_->decide(judgement, must_keep);
+  result.quality_score = judgement.score;
+  result.refused_by_quality_gate = judgement.refused;
   return result.refused_by_quality_gate;
 }
 
@@ -251,7 +267,9 @@ void Frontend::insertKeyframeIfNeeded(const Frame& frame, TrackingResult& result
                                       const std::vector<int>& static_inliers,
                                       const std::vector<Eigen::Vector2d>& dynamic_pixels) {
   // The gate is asked last: it costs ~25 ms and only keyframe candidates need it.
-  if (!needsKeyframe(frame.pose_wc, static_inliers.size()) || refusedByQualityGate(result)) return;
+  if (!needsKeyframe(frame.pose_wc, static_inliers.size())) return;
+  // A candidate that barely tracks is never refused: its points may be what the next frame needs.
+  if (refusedByQualityGate(result, static_inliers.size() < options_.quality.min_tracked_to_refuse)) return;
   std::vector<std::pair<std::size_t, MapPointId>> tracked;
   for (const int m : static_inliers) tracked.push_back(matched.ids[m]);
   insertKeyframe(frame, tracked, dynamic_pixels);
@@ -337,7 +355,7 @@ TrackingResult Frontend::lose(TrackingResult result, const std::string& reason) 
   if (refusedByQualityGate(result)) {
     // A bad image (blur, noise) is not a lost track: skip it, keep the motion.
     result.status = TrackingStatus::SkippedLowQuality;
-    result.reason = reason + "; BRISQUE " + std::to_string(result.quality_score);
+    result.reason = reason + "; quality score " + std::to_string(result.quality_score);
     return result;
   }
   transitionTo(FrontendState::Lost);

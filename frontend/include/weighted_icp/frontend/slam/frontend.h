@@ -181,8 +181,8 @@ class Frontend {
   TrackingResult lose(TrackingResult result, const std::string& reason);
   /// Sets the pose and its expression relative to the latest keyframe.
   void setPose(TrackingResult& result, const Eigen::Isometry3d& pose_wc) const;
-  /// Scores `color` with the gate; true when it is refused.
-  bool refusedByQualityGate(TrackingResult& result);
+  /// Scores `color` with the gate; true when it is refused (never when `must_keep`, in relative mode).
+  bool refusedByQualityGate(TrackingResult& result, bool must_keep = false);
   /// True when the camera moved or turned enough since the last keyframe, or too few of its points are tracked.
   bool needsKeyframe(const Eigen::Isometry3d& pose_wc, std::size_t tracked) const;
   /// Adds the frame as a keyframe: it observes the tracked points; its other features with depth become points.
@@ -218,6 +218,8 @@ class Frontend {
   std::map<MapPointId, int> dynamic_votes_;
   LocalMap local_map_;     // what matcher_ is indexed on
   cv::Mat current_color_;  // the image being tracked, for the quality gate
+  /// Its assessment, when the gate sees every frame.
+  std::optional<QualityJudgement> frame_quality_;
 };
 
 }  // namespace weighted_icp::frontend

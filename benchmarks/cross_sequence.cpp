@@ -1,0 +1,206 @@
+// The cross-sequence table of issue #11: the front end (default, and each
+// quality-gate mode) next to cv::rgbd::RgbdOdometry on fr1 head, fr3 head, the
+// synthetic sequence and variants of each (JPEG colour, depth in millimetres,
+// another focal length, unregistered depth, motion blur, low light, bursts of
+// bad frames, and "kinect": JPEG + mm depth + focal 585 together, the held-out
+// Kinect's format). Variants are written into --scratch (never into the source
+// tree) and read back as TUM folders with their camera.yaml, as a user would.
+// Prints Markdown: ATE RMSE with frames without a pose, and tracking times.
+//
+//   wicp_benchmark_cross_sequence --scratch DIR [--data DIR] [--max-frames N]
+//                                 [--synthetic-frames N] [--sequences LIST] [--variants LIST] [--runs LIST]
+
+#include <cmath>
+#include <filesystem>
+#include <iomanip>
+#include <iostream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <boost/program_options.hpp>
+
+#include "rgbd_odometry_runs.h"
+#include "weighted_icp/io/camera.h"
+#include "weighted_icp/io/tum_sequence.h"
+#include "weighted_icp/simulation/sequence_variants.h"
+
+namespace po = boost::program_options;
+namespace fs = std::filesystem;
+using namespace weighted_icp;
+using benchmarks::Run;
+using benchmarks::Sequence;
+
+namespace {
+
+/// A base sequence: a TUM folder with its camera, or the synthetic one.
+struct Base {
+  std::string name;
+  simulation::VariantSource source;
+};
+
+/// A tracker configuration: a column of the table.
+struct Tracker {
+  std::string name;
+  bool opencv = false;
+  frontend::RgbdSlamOptions options;
+};
+
+std::vector<Tracker> trackers(const std::string& list) {
+  std::vector<Tracker> all;
+  std::stringstream names(list);
+  std::string name;
+  while (std::getline(names, name, ',')) {
+    Tracker tracker{name, name == "opencv", {}};
+    auto& quality = tracker.options.frontend.quality;
+    if (name == "relative-brisque") {
+      quality.measure = frontend::QualityMeasure::Brisque;
+    } else if (name == "absolute") {
+      quality.mode = frontend::QualityGateMode::Absolute;
+    } else if (name == "paper") {
+      quality.mode = frontend::QualityGateMode::PaperEveryFrame;
+    } else if (name == "no-gate") {
+      tracker.options.frontend.quality_gate = false;
+    } else if (name != "default" && name != "opencv") {
+      throw po::error("--runs: unknown run '" + name +
+                      "' (expected default, relative-brisque, absolute, paper, no-gate, opencv)");
+    }
+    all.push_back(tracker);
+  }
+  return all;
+}
+
+/// "kinect" is the held-out Kinect's format; other names are sequence_variants.h kinds.
+std::vector<simulation::VariantKind> kindsOf(const std::string& variant) {
+  return simulation::parseVariantKinds(variant == "kinect" ? "jpeg,mm-depth,focal" : variant);
+}
+
+Sequence load(const fs::path& dir, const std::string& name) {
+  const io::TumSequence tum = io::TumSequence::open(dir.string());
+  Sequence sequence{name, io::loadCamera((dir / "camera.yaml").string()), {}, tum.groundTruth()};
+  for (std::size_t i = 0; i < tum.size(); ++i) sequence.frames.push_back(tum.loadFrame(i, sequence.camera));
+  return sequence;
+}
+
+/// The base itself (variant "original") or a variant, written into the scratch folder and read back.
+Sequence prepare(const Base& base, const std::string& variant, const fs::path& scratch) {
+  const fs::path dir = scratch / (base.name + "_" + variant);
+  simulation::SequenceVariantOptions options;
+  // "original" rewrites the frames unchanged (PNG, same camera): the same path as every variant.
+  options.kinds = variant == "original" ? std::vector<simulation::VariantKind>{} : kindsOf(variant);
+  if (options.kinds.empty()) {
+    options.kinds = {simulation::VariantKind::MillimetreDepth};
+    options.depth_factor = base.source.camera.depth_factor;
+  }
+  simulation::writeSequenceVariant(base.source, options, dir.string(), true);
+  return load(dir, base.name + (variant == "original" ? "" : ", " + variant));
+}
+
+std::string cell(const Run& run, std::size_t frames) {
+  std::ostringstream text;
+  text << std::fixed << std::setprecision(2);
+  if (std::isnan(run.ate_rmse_m))
+    text << "–";
+  else
+    text << run.ate_rmse_m * 100;
+  text << " (" << frames - run.tracked << ")";
+  return text.str();
+}
+
+void requireOutsideSourceTree(const fs::path& scratch) {
+  const std::string source = fs::weakly_canonical(WEIGHTED_ICP_SOURCE_DIR).string() + "/";
+  const std::string target = fs::weakly_canonical(fs::absolute(scratch)).string() + "/";
+  if (target.rfind(source, 0) == 0)
+    throw po::error("--scratch " + scratch.string() + " is inside the source tree " + source +
+                    "; variants of shared data must not be written into the repository");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    std::string data = WEIGHTED_ICP_DATA_DIR, scratch,
+                variants =
+                    "jpeg,mm-depth,focal,unregistered,blur,low-light,"
+                    "burst,kinect",
+                runs = "default,relative-brisque,absolute,paper,no-gate,opencv",
+                sequences = "fr1_head,fr3_head,synthetic";
+    std::size_t max_frames = 0, synthetic_frames = 150;
+    po::options_description description("wicp_benchmark_cross_sequence options");
+    // clang-format off
+    description.add_options()
+        ("help,h", "print this help")
+        ("scratch", po::value(&scratch)->required(), "folder for the variants (outside the source tree)")
+        ("data", po::value(&data)->default_value(data), "folder with tum_fr1_xyz_head and tum_fr3_teddy_head")
+        ("max-frames", po::value(&max_frames)->default_value(max_frames), "frames per TUM sequence (0 = all)")
+        ("synthetic-frames", po::value(&synthetic_frames)->default_value(synthetic_frames), "synthetic sequence length (0 = none)")
+        ("sequences", po::value(&sequences)->default_value(sequences), "comma-separated: fr1_head, fr3_head, synthetic")
+        ("variants", po::value(&variants)->default_value(variants), "comma-separated variants (kinds of wicp_make_variant, or kinect)")
+        ("runs", po::value(&runs)->default_value(runs), "comma-separated: default, relative-brisque, absolute, paper, no-gate, opencv");
+    // clang-format on
+    po::variables_map vm;
+    po::store(po::parse_command_line(argc, argv, description), vm);
+    if (vm.count("help")) {
+      std::cout << description << '\n';
+      return 0;
+    }
+    po::notify(vm);
+    requireOutsideSourceTree(scratch);
+    const std::vector<Tracker> columns = trackers(runs);
+    std::vector<std::string> variant_names{"original"};
+    std::stringstream list(variants);
+    for (std::string name; std::getline(list, name, ',');) {
+      kindsOf(name);  // an unknown name fails before any run
+      variant_names.push_back(name);
+    }
+
+    std::vector<Base> bases;
+    for (const auto& [folder, freiburg] :
+         {std::pair<const char*, int>{"tum_fr1_xyz_head", 1}, {"tum_fr3_teddy_head", 3}}) {
+      const std::string dir = data + "/" + folder;
+      if (!fs::exists(dir)) {
+        std::cerr << "skipping " << dir << ": not found\n";
+        continue;
+      }
+      const std::string name = folder == std::string("tum_fr1_xyz_head") ? "fr1_head" : "fr3_head";
+      if (sequences.find(name) == std::string::npos) continue;
+      Base base{name, simulation::tumVariantSource(dir, tumCamera(freiburg))};
+      if (max_frames) base.source.size = std::min(base.source.size, max_frames);
+      bases.push_back(base);
+    }
+    if (synthetic_frames > 0 && sequences.find("synthetic") != std::string::npos) {
+      simulation::SyntheticRgbdOptions synthetic;
+      synthetic.frames = synthetic_frames;
+      bases.push_back({"synthetic", simulation::syntheticVariantSource(synthetic)});
+    }
+
+    std::cout << "ATE RMSE in cm (frames without a pose)\n\n| sequence | frames |";
+    for (const Tracker& tracker : columns) std::cout << ' ' << tracker.name << " |";
+    std::cout << " median / p90 ms, default | median / p90 ms, opencv |\n|---|---|";
+    for (std::size_t c = 0; c < columns.size() + 2; ++c) std::cout << "---|";
+    std::cout << std::endl;
+    for (const Base& base : bases)
+      for (const std::string& variant : variant_names) {
+        const Sequence sequence = prepare(base, variant, scratch);
+        std::cout << "| " << sequence.name << " | " << sequence.frames.size() << " |";
+        std::string timing[2] = {"–", "–"};
+        for (const Tracker& tracker : columns) {
+          const Run run = tracker.opencv ? benchmarks::runOpenCvOdometry(sequence)
+                                         : benchmarks::runFrontend(sequence, tracker.options);
+          std::cout << ' ' << cell(run, sequence.frames.size()) << " |" << std::flush;
+          std::ostringstream ms;
+          ms << std::fixed << std::setprecision(1) << run.medianMs() << " / " << run.p90Ms();
+          if (tracker.name == "default") timing[0] = ms.str();
+          if (tracker.opencv) timing[1] = ms.str();
+        }
+        std::cout << ' ' << timing[0] << " | " << timing[1] << " |" << std::endl;
+      }
+    return 0;
+  } catch (const po::error& e) {
+    std::cerr << "wicp_benchmark_cross_sequence: error: " << e.what() << '\n';
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "wicp_benchmark_cross_sequence: error: " << e.what() << '\n';
+    return 1;
+  }
+}

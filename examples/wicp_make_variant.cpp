@@ -1,0 +1,82 @@
+// wicp_make_variant: writes a variant of a TUM RGB-D sequence (or of the
+// synthetic one) as another sensor or condition would record it, in the TUM
+// layout with its camera.yaml, so that the front end's defaults can be checked
+// on data they were not chosen on (issue #11). Run the result with
+//   wicp_rgbd_slam --dataset OUT   (OUT/camera.yaml is picked up)
+
+#include <iostream>
+#include <limits>
+
+#include <boost/program_options.hpp>
+
+#include "dataset_camera.h"
+#include "tool_support.h"
+#include "weighted_icp/simulation/sequence_variants.h"
+
+namespace po = boost::program_options;
+using namespace weighted_icp;
+
+int main(int argc, char** argv) {
+  return tools::runTool("wicp_make_variant", [&] {
+    std::string dataset, camera_spec, out_dir, kinds;
+    simulation::SequenceVariantOptions options;
+    simulation::SyntheticRgbdOptions synthetic;
+    double offset_x = options.depth_offset_m.x();
+    po::options_description description(
+        "wicp_make_variant [--dataset DIR [--camera fr1|fr2|fr3|FILE.yaml]] --variant KIND[,KIND...] --out DIR\n"
+        "Writes DIR in the TUM layout (rgb/, depth/, rgb.txt, depth.txt, groundtruth.txt) with camera.yaml,\n"
+        "variant.txt and, for bursts, bursts.txt. Kinds, applied in the order given: jpeg, mm-depth, focal,\n"
+        "unregistered, blur, low-light, burst. Without --dataset the synthetic sequence is used.\n"
+        "Exit 1 on an error (nothing written), 2 on a bad command line. Options");
+    // One option per line reads as a table: not reflowed.
+    // clang-format off
+    description.add_options()
+        ("help,h", "print this help")
+        ("dataset", po::value(&dataset), "TUM RGB-D folder; default: the synthetic sequence")
+        ("camera", po::value(&camera_spec), "fr1, fr2, fr3 or a camera YAML; default: DIR/camera.yaml, else from the folder name")
+        ("variant", po::value(&kinds)->required(), "comma-separated kinds (jpeg,mm-depth,focal,unregistered,blur,low-light,burst)")
+        ("out", po::value(&out_dir)->required(), "output folder (written complete or not at all)")
+        ("overwrite", "replace --out if it exists and is not empty")
+        ("jpeg-quality", tools::rangedValue(&options.jpeg_quality, 1, 100)->default_value(options.jpeg_quality), "jpeg: quality (1-100)")
+        ("depth-factor", tools::rangedValue(&options.depth_factor, 100.0, 65535.0)->default_value(options.depth_factor), "mm-depth: raw value per metre (100-65535)")
+        ("focal", tools::rangedValue(&options.focal_length_px, 50.0, 5000.0)->default_value(options.focal_length_px), "focal: new fx in px (50-5000)")
+        ("depth-offset", tools::rangedValue(&offset_x, -0.5, 0.5)->default_value(offset_x), "unregistered: depth camera x offset, m")
+        ("depth-rotation", tools::rangedValue(&options.depth_rotation_deg, -10.0, 10.0)->default_value(options.depth_rotation_deg), "unregistered: rotation about y, degrees")
+        ("blur-length", tools::rangedValue(&options.blur_length_px, 1.0, 200.0)->default_value(options.blur_length_px), "blur: length in px (1-200)")
+        ("gain", tools::rangedValue(&options.low_light_gain, 0.01, 1.0)->default_value(options.low_light_gain), "low-light: gain (0.01-1)")
+        ("gamma", tools::rangedValue(&options.low_light_gamma, 0.1, 10.0)->default_value(options.low_light_gamma), "low-light: gamma (0.1-10)")
+        ("noise", tools::rangedValue(&options.low_light_noise, 0.0, 100.0)->default_value(options.low_light_noise), "low-light: noise sigma, grey levels")
+        ("burst-start", tools::rangedValue(&options.burst_start, std::size_t{0})->default_value(options.burst_start), "burst: first degraded frame")
+        ("burst-period", tools::rangedValue(&options.burst_period, std::size_t{1})->default_value(options.burst_period), "burst: frames from one burst to the next")
+        ("burst-length", tools::rangedValue(&options.burst_length, std::size_t{1})->default_value(options.burst_length), "burst: frames per burst")
+        ("burst-blur", tools::rangedValue(&options.burst_blur_length_px, 1.0, 200.0)->default_value(options.burst_blur_length_px), "burst: blur length in px")
+        ("burst-noise", tools::rangedValue(&options.burst_noise_sigma, 0.0, 100.0)->default_value(options.burst_noise_sigma), "burst: noise sigma, grey levels")
+        ("seed", tools::rangedValue(&options.seed, std::uint64_t{0})->default_value(options.seed), "blur directions and noise")
+        ("synthetic-frames", tools::rangedValue(&synthetic.frames, std::size_t{1}, std::size_t{100000})->default_value(synthetic.frames), "synthetic: frames")
+        ("synthetic-seed", tools::rangedValue(&synthetic.seed, std::uint64_t{0})->default_value(synthetic.seed), "synthetic: seed");
+    // clang-format on
+    po::variables_map vm;
+    if (!tools::parseCommandLine(argc, argv, description, vm)) return 0;
+    try {
+      options.kinds = simulation::parseVariantKinds(kinds);
+    } catch (const std::invalid_argument& e) {
+      throw po::error(std::string("--variant: ") + e.what());
+    }
+    if (options.burst_period < options.burst_length)
+      tools::throwOutOfRange("burst-period", std::to_string(options.burst_period),
+                             static_cast<long long>(options.burst_length), std::numeric_limits<long long>::max());
+    options.depth_offset_m.x() = offset_x;
+
+    const simulation::VariantSource source =
+        dataset.empty() ? simulation::syntheticVariantSource(synthetic)
+                        : simulation::tumVariantSource(dataset, tools::datasetCamera(dataset, camera_spec));
+    tools::Progress progress("writing", source.size);
+    const simulation::VariantSummary summary = simulation::writeSequenceVariant(
+        source, options, out_dir, vm.count("overwrite") > 0, [&](std::size_t) { progress.step(); });
+    progress.finish();
+    std::cout << "wrote " << summary.frames << " frames (" << kinds << ") to " << out_dir << ": fx "
+              << summary.camera.fx << ", depth factor " << summary.camera.depth_factor << ", "
+              << summary.degraded.size() << " frames degraded by bursts\n";
+    return 0;
+  });
+}

@@ -1,0 +1,66 @@
+#pragma once
+// Image-level simulations of other sensors and conditions, applied to real or
+// synthetic RGB-D frames: motion blur, low light, sensor noise, another focal
+// length (zoom about the principal point) and depth that is not registered to
+// the colour image. sequence_variants.h applies them to whole sequences.
+
+#include <Eigen/Geometry>
+#include <opencv2/core.hpp>
+
+#include "weighted_icp/core/camera.h"
+
+namespace weighted_icp::simulation {
+
+/// @brief Linear motion blur: the image averaged along a segment, as an
+/// exposure during which the image moved `length_px` at `angle_deg`.
+/// @param image 8-bit, 1 to 4 channels
+/// @param length_px segment length in pixels (>= 1; 1 returns a copy)
+/// @param angle_deg direction of the motion in the image, degrees from +x
+cv::Mat motionBlur(const cv::Mat& image, double length_px, double angle_deg);
+
+/// @brief Adds zero-mean Gaussian noise of `sigma` grey levels, saturating.
+/// @param image 8-bit, 1 to 4 channels
+/// @param sigma standard deviation in grey levels (>= 0)
+/// @param rng the source of the noise (seeded by the caller for determinism)
+cv::Mat addGaussianNoise(const cv::Mat& image, double sigma, cv::RNG& rng);
+
+/// @brief A low-light exposure: value = 255 gain (value / 255)^gamma, then
+/// read noise of `noise_sigma` grey levels (a dark image's noise is relatively
+/// larger, which is what makes low light hard).
+/// @param image 8-bit, 1 to 4 channels
+/// @param gain in (0, 1]
+/// @param gamma > 0 (above 1 crushes the shadows)
+/// @param noise_sigma grey levels, after the gain
+/// @param rng the source of the noise
+cv::Mat lowLight(const cv::Mat& image, double gain, double gamma, double noise_sigma, cv::RNG& rng);
+
+/// @brief The camera of zoomImage: focal lengths times `scale`, the principal
+/// point, distortion (in normalised coordinates, unchanged by a zoom about the
+/// principal point), size and depth factor unchanged.
+/// @param camera the original camera
+/// @param scale new focal length / old (> 0)
+PinholeCamera zoomedCamera(const PinholeCamera& camera, double scale);
+
+/// @brief The image a camera with `scale` times the focal length would have
+/// seen from the same place: a zoom about the principal point, same size.
+/// Pixels outside the original (scale < 1) are 0, which is "no reading" for depth.
+/// @param image colour or depth image of `camera`'s size
+/// @param camera its camera (the principal point is the zoom's centre)
+/// @param scale new focal length / old (> 0)
+/// @param interpolation cv::INTER_LINEAR for colour, cv::INTER_NEAREST for
+///        depth (never mix a foreground and a background depth)
+cv::Mat zoomImage(const cv::Mat& image, const PinholeCamera& camera, double scale, int interpolation);
+
+/// @brief Depth as an unregistered sensor delivers it: seen from a depth
+/// camera at `depth_in_color` (its pose in the colour camera's frame) with the
+/// same intrinsics, but indexed as if it were the colour camera's. Each pixel is
+/// lifted with its depth, moved into the depth camera and splatted (nearest
+/// pixel, nearest depth wins); one-pixel cracks of the resampling are filled
+/// with the farther neighbour. Lens distortion is ignored: over a shift of a few
+/// centimetres its effect is far below a pixel.
+/// @param depth CV_32F metres (0 or NaN: no reading), `camera`'s size
+/// @param camera the colour camera's intrinsics
+/// @param depth_in_color the depth camera's pose in the colour camera's frame
+cv::Mat unregisteredDepth(const cv::Mat& depth, const PinholeCamera& camera, const Eigen::Isometry3d& depth_in_color);
+
+}  // namespace weighted_icp::simulation

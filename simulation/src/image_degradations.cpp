@@ -1,0 +1,123 @@
+// Motion blur, noise, low light, zoom and unregistered depth (see image_degradations.h).
+
+#include "weighted_icp/simulation/image_degradations.h"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include <opencv2/imgproc.hpp>
+
+namespace weighted_icp::simulation {
+
+namespace {
+
+void requireEightBit(const cv::Mat& image, const char* function) {
+  if (image.empty()) throw std::invalid_argument(std::string(function) + ": empty image");
+  if (image.depth() != CV_8U)
+    throw std::invalid_argument(std::string(function) + ": needs an 8-bit image, got " +
+                                cv::typeToString(image.type()));
+}
+
+}  // namespace
+
+cv::Mat motionBlur(const cv::Mat& image, double length_px, double angle_deg) {
+  requireEightBit(image, "motionBlur");
+  if (!(length_px >= 1.0) || length_px > 200.0)
+    throw std::invalid_argument("motionBlur: length must be in [1, 200] px, got " + std::to_string(length_px));
+  const int size = 2 * static_cast<int>(std::ceil(length_px / 2.0)) + 1;
+  cv::Mat kernel = cv::Mat::zeros(size, size, CV_32F);
+  const double c = (size - 1) / 2.0, angle = angle_deg * M_PI / 180.0;
+  // A segment of the given length through the centre, drawn with sub-pixel steps.
+  const int steps = 4 * size;
+  for (int s = 0; s <= steps; ++s) {
+    const double t = (static_cast<double>(s) / steps - 0.5) * (length_px - 1.0);
+    const int x = static_cast<int>(std::lround(c + t * std::cos(angle)));
+    const int y = static_cast<int>(std::lround(c + t * std::sin(angle)));
+    kernel.at<float>(y, x) += 1.0f;
+  }
+  kernel /= cv::sum(kernel)[0];
+  cv::Mat blurred;
+  cv::filter2D(image, blurred, -1, kernel, cv::Point(-1, -1), 0.0, cv::BORDER_REFLECT);
+  return blurred;
+}
+
+cv::Mat addGaussianNoise(const cv::Mat& image, double sigma, cv::RNG& rng) {
+  requireEightBit(image, "addGaussianNoise");
+  if (!(sigma >= 0.0)) throw std::invalid_argument("addGaussianNoise: sigma must be >= 0");
+  cv::Mat noise(image.size(), CV_MAKETYPE(CV_32F, image.channels())), noisy;
+  rng.fill(noise, cv::RNG::NORMAL, 0.0, sigma);
+  image.convertTo(noisy, noise.type());
+  noisy += noise;
+  noisy.convertTo(noisy, image.type());  // saturates
+  return noisy;
+}
+
+cv::Mat lowLight(const cv::Mat& image, double gain, double gamma, double noise_sigma, cv::RNG& rng) {
+  requireEightBit(image, "lowLight");
+  if (!(gain > 0.0 && gain <= 1.0)) throw std::invalid_argument("lowLight: gain must be in (0, 1]");
+  if (!(gamma > 0.0)) throw std::invalid_argument("lowLight: gamma must be > 0");
+  cv::Mat table(1, 256, CV_8U);
+  for (int v = 0; v < 256; ++v)
+    table.at<unsigned char>(v) = cv::saturate_cast<unsigned char>(255.0 * gain * std::pow(v / 255.0, gamma));
+  cv::Mat dark;
+  cv::LUT(image, table, dark);
+  return addGaussianNoise(dark, noise_sigma, rng);
+}
+
+PinholeCamera zoomedCamera(const PinholeCamera& camera, double scale) {
+  if (!(scale > 0.0) || !std::isfinite(scale))
+    throw std::invalid_argument("zoomedCamera: scale must be > 0, got " + std::to_string(scale));
+  PinholeCamera zoomed = camera;
+  zoomed.fx *= scale;
+  zoomed.fy *= scale;
+  return zoomed;
+}
+
+cv::Mat zoomImage(const cv::Mat& image, const PinholeCamera& camera, double scale, int interpolation) {
+  if (image.empty()) throw std::invalid_argument("zoomImage: empty image");
+  if (image.cols != camera.width || image.rows != camera.height)
+    throw std::invalid_argument("zoomImage: image is " + std::to_string(image.cols) + "x" + std::to_string(image.rows) +
+                                ", the camera " + std::to_string(camera.width) + "x" + std::to_string(camera.height));
+  if (!(scale > 0.0) || !std::isfinite(scale)) throw std::invalid_argument("zoomImage: scale must be > 0");
+  // u' = cx + scale (u - cx): the normalised coordinates (u - cx) / fx are kept.
+  const cv::Matx23d to_zoomed(scale, 0.0, (1.0 - scale) * camera.cx, 0.0, scale, (1.0 - scale) * camera.cy);
+  cv::Mat zoomed;
+  cv::warpAffine(image, zoomed, to_zoomed, image.size(), interpolation, cv::BORDER_CONSTANT, cv::Scalar::all(0));
+  return zoomed;
+}
+
+cv::Mat unregisteredDepth(const cv::Mat& depth, const PinholeCamera& camera, const Eigen::Isometry3d& depth_in_color) {
+  if (depth.type() != CV_32F) throw std::invalid_argument("unregisteredDepth: depth must be CV_32F metres");
+  if (depth.cols != camera.width || depth.rows != camera.height)
+    throw std::invalid_argument("unregisteredDepth: depth is " + std::to_string(depth.cols) + "x" +
+                                std::to_string(depth.rows) + ", the camera " + std::to_string(camera.width) + "x" +
+                                std::to_string(camera.height));
+  const Eigen::Isometry3d color_to_depth = depth_in_color.inverse();
+  cv::Mat splatted(depth.size(), CV_32F, cv::Scalar(0.0f));
+  for (int v = 0; v < depth.rows; ++v)
+    for (int u = 0; u < depth.cols; ++u) {
+      const float z = depth.at<float>(v, u);
+      if (!(z > 0.0f) || !std::isfinite(z)) continue;
+      const Eigen::Vector3d in_depth = color_to_depth * camera.backProject(u, v, z);
+      if (in_depth.z() <= 0.0) continue;
+      const Eigen::Vector2d pixel = camera.project(in_depth);
+      const int tu = static_cast<int>(std::lround(pixel.x())), tv = static_cast<int>(std::lround(pixel.y()));
+      if (tu < 0 || tv < 0 || tu >= depth.cols || tv >= depth.rows) continue;
+      float& target = splatted.at<float>(tv, tu);
+      const float moved = static_cast<float>(in_depth.z());
+      if (target == 0.0f || moved < target) target = moved;  // the nearer surface hides the farther
+    }
+  // Resampling leaves one-pixel cracks; an occlusion edge uncovers background,
+  // so a crack takes its farthest neighbour.
+  cv::Mat farthest;
+  cv::dilate(splatted, farthest, cv::Mat());
+  cv::Mat filled = splatted.clone();
+  for (int v = 1; v + 1 < depth.rows; ++v)
+    for (int u = 1; u + 1 < depth.cols; ++u)
+      if (splatted.at<float>(v, u) == 0.0f && depth.at<float>(v, u) > 0.0f)
+        filled.at<float>(v, u) = farthest.at<float>(v, u);
+  return filled;
+}
+
+}  // namespace weighted_icp::simulation

@@ -1,0 +1,298 @@
+// Sequence variants written in the TUM layout (see sequence_variants.h): the
+// degradations of image_degradations.h applied frame by frame into an
+// io::AtomicFolder, with the camera, lists and ground truth that go with them.
+
+#include "weighted_icp/simulation/sequence_variants.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "weighted_icp/io/atomic_folder.h"
+#include "weighted_icp/io/camera.h"
+#include "weighted_icp/simulation/image_degradations.h"
+
+namespace weighted_icp::simulation {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::vector<std::pair<VariantKind, const char*>>& kindNames() {
+  static const std::vector<std::pair<VariantKind, const char*>> names = {
+      {VariantKind::Jpeg, "jpeg"},       {VariantKind::MillimetreDepth, "mm-depth"},
+      {VariantKind::Focal, "focal"},     {VariantKind::Unregistered, "unregistered"},
+      {VariantKind::MotionBlur, "blur"}, {VariantKind::LowLight, "low-light"},
+      {VariantKind::Burst, "burst"}};
+  return names;
+}
+
+bool has(const SequenceVariantOptions& options, VariantKind kind) {
+  return std::find(options.kinds.begin(), options.kinds.end(), kind) != options.kinds.end();
+}
+
+std::string timestampText(double timestamp) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%.6f", timestamp);
+  return text;
+}
+
+void require(bool condition, const std::string& what) {
+  if (!condition) throw std::invalid_argument("sequence variant: " + what);
+}
+
+void checkOptions(const SequenceVariantOptions& options) {
+  require(!options.kinds.empty(), "no variant kind given");
+  require(options.jpeg_quality >= 1 && options.jpeg_quality <= 100, "JPEG quality must be in [1, 100]");
+  require(options.depth_factor >= 100.0 && options.depth_factor <= 65535.0,
+          "depth factor must be in [100, 65535] raw values per metre");
+  require(options.focal_length_px >= 50.0 && options.focal_length_px <= 5000.0,
+          "focal length must be in [50, 5000] px");
+  require(options.depth_offset_m.allFinite() && options.depth_offset_m.norm() <= 0.5,
+          "the depth camera's offset must be finite and at most 0.5 m");
+  require(std::abs(options.depth_rotation_deg) <= 10.0, "the depth camera's rotation must be within 10 degrees");
+  require(options.blur_length_px >= 1.0 && options.blur_length_px <= 200.0, "blur length must be in [1, 200] px");
+  require(options.burst_blur_length_px >= 1.0 && options.burst_blur_length_px <= 200.0,
+          "burst blur length must be in [1, 200] px");
+  require(options.low_light_gain > 0.0 && options.low_light_gain <= 1.0, "low-light gain must be in (0, 1]");
+  require(options.low_light_gamma > 0.0 && options.low_light_gamma <= 10.0, "low-light gamma must be in (0, 10]");
+  require(options.low_light_noise >= 0.0 && options.burst_noise_sigma >= 0.0, "noise sigmas must be >= 0");
+  require(options.burst_length >= 1 && options.burst_period >= options.burst_length,
+          "bursts need a length >= 1 and a period >= their length");
+}
+
+/// The camera the variant is read with: the kinds that change it, in order.
+PinholeCamera variantCamera(const PinholeCamera& original, const SequenceVariantOptions& options) {
+  PinholeCamera camera = original;
+  for (const VariantKind kind : options.kinds) {
+    if (kind == VariantKind::Focal) camera = zoomedCamera(camera, options.focal_length_px / camera.fx);
+    if (kind == VariantKind::MillimetreDepth) camera.depth_factor = options.depth_factor;
+  }
+  return camera;
+}
+
+/// Burst k (0, 1, ...) covers frames start + k period ... + length - 1; even bursts blur, odd ones add noise.
+const char* burstDegradation(std::size_t i, const SequenceVariantOptions& options) {
+  if (i < options.burst_start) return nullptr;
+  const std::size_t since = i - options.burst_start;
+  if (since % options.burst_period >= options.burst_length) return nullptr;
+  return (since / options.burst_period) % 2 == 0 ? "blur" : "noise";
+}
+
+/// Frame i changed by every kind in order; `camera` is the input camera, updated as the kinds change it.
+RgbdFrame applyKinds(RgbdFrame frame, std::size_t i, PinholeCamera camera, const SequenceVariantOptions& options,
+                     std::vector<DegradedFrame>& degraded) {
+  // Each frame draws from its own stream: the output does not depend on what was written before.
+  cv::RNG rng(options.seed * 0x9E3779B97F4A7C15ull + i + 1);
+  for (const VariantKind kind : options.kinds) {
+    switch (kind) {
+      case VariantKind::Jpeg:
+      case VariantKind::MillimetreDepth: break;  // how the images are written
+      case VariantKind::Focal: {
+        const double scale = options.focal_length_px / camera.fx;
+        frame.color = zoomImage(frame.color, camera, scale, cv::INTER_LINEAR);
+        frame.depth = zoomImage(frame.depth, camera, scale, cv::INTER_NEAREST);
+        camera = zoomedCamera(camera, scale);
+        break;
+      }
+      case VariantKind::Unregistered: {
+        Eigen::Isometry3d depth_in_color = Eigen::Isometry3d::Identity();
+        depth_in_color.linear() =
+            Eigen::AngleAxisd(options.depth_rotation_deg * M_PI / 180.0, Eigen::Vector3d::UnitY()).toRotationMatrix();
+        depth_in_color.translation() = options.depth_offset_m;
+        frame.depth = unregisteredDepth(frame.depth, camera, depth_in_color);
+        break;
+      }
+      case VariantKind::MotionBlur:
+        frame.color = motionBlur(frame.color, options.blur_length_px, rng.uniform(0.0, 180.0));
+        break;
+      case VariantKind::LowLight:
+        frame.color =
+            lowLight(frame.color, options.low_light_gain, options.low_light_gamma, options.low_light_noise, rng);
+        break;
+      case VariantKind::Burst: {
+        const char* how = burstDegradation(i, options);
+        if (!how) break;
+        frame.color = std::string(how) == "blur"
+                          ? motionBlur(frame.color, options.burst_blur_length_px, rng.uniform(0.0, 180.0))
+                          : addGaussianNoise(frame.color, options.burst_noise_sigma, rng);
+        degraded.push_back({i, frame.timestamp, how});
+        break;
+      }
+    }
+  }
+  return frame;
+}
+
+/// Inside the AtomicFolder's temporary folder, so a plain write is already all or nothing.
+void writeText(const fs::path& path, const std::string& text) {
+  std::ofstream out(path);
+  out << text;
+  out.close();
+  if (!out) throw std::runtime_error("cannot write " + path.string());
+}
+
+void writeImage(const fs::path& path, const cv::Mat& image, const std::vector<int>& parameters = {}) {
+  if (!cv::imwrite(path.string(), image, parameters)) throw std::runtime_error("cannot write " + path.string());
+}
+
+void writeDescription(const fs::path& path, const VariantSource& source, const SequenceVariantOptions& options) {
+  std::ostringstream text;
+  text << "# sequence variant (weighted_icp simulation/sequence_variants.h)\nsource: " << source.description
+       << "\nkinds:";
+  for (const VariantKind kind : options.kinds) text << ' ' << toString(kind);
+  text << "\nseed: " << options.seed;
+  if (has(options, VariantKind::Jpeg)) text << "\njpeg_quality: " << options.jpeg_quality;
+  if (has(options, VariantKind::MillimetreDepth)) text << "\ndepth_factor: " << options.depth_factor;
+  if (has(options, VariantKind::Focal)) text << "\nfocal_length_px: " << options.focal_length_px;
+  if (has(options, VariantKind::Unregistered))
+    text << "\ndepth_offset_m: " << options.depth_offset_m.transpose()
+         << "\ndepth_rotation_deg: " << options.depth_rotation_deg;
+  if (has(options, VariantKind::MotionBlur)) text << "\nblur_length_px: " << options.blur_length_px;
+  if (has(options, VariantKind::LowLight))
+    text << "\nlow_light_gain: " << options.low_light_gain << "\nlow_light_gamma: " << options.low_light_gamma
+         << "\nlow_light_noise: " << options.low_light_noise;
+  if (has(options, VariantKind::Burst))
+    text << "\nburst_start: " << options.burst_start << "\nburst_period: " << options.burst_period
+         << "\nburst_length: " << options.burst_length << "\nburst_blur_length_px: " << options.burst_blur_length_px
+         << "\nburst_noise_sigma: " << options.burst_noise_sigma;
+  writeText(path, text.str() + "\n");
+}
+
+void writeDegradedFrames(const fs::path& path, const std::vector<DegradedFrame>& degraded) {
+  std::ostringstream text;
+  text << "# frames degraded by bursts: index (in rgb.txt order) timestamp blur|noise\n";
+  for (const DegradedFrame& frame : degraded)
+    text << frame.index << ' ' << timestampText(frame.timestamp) << ' ' << frame.how << '\n';
+  writeText(path, text.str());
+}
+
+/// Every frame into `folder`: images and both lists.
+std::vector<DegradedFrame> writeFrames(const VariantSource& source, const SequenceVariantOptions& options,
+                                       const PinholeCamera& camera, const fs::path& folder,
+                                       const std::function<void(std::size_t)>& frame_written) {
+  fs::create_directory(folder / "rgb");
+  fs::create_directory(folder / "depth");
+  std::ofstream rgb_list(folder / "rgb.txt"), depth_list(folder / "depth.txt");
+  rgb_list << "# color images\n# " << source.description << "\n# timestamp filename\n";
+  depth_list << "# depth maps\n# " << source.description << "\n# timestamp filename\n";
+  const bool jpeg = has(options, VariantKind::Jpeg);
+  std::vector<DegradedFrame> degraded;
+  for (std::size_t i = 0; i < source.size; ++i) {
+    const RgbdFrame frame = applyKinds(source.load(i), i, source.camera, options, degraded);
+    const std::string rgb_name = "rgb/" + timestampText(frame.timestamp) + (jpeg ? ".jpg" : ".png");
+    const std::string depth_name = "depth/" + timestampText(source.depth_timestamp(i)) + ".png";
+    writeImage(folder / rgb_name, frame.color,
+               jpeg ? std::vector<int>{cv::IMWRITE_JPEG_QUALITY, options.jpeg_quality} : std::vector<int>{});
+    writeImage(folder / depth_name, depthToRaw(frame.depth, camera.depth_factor));
+    rgb_list << timestampText(frame.timestamp) << ' ' << rgb_name << '\n';
+    depth_list << timestampText(source.depth_timestamp(i)) << ' ' << depth_name << '\n';
+    if (frame_written) frame_written(i);
+  }
+  for (std::ofstream* list : {&rgb_list, &depth_list}) {
+    list->close();
+    if (!*list) throw std::runtime_error("cannot write the lists in " + folder.string());
+  }
+  return degraded;
+}
+
+}  // namespace
+
+std::string toString(VariantKind kind) {
+  for (const auto& [k, name] : kindNames())
+    if (k == kind) return name;
+  return "unknown";
+}
+
+VariantKind parseVariantKind(const std::string& name) {
+  std::string accepted;
+  for (const auto& [kind, text] : kindNames()) {
+    if (name == text) return kind;
+    accepted += (accepted.empty() ? "" : "|") + std::string(text);
+  }
+  throw std::invalid_argument("unknown variant '" + name + "' (expected " + accepted + ")");
+}
+
+std::vector<VariantKind> parseVariantKinds(const std::string& names) {
+  std::vector<VariantKind> kinds;
+  std::stringstream list(names);
+  std::string name;
+  while (std::getline(list, name, ',')) {
+    const VariantKind kind = parseVariantKind(name);
+    if (std::find(kinds.begin(), kinds.end(), kind) != kinds.end())
+      throw std::invalid_argument("variant '" + name + "' given twice");
+    kinds.push_back(kind);
+  }
+  if (kinds.empty()) throw std::invalid_argument("no variant given");
+  return kinds;
+}
+
+VariantSource tumVariantSource(const std::string& directory, const PinholeCamera& camera) {
+  auto sequence = std::make_shared<io::TumSequence>(io::TumSequence::open(directory));
+  VariantSource source;
+  source.camera = camera;
+  source.size = sequence->size();
+  source.load = [sequence, camera](std::size_t i) { return sequence->loadFrame(i, camera); };
+  source.depth_timestamp = [sequence](std::size_t i) { return sequence->frame(i).depth_timestamp; };
+  source.groundtruth = sequence->groundTruth();
+  source.description = "TUM sequence " + directory;
+  return source;
+}
+
+VariantSource syntheticVariantSource(const SyntheticRgbdOptions& options) {
+  auto sequence = std::make_shared<SyntheticRgbdSequence>(options);
+  VariantSource source;
+  source.camera = options.camera;
+  source.size = sequence->size();
+  source.load = [sequence](std::size_t i) { return sequence->frame(i).rgbd; };
+  source.depth_timestamp = [sequence](std::size_t i) { return sequence->timestamp(i); };
+  for (std::size_t i = 0; i < sequence->size(); ++i)
+    source.groundtruth.push_back({sequence->timestamp(i), sequence->cameraToWorld(i)});
+  source.description = "synthetic sequence, seed " + std::to_string(options.seed);
+  return source;
+}
+
+VariantSummary writeSequenceVariant(const VariantSource& source, const SequenceVariantOptions& options,
+                                    const std::string& dir, bool overwrite,
+                                    const std::function<void(std::size_t)>& frame_written) {
+  checkOptions(options);
+  if (source.size == 0) throw std::invalid_argument("sequence variant: the source has no frame");
+  VariantSummary summary;
+  summary.camera = variantCamera(source.camera, options);
+  summary.frames = source.size;
+  io::AtomicFolder folder(dir, overwrite);  // refuses a non-empty dir before any frame is read
+  summary.degraded = writeFrames(source, options, summary.camera, folder.path(), frame_written);
+  io::saveCamera(summary.camera, (folder.path() / "camera.yaml").string());
+  if (!source.groundtruth.empty())
+    io::writeTrajectory(source.groundtruth, (folder.path() / "groundtruth.txt").string());
+  writeDescription(folder.path() / "variant.txt", source, options);
+  if (has(options, VariantKind::Burst)) writeDegradedFrames(folder.path() / "bursts.txt", summary.degraded);
+  folder.publish();
+  return summary;
+}
+
+std::vector<DegradedFrame> readDegradedFrames(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(path + ": cannot open");
+  std::vector<DegradedFrame> frames;
+  std::string line;
+  for (int number = 1; std::getline(in, line); ++number) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream fields(line);
+    DegradedFrame frame;
+    if (!(fields >> frame.index >> frame.timestamp >> frame.how) || (frame.how != "blur" && frame.how != "noise"))
+      throw std::runtime_error(path + ":" + std::to_string(number) + ": expected 'index timestamp blur|noise', got '" +
+                               line + "'");
+    frames.push_back(frame);
+  }
+  return frames;
+}
+
+}  // namespace weighted_icp::simulation

@@ -1,0 +1,237 @@
+// Sequence variants (issue #11): each kind changes what it says and nothing
+// else; the camera, lists and ground truth written with it read the variant back
+// consistently; bad options and outputs fail before anything is written.
+
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+
+#include <gtest/gtest.h>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "test_support.h"
+#include "weighted_icp/io/camera.h"
+#include "weighted_icp/io/tum_sequence.h"
+#include "weighted_icp/simulation/image_degradations.h"
+#include "weighted_icp/simulation/sequence_variants.h"
+
+namespace {
+
+using namespace weighted_icp;
+using weighted_icp::testing::scratchDir;
+namespace fs = std::filesystem;
+
+/// A small sequence made here (160x120, a textured wall at 2 m with a box at
+/// 1 m, the camera sliding sideways): fast, and every value known.
+simulation::VariantSource smallSynthetic(std::size_t frames = 4) {
+  PinholeCamera camera;
+  camera.fx = camera.fy = 130.0;
+  camera.cx = 79.5;
+  camera.cy = 59.5;
+  camera.width = 160;
+  camera.height = 120;
+  camera.depth_factor = 5000.0;
+  simulation::VariantSource source;
+  source.camera = camera;
+  source.size = frames;
+  source.description = "test sequence";
+  source.load = [camera](std::size_t i) {
+    RgbdFrame frame;
+    frame.timestamp = 100.0 + 0.05 * static_cast<double>(i);
+    frame.color = cv::Mat(camera.height, camera.width, CV_8UC3);
+    cv::RNG(static_cast<std::uint64_t>(7 + i)).fill(frame.color, cv::RNG::UNIFORM, 0, 256);
+    cv::GaussianBlur(frame.color, frame.color, cv::Size(), 1.5);  // texture, not pixel noise
+    frame.depth = cv::Mat(camera.height, camera.width, CV_32F, cv::Scalar(2.0f));
+    frame.depth(cv::Rect(40 + static_cast<int>(i), 30, 40, 40)).setTo(1.0f);
+    frame.depth.at<float>(5, 5) = 0.0f;  // no reading
+    return frame;
+  };
+  source.depth_timestamp = [](std::size_t i) { return 100.01 + 0.05 * static_cast<double>(i); };
+  for (std::size_t i = 0; i < frames; ++i) {
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    pose.translation().x() = 0.01 * static_cast<double>(i);
+    source.groundtruth.push_back({100.0 + 0.05 * static_cast<double>(i), pose});
+  }
+  return source;
+}
+
+simulation::SequenceVariantOptions kinds(const std::string& names) {
+  simulation::SequenceVariantOptions options;
+  options.kinds = simulation::parseVariantKinds(names);
+  return options;
+}
+
+struct Written {
+  io::TumSequence sequence;
+  PinholeCamera camera;
+};
+
+Written writeAndOpen(const simulation::VariantSource& source, const simulation::SequenceVariantOptions& options,
+                     const fs::path& dir) {
+  simulation::writeSequenceVariant(source, options, dir.string());
+  return {io::TumSequence::open(dir.string()), io::loadCamera((dir / "camera.yaml").string())};
+}
+
+TEST(SequenceVariants, MillimetreDepthGivesTheSameMetricDepth) {
+  const simulation::VariantSource source = smallSynthetic();
+  const Written variant = writeAndOpen(source, kinds("mm-depth"), scratchDir("variant") / "mm");
+  EXPECT_EQ(variant.camera.depth_factor, 1000.0);
+  const cv::Mat raw = cv::imread(variant.sequence.frame(0).depth_path, cv::IMREAD_UNCHANGED);
+  ASSERT_EQ(raw.type(), CV_16UC1);
+  for (std::size_t i = 0; i < source.size; ++i) {
+    const cv::Mat original = source.load(i).depth, read = variant.sequence.loadFrame(i, variant.camera).depth;
+    std::size_t valid = 0;
+    for (int v = 0; v < original.rows; v += 2)
+      for (int u = 0; u < original.cols; u += 2) {
+        const float z = original.at<float>(v, u);
+        if (!(z > 0.0f)) continue;
+        ++valid;
+        ASSERT_NEAR(read.at<float>(v, u), z, 0.0005 + 1e-6) << "frame " << i << " pixel " << u << "," << v;
+      }
+    EXPECT_GT(valid, 300u);
+  }
+}
+
+TEST(SequenceVariants, FocalVariantSeesEachPointWhereItsIntrinsicsSay) {
+  const simulation::VariantSource source = smallSynthetic(2);
+  simulation::SequenceVariantOptions options = kinds("focal");
+  options.focal_length_px = 147.0;  // 1.13 times: as 585 px is to fr1's 517 px
+  const Written variant = writeAndOpen(source, options, scratchDir("variant") / "focal");
+  const double scale = 147.0 / source.camera.fx;
+  EXPECT_DOUBLE_EQ(variant.camera.fx, 147.0);
+  EXPECT_NEAR(variant.camera.fy, source.camera.fy * scale, 1e-9);
+  EXPECT_EQ(variant.camera.cx, source.camera.cx);
+  EXPECT_EQ(variant.camera.cy, source.camera.cy);
+  EXPECT_EQ(variant.camera.width, source.camera.width);
+
+  // A point seen by the original camera projects, through the variant's
+  // intrinsics, to a pixel where the variant has (nearly) the same depth.
+  const cv::Mat original = source.load(0).depth, zoomed = variant.sequence.loadFrame(0, variant.camera).depth;
+  std::size_t checked = 0, agree = 0;
+  for (int v = 0; v < original.rows; v += 2)
+    for (int u = 0; u < original.cols; u += 2) {
+      const float z = original.at<float>(v, u);
+      if (!(z > 0.0f)) continue;
+      const Eigen::Vector2d pixel = variant.camera.project(source.camera.backProject(u, v, z));
+      const int pu = static_cast<int>(std::lround(pixel.x())), pv = static_cast<int>(std::lround(pixel.y()));
+      if (pu < 0 || pv < 0 || pu >= zoomed.cols || pv >= zoomed.rows) continue;
+      ++checked;
+      agree += std::abs(zoomed.at<float>(pv, pu) - z) < 0.02f * z;
+    }
+  ASSERT_GT(checked, 300u);
+  EXPECT_GT(static_cast<double>(agree) / checked, 0.95);
+}
+
+TEST(SequenceVariants, UnregisteredDepthIsSeenFromTheOffsetCamera) {
+  // A near square (1 m) in front of a wall (2 m): seen from 2.5 cm to the
+  // right, the square moves fx * 0.025 / 1 px to the left, the wall half that.
+  PinholeCamera camera = tumCamera(1);
+  camera.distortion = {};
+  cv::Mat depth(camera.height, camera.width, CV_32F, cv::Scalar(2.0f));
+  depth(cv::Rect(300, 200, 100, 100)).setTo(1.0f);
+  Eigen::Isometry3d depth_in_color = Eigen::Isometry3d::Identity();
+  depth_in_color.translation() = Eigen::Vector3d(0.025, 0.0, 0.0);
+  const cv::Mat moved = simulation::unregisteredDepth(depth, camera, depth_in_color);
+  int left_edge = -1;
+  for (int u = 200; u < 400 && left_edge < 0; ++u)
+    if (moved.at<float>(250, u) < 1.5f) left_edge = u;
+  EXPECT_NEAR(left_edge, 300 - camera.fx * 0.025, 1.0);
+  EXPECT_NEAR(moved.at<float>(250, 500), 2.0f, 1e-4);
+  EXPECT_THROW(simulation::unregisteredDepth(depth(cv::Rect(0, 0, 320, 240)).clone(), camera, depth_in_color),
+               std::invalid_argument);
+}
+
+TEST(SequenceVariants, JpegColourIsWrittenAsJpegAndStaysCloseToTheOriginal) {
+  const simulation::VariantSource source = smallSynthetic(2);
+  const Written variant = writeAndOpen(source, kinds("jpeg"), scratchDir("variant") / "jpeg");
+  EXPECT_EQ(fs::path(variant.sequence.frame(0).rgb_path).extension(), ".jpg");
+  const cv::Mat original = source.load(1).color, read = variant.sequence.loadFrame(1, variant.camera).color;
+  EXPECT_GT(cv::PSNR(original, read), 28.0);
+  EXPECT_GT(cv::norm(original, read, cv::NORM_INF), 0.0) << "JPEG at quality 75 is lossy";
+}
+
+TEST(SequenceVariants, BurstsDegradeTheListedFramesOnlyAndKeepTimestampsAndGroundTruth) {
+  const simulation::VariantSource source = smallSynthetic(6);
+  simulation::SequenceVariantOptions options = kinds("burst");
+  options.burst_start = 1;
+  options.burst_period = 3;
+  options.burst_length = 1;
+  const fs::path dir = scratchDir("variant") / "burst";
+  const Written variant = writeAndOpen(source, options, dir);
+  const auto degraded = simulation::readDegradedFrames((dir / "bursts.txt").string());
+  ASSERT_EQ(degraded.size(), 2u);
+  EXPECT_EQ(degraded[0].index, 1u);
+  EXPECT_EQ(degraded[0].how, "blur");
+  EXPECT_EQ(degraded[1].index, 4u);
+  EXPECT_EQ(degraded[1].how, "noise");
+  ASSERT_EQ(variant.sequence.size(), source.size);
+  ASSERT_TRUE(variant.sequence.hasGroundTruth());
+  for (std::size_t i = 0; i < source.size; ++i) {
+    const RgbdFrame original = source.load(i), read = variant.sequence.loadFrame(i, variant.camera);
+    EXPECT_NEAR(read.timestamp, original.timestamp, 1e-6);
+    const bool is_degraded = i == 1 || i == 4;
+    EXPECT_EQ(cv::norm(original.color, read.color, cv::NORM_INF) > 0.0, is_degraded) << "frame " << i;
+    const auto truth = variant.sequence.groundTruthAt(read.timestamp);
+    ASSERT_TRUE(truth) << "frame " << i;
+    EXPECT_TRUE(truth->isApprox(source.groundtruth[i].pose, 1e-6)) << "frame " << i;
+  }
+}
+
+TEST(SequenceVariants, TheSameSeedWritesTheSameImages) {
+  const simulation::VariantSource source = smallSynthetic(2);
+  const fs::path a = scratchDir("variant") / "a", b = scratchDir("variant") / "b";
+  const Written first = writeAndOpen(source, kinds("blur,low-light"), a);
+  const Written second = writeAndOpen(source, kinds("blur,low-light"), b);
+  for (std::size_t i = 0; i < source.size; ++i)
+    EXPECT_EQ(cv::norm(first.sequence.loadFrame(i, first.camera).color,
+                       second.sequence.loadFrame(i, second.camera).color, cv::NORM_INF),
+              0.0);
+}
+
+TEST(SequenceVariants, BadOptionsAndOutputsFailBeforeWritingAnything) {
+  const simulation::VariantSource source = smallSynthetic(1);
+  const fs::path dir = scratchDir("variant") / "out";
+  simulation::SequenceVariantOptions options = kinds("jpeg");
+  options.jpeg_quality = 0;
+  EXPECT_THROW(simulation::writeSequenceVariant(source, options, dir.string()), std::invalid_argument);
+  EXPECT_FALSE(fs::exists(dir));
+  options = kinds("burst");
+  options.burst_period = 1;
+  options.burst_length = 2;
+  EXPECT_THROW(simulation::writeSequenceVariant(source, options, dir.string()), std::invalid_argument);
+  EXPECT_THROW(simulation::writeSequenceVariant(source, simulation::SequenceVariantOptions{}, dir.string()),
+               std::invalid_argument);
+  EXPECT_FALSE(fs::exists(dir));
+
+  fs::create_directories(dir);
+  std::ofstream(dir / "keep.txt") << "mine\n";
+  EXPECT_THROW(simulation::writeSequenceVariant(source, kinds("jpeg"), dir.string()), std::runtime_error);
+  EXPECT_TRUE(fs::exists(dir / "keep.txt"));
+  EXPECT_FALSE(fs::exists(dir / "rgb.txt"));
+
+  EXPECT_THROW(simulation::parseVariantKinds("jpeg,sepia"), std::invalid_argument);
+  EXPECT_THROW(simulation::parseVariantKinds("jpeg,jpeg"), std::invalid_argument);
+  const fs::path bursts = dir / "bursts.txt";
+  std::ofstream(bursts) << "# header\n3 1.5 blur\n4 x noise\n";
+  try {
+    simulation::readDegradedFrames(bursts.string());
+    FAIL() << "a malformed line was accepted";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("bursts.txt:3"), std::string::npos) << e.what();
+  }
+}
+
+TEST(ImageDegradations, RefuseWhatTheyCannotDegrade) {
+  cv::RNG rng(1);
+  const cv::Mat color(48, 64, CV_8UC3, cv::Scalar::all(100));
+  EXPECT_THROW(simulation::motionBlur(cv::Mat(), 5.0, 0.0), std::invalid_argument);
+  EXPECT_THROW(simulation::motionBlur(color, 0.5, 0.0), std::invalid_argument);
+  EXPECT_THROW(simulation::addGaussianNoise(cv::Mat(4, 4, CV_32F), 1.0, rng), std::invalid_argument);
+  EXPECT_THROW(simulation::lowLight(color, 0.0, 1.0, 1.0, rng), std::invalid_argument);
+  EXPECT_THROW(simulation::zoomImage(color, tumCamera(1), 1.1, 1), std::invalid_argument);  // 64x48 vs 640x480
+  EXPECT_LT(cv::mean(simulation::lowLight(color, 0.3, 1.0, 0.0, rng))[0], 31.0);
+}
+
+}  // namespace
