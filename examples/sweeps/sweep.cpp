@@ -499,7 +499,11 @@ int runSweepTool(const std::string& tool, const SweepDefinition& sweep, int argc
     const bool created = fs::create_directories(out_dir);  // early, so a bad --out fails before the runs
 
     const auto start = std::chrono::steady_clock::now();
-    tools::Progress progress(tool, countRuns(cases));
+    // With the paper's XY rule the run count is an upper bound: the sweep stops at the first failing step.
+    std::size_t planned = countRuns(cases);
+    if (paper && sweep.paper_extension)
+      for (int step = 1; step <= kPaperMaxExtensionSteps; ++step) planned += countRuns(sweep.paper_extension(k, step));
+    tools::Progress progress(tool, planned);
     const auto on_run = [&](const SweepRun& run) {
       progress.step(toString(run.strategy) + " k " + std::to_string(run.k) + " (" + run.displacement.toString() + ")");
     };
