@@ -3,14 +3,22 @@
 // against the weighted rule, k = 5, with 1 and 2 search threads, both as a
 // drop-in inside pcl::IterativeClosestPoint and through LandmarkAligner.
 //
-//   wicp_benchmark_icp [--map FILE] [Google Benchmark flags]
+//   wicp_benchmark_icp [--map FILE] [--case full|halves] [--repeat N] [Google Benchmark flags]
 //
-// "per_icp_iteration" is the figure to compare: alignment time divided by the
-// iterations ICP ran (both stop on PCL's default convergence criteria).
+// "per_icp_iteration" is the figure to compare: alignment time (wall clock)
+// divided by the iterations ICP ran (both stop on PCL's default convergence
+// criteria). --case halves aligns one half of the map's landmarks onto the
+// other (alternate landmarks, 3,040 onto 3,041), as the sweeps do; full (the
+// default) aligns the displaced map onto itself. --repeat N runs each
+// benchmark exactly N times instead of for a minimum time, so that two
+// processes do fixed work and can be timed against each other from outside.
 
 #include <cstdlib>
+#include <functional>
 #include <iostream>
+#include <stdexcept>
 #include <string>
+#include <tuple>
 
 #include <benchmark/benchmark.h>
 #include <pcl/common/transforms.h>
@@ -30,6 +38,7 @@ using namespace weighted_icp;
 using Cloud = pcl::PointCloud<pcl::PointXYZ>;
 
 std::string map_path = std::string(WEIGHTED_ICP_DATA_DIR) + "/map_fr1_desk.txt";
+std::string case_name = "full";
 const Displacement kDisplacement{0.1, 0.05, 0.02, 2, 1, 10};
 constexpr int kMaxIterations = 150;
 
@@ -41,8 +50,9 @@ struct Clouds {
 
 const Clouds& clouds() {
   static const Clouds c = [] {
-    const LandmarkMap target = io::readLandmarkMap(map_path).withMinObservations(2);
-    LandmarkMap source = target;
+    const LandmarkMap map = io::readLandmarkMap(map_path).withMinObservations(2);
+    LandmarkMap target = map, source = map;
+    if (case_name == "halves") std::tie(target, source) = map.alternateHalves();
     source.transform(kDisplacement.toIsometry());
     Clouds out;
     out.target = toLandmarkCloud(target, CovarianceWeight{});
@@ -73,14 +83,16 @@ struct CountingIcp : Icp {
 
 using PclIcp = CountingIcp<pcl::IterativeClosestPoint<pcl::PointXYZ, pcl::PointXYZ, double>>;
 
-/// Aligns the clouds as a user runs PCL's ICP: a fresh ICP each time, its
-/// kd-trees built inside align(); `correspondences` null keeps PCL's own.
-void runPclIcp(benchmark::State& state, const PclIcp::CorrespondenceEstimationPtr& correspondences) {
+/// Aligns the clouds as a user runs PCL's ICP once: a fresh ICP (and a fresh
+/// correspondence estimation from `make`, so no index or candidate survives
+/// from one run to the next) each time, the kd-trees built inside align();
+/// `make` null keeps PCL's own correspondence estimation.
+void runPclIcp(benchmark::State& state, const std::function<PclIcp::CorrespondenceEstimationPtr()>& make) {
   const Clouds& c = clouds();
   double iterations = 0;
   for (auto _ : state) {
     PclIcp icp;
-    if (correspondences) icp.setCorrespondenceEstimation(correspondences);
+    if (make) icp.setCorrespondenceEstimation(make());
     icp.setMaximumIterations(kMaxIterations);
     icp.setInputSource(c.source_xyz);
     icp.setInputTarget(c.target_xyz);
@@ -94,10 +106,13 @@ void runPclIcp(benchmark::State& state, const PclIcp::CorrespondenceEstimationPt
 void BM_StockPclIcp(benchmark::State& state) { runPclIcp(state, nullptr); }
 
 void BM_WeightedDropInPclIcp(benchmark::State& state) {
-  auto ce = std::make_shared<WeightedCorrespondenceEstimation<pcl::PointXYZ, pcl::PointXYZ, double>>(5);
-  ce->setNumberOfThreads(static_cast<unsigned>(state.range(0)));
-  ce->setTargetWeights(clouds().target_weights);
-  runPclIcp(state, ce);
+  runPclIcp(state, [&state]() -> PclIcp::CorrespondenceEstimationPtr {
+    auto ce = std::make_shared<WeightedCorrespondenceEstimation<pcl::PointXYZ, pcl::PointXYZ, double>>(5);
+    ce->setNumberOfThreads(static_cast<unsigned>(state.range(0)));
+    ce->setCandidateReuse(state.range(1) != 0);
+    ce->setTargetWeights(clouds().target_weights);
+    return ce;
+  });
 }
 
 void BM_LandmarkAligner(benchmark::State& state) {
@@ -131,6 +146,7 @@ void BM_WeightedCorrespondences(benchmark::State& state) {
   const Clouds& c = clouds();
   WeightedCorrespondenceEstimation<pcl::PointXYZ, pcl::PointXYZ> ce(static_cast<unsigned>(state.range(0)));
   ce.setNumberOfThreads(static_cast<unsigned>(state.range(1)));
+  ce.setCandidateReuse(state.range(2) != 0);
   ce.setTargetWeights(c.target_weights);
   ce.setInputTarget(c.target_xyz);
   pcl::Correspondences out;
@@ -140,31 +156,67 @@ void BM_WeightedCorrespondences(benchmark::State& state) {
     benchmark::DoNotOptimize(out.data());
   }
   state.counters["points"] = static_cast<double>(c.source_xyz->size());
+  state.counters["reused"] = static_cast<double>(ce.getLastReusedCount());
+  state.counters["candidates"] = static_cast<double>(ce.getCandidateCount());
 }
 
-BENCHMARK(BM_StockPclIcp)->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_WeightedDropInPclIcp)->ArgName("threads")->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_LandmarkAligner)
-    ->ArgNames({"k", "threads"})
-    ->Args({5, 1})
-    ->Args({5, 2})
-    ->Args({1, 1})
-    ->Args({1, 2})
-    ->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_StockPclCorrespondences)->Unit(benchmark::kMicrosecond);
-BENCHMARK(BM_WeightedCorrespondences)
-    ->ArgNames({"k", "threads"})
-    ->Args({1, 1})
-    ->Args({5, 1})
-    ->Args({5, 2})
-    ->Unit(benchmark::kMicrosecond);
+/// Registers every benchmark; `repeat` > 0 fixes their iteration counts.
+void registerAll(int repeat) {
+  auto fix = [repeat](benchmark::internal::Benchmark* b) {
+    b->UseRealTime();
+    if (repeat > 0) b->Iterations(repeat);
+  };
+  fix(benchmark::RegisterBenchmark("BM_StockPclIcp", BM_StockPclIcp)->Unit(benchmark::kMillisecond));
+  fix(benchmark::RegisterBenchmark("BM_WeightedDropInPclIcp", BM_WeightedDropInPclIcp)
+          ->ArgNames({"threads", "reuse"})
+          ->Args({1, 1})
+          ->Args({2, 1})
+          ->Args({1, 0})
+          ->Args({2, 0})
+          ->Unit(benchmark::kMillisecond));
+  fix(benchmark::RegisterBenchmark("BM_LandmarkAligner", BM_LandmarkAligner)
+          ->ArgNames({"k", "threads"})
+          ->Args({5, 1})
+          ->Args({5, 2})
+          ->Args({1, 1})
+          ->Args({1, 2})
+          ->Unit(benchmark::kMillisecond));
+  fix(benchmark::RegisterBenchmark("BM_StockPclCorrespondences", BM_StockPclCorrespondences)
+          ->Unit(benchmark::kMicrosecond));
+  fix(benchmark::RegisterBenchmark("BM_WeightedCorrespondences", BM_WeightedCorrespondences)
+          ->ArgNames({"k", "threads", "reuse"})
+          ->Args({1, 1, 0})
+          ->Args({1, 1, 1})
+          ->Args({5, 1, 0})
+          ->Args({5, 1, 1})
+          ->Args({5, 2, 0})
+          ->Args({5, 2, 1})
+          ->Unit(benchmark::kMicrosecond));
+}
 
 }  // namespace
 
 int main(int argc, char** argv) {
   weighted_icp::benchmarks::takeOption(argc, argv, "--map", map_path);
+  weighted_icp::benchmarks::takeOption(argc, argv, "--case", case_name);
+  std::string repeat = "0";
+  weighted_icp::benchmarks::takeOption(argc, argv, "--repeat", repeat);
+  if (case_name != "full" && case_name != "halves") {
+    std::cerr << "wicp_benchmark_icp: error: --case must be full or halves (got " << case_name << ")\n";
+    return 2;
+  }
+  int repeat_count = 0;
   try {
-    std::cerr << "map " << map_path << ": " << clouds().source->size() << " landmarks with >= 2 observations\n";
+    repeat_count = std::stoi(repeat);
+    if (repeat_count < 0 || repeat_count > 1000000) throw std::out_of_range("repeat");
+  } catch (const std::exception&) {
+    std::cerr << "wicp_benchmark_icp: error: --repeat must be between 0 and 1000000 (got " << repeat << ")\n";
+    return 2;
+  }
+  registerAll(repeat_count);
+  try {
+    std::cerr << "map " << map_path << " (" << case_name << "): " << clouds().source->size() << " onto "
+              << clouds().target->size() << " landmarks with >= 2 observations\n";
   } catch (const std::exception& e) {
     std::cerr << "wicp_benchmark_icp: error: " << e.what() << '\n';
     return 1;

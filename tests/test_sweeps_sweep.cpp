@@ -147,6 +147,28 @@ TEST(SweepCases, BaseRunsOncePerDisplacementInTheKSweep) {
 }
 
 // ---------------------------------------------------------------------------
+// The paper's preset
+
+TEST(SweepPresets, PaperGridsAreTheOnesItsSectionFourDescribes) {
+  // Table 1: every k at the one config.yaml displacement.
+  const auto k_cases = kSweep().paper_cases(5);
+  ASSERT_EQ(k_cases.size(), kSweepValues.size());
+  for (const SweepCase& c : k_cases) EXPECT_EQ(c.displacement.toString(), kSweepDisplacements().front().toString());
+  // Yaw 0..70 in steps of 10, one direction.
+  const auto yaw_cases = yawSweep().paper_cases(5);
+  ASSERT_EQ(yaw_cases.size(), 8u);
+  for (std::size_t i = 0; i < yaw_cases.size(); ++i) EXPECT_EQ(yaw_cases[i].displacement.yaw_deg, 10.0 * i);
+  // XY: quadrants at 0.25 and 0.5 m, then growing by kPaperXyStep.
+  const auto xy_cases = xySweep().paper_cases(5);
+  ASSERT_EQ(xy_cases.size(), 8u);
+  EXPECT_EQ(std::abs(xy_cases.back().displacement.x), 0.5);
+  ASSERT_TRUE(xySweep().paper_extension);
+  const auto step2 = xySweep().paper_extension(5, 2);
+  ASSERT_EQ(step2.size(), 4u);
+  EXPECT_EQ(std::abs(step2[0].displacement.x), 0.5 + 2 * kPaperXyStep);
+  EXPECT_FALSE(yawSweep().paper_extension);
+}
+
 // Running and the CSV
 
 TEST(SweepRunning, CsvHasOneRowPerRunWithTheDocumentedColumns) {
@@ -157,12 +179,20 @@ TEST(SweepRunning, CsvHasOneRowPerRunWithTheDocumentedColumns) {
   ASSERT_EQ(runs.size(), 60u);
   const auto rows = parseCsv(formatResultsCsv("yaw", runs));
   ASSERT_EQ(rows.size(), 61u);
-  EXPECT_EQ(rows[0], (std::vector<std::string>{"sweep", "strategy", "k", "x", "y", "z", "roll", "pitch", "yaw",
-                                               "fitness_score", "iterations", "refine_iterations", "converged",
-                                               "time_ms", "rotation_error_deg", "translation_error_m"}));
+  EXPECT_EQ(rows[0],
+            (std::vector<std::string>{"sweep", "strategy", "k", "x", "y", "z", "roll", "pitch", "yaw", "fitness_score",
+                                      "iterations", "refine_iterations", "converged", "time_ms", "rotation_error_deg",
+                                      "translation_error_m", "paper_success", "truth_success"}));
   std::set<std::pair<std::string, std::string>> strategy_yaw;
   for (std::size_t i = 1; i < rows.size(); ++i) {
-    ASSERT_EQ(rows[i].size(), 16u) << "row " << i;
+    ASSERT_EQ(rows[i].size(), 18u) << "row " << i;
+    // Both verdicts, each following its own rule.
+    EXPECT_EQ(rows[i][16], std::stod(rows[i][9]) < kPaperSuccessFitness ? "1" : "0") << "row " << i;
+    EXPECT_EQ(rows[i][17],
+              std::stod(rows[i][14]) <= kTruthSuccessRotationDeg && std::stod(rows[i][15]) <= kTruthSuccessTranslationM
+                  ? "1"
+                  : "0")
+        << "row " << i;
     EXPECT_EQ(rows[i][0], "yaw");
     EXPECT_EQ(rows[i][2], rows[i][1] == "base" ? "1" : "5");
     EXPECT_FALSE(rows[i][14].empty());
@@ -214,9 +244,11 @@ TEST(SweepRunning, ErrorCellsAreEmptyWhenTheTruthIsUnknown) {
   const auto rows = parseCsv(formatResultsCsv("yaw", runs));
   ASSERT_EQ(rows.size(), 5u);
   for (std::size_t i = 1; i < rows.size(); ++i) {
-    ASSERT_EQ(rows[i].size(), 16u);
+    ASSERT_EQ(rows[i].size(), 18u);
     EXPECT_EQ(rows[i][14], "");
     EXPECT_EQ(rows[i][15], "");
+    EXPECT_FALSE(rows[i][16].empty());  // the paper's verdict needs no truth
+    EXPECT_EQ(rows[i][17], "");         // ours does
   }
 }
 

@@ -1,5 +1,6 @@
 #include "sweep.h"
 
+#include <algorithm>
 #include <array>
 #include <cerrno>
 #include <chrono>
@@ -69,46 +70,76 @@ std::vector<Displacement> kSweepDisplacements() {
 }
 
 SweepDefinition kSweep() {
-  return {"k", "Sweeps the neighbourhood size k over {1,3,5,7,10,15,20} at five displacements.", true,
-          [](unsigned int) {
-            std::vector<SweepCase> cases;
-            for (const unsigned int k : kSweepValues)
-              for (const SweepCase& c : withK(k, kSweepDisplacements())) cases.push_back(c);
-            return cases;
-          }};
+  SweepDefinition sweep{"k", "Sweeps the neighbourhood size k over {1,3,5,7,10,15,20} at five displacements.", true,
+                        [](unsigned int) {
+                          std::vector<SweepCase> cases;
+                          for (const unsigned int k : kSweepValues)
+                            for (const SweepCase& c : withK(k, kSweepDisplacements())) cases.push_back(c);
+                          return cases;
+                        }};
+  // Table 1: "the transformation between the two point clouds is fixed while varying k": config.yaml's.
+  sweep.paper_cases = [](unsigned int) {
+    std::vector<SweepCase> cases;
+    for (const unsigned int k : kSweepValues) cases.push_back({k, kSweepDisplacements().front()});
+    return cases;
+  };
+  return sweep;
 }
 
 SweepDefinition yawSweep() {
-  return {"yaw", "Sweeps the yaw (about z) from 0 to 70 deg in steps of 10, in both directions.", false,
-          [](unsigned int k) {
-            std::vector<Displacement> displacements;
-            for (const double yaw : yawSweepYaws) {
-              displacements.push_back(yawOnly(yaw));
-              if (yaw != 0.0) displacements.push_back(yawOnly(-yaw));
-            }
-            return withK(k, displacements);
-          }};
+  SweepDefinition sweep{"yaw", "Sweeps the yaw (about z) from 0 to 70 deg in steps of 10, in both directions.", false,
+                        [](unsigned int k) {
+                          std::vector<Displacement> displacements;
+                          for (const double yaw : yawSweepYaws) {
+                            displacements.push_back(yawOnly(yaw));
+                            if (yaw != 0.0) displacements.push_back(yawOnly(-yaw));
+                          }
+                          return withK(k, displacements);
+                        }};
+  // Section 4.2: "starts at 0 degrees, and is incremented by 10 until 70": one direction.
+  sweep.paper_cases = [](unsigned int k) {
+    std::vector<Displacement> displacements;
+    for (const double yaw : yawSweepYaws) displacements.push_back(yawOnly(yaw));
+    return withK(k, displacements);
+  };
+  return sweep;
 }
 
 SweepDefinition xySweep() {
-  return {"xy", "Sweeps XY offsets: the four quadrants (+-a, +-a) for a in {0.25,0.5,1,1.5,2} m.", false,
-          [](unsigned int k) {
-            std::vector<SweepCase> cases;
-            for (const double a : xySweepMagnitudes)
-              for (const SweepCase& c : withK(k, quadrants(a, a, 0.0))) cases.push_back(c);
-            return cases;
-          }};
+  SweepDefinition sweep{"xy", "Sweeps XY offsets: the four quadrants (+-a, +-a) for a in {0.25,0.5,1,1.5,2} m.", false,
+                        [](unsigned int k) {
+                          std::vector<SweepCase> cases;
+                          for (const double a : xySweepMagnitudes)
+                            for (const SweepCase& c : withK(k, quadrants(a, a, 0.0))) cases.push_back(c);
+                          return cases;
+                        }};
+  // Section 4.3: "by the values 0.25m and 0.5m, and then increased until at least one ICP strategy
+  // stopped aligning successfully"; the paper does not give the step: ours is kPaperXyStep.
+  sweep.paper_cases = [](unsigned int k) {
+    std::vector<SweepCase> cases;
+    for (const double a : {0.25, 0.5})
+      for (const SweepCase& c : withK(k, quadrants(a, a, 0.0))) cases.push_back(c);
+    return cases;
+  };
+  sweep.paper_extension = [](unsigned int k, int step) {
+    const double a = 0.5 + kPaperXyStep * step;
+    return withK(k, quadrants(a, a, 0.0));
+  };
+  return sweep;
 }
 
 SweepDefinition xyYawSweep() {
-  return {"xy_yaw", "Sweeps XY plus yaw: the quadrants (+-0.5 m, +-0.5 m) at yaw -30, -10, 10, 30 deg.", false,
-          [](unsigned int k) {
-            std::vector<SweepCase> cases;
-            for (const double yaw : xyYawSweepYaws)
-              for (const SweepCase& c : withK(k, quadrants(xyYawSweepOffset, xyYawSweepOffset, yaw)))
-                cases.push_back(c);
-            return cases;
-          }};
+  SweepDefinition sweep{"xy_yaw", "Sweeps XY plus yaw: the quadrants (+-0.5 m, +-0.5 m) at yaw -30, -10, 10, 30 deg.",
+                        false, [](unsigned int k) {
+                          std::vector<SweepCase> cases;
+                          for (const double yaw : xyYawSweepYaws)
+                            for (const SweepCase& c : withK(k, quadrants(xyYawSweepOffset, xyYawSweepOffset, yaw)))
+                              cases.push_back(c);
+                          return cases;
+                        }};
+  // Section 4.4: 0.5 m in each quadrant, rotated by 10, -10, 30 and -30 degrees: the same grid as ours.
+  sweep.paper_cases = sweep.cases;
+  return sweep;
 }
 
 // ---------------------------------------------------------------------------
@@ -264,6 +295,13 @@ std::vector<SweepRun> runSweep(const std::vector<SweepCase>& cases, const MapPai
 // ---------------------------------------------------------------------------
 // Output
 
+bool paperSuccess(const SweepRun& run) { return run.result.fitness_score < kPaperSuccessFitness; }
+
+std::optional<bool> truthSuccess(const SweepRun& run) {
+  if (!run.rotation_error_deg || !run.translation_error_m) return std::nullopt;
+  return *run.rotation_error_deg <= kTruthSuccessRotationDeg && *run.translation_error_m <= kTruthSuccessTranslationM;
+}
+
 const std::vector<std::string>& csvColumns() {
   static const std::vector<std::string> columns{"sweep",
                                                 "strategy",
@@ -280,7 +318,9 @@ const std::vector<std::string>& csvColumns() {
                                                 "converged",
                                                 "time_ms",
                                                 "rotation_error_deg",
-                                                "translation_error_m"};
+                                                "translation_error_m",
+                                                "paper_success",
+                                                "truth_success"};
   return columns;
 }
 
@@ -307,7 +347,9 @@ std::string formatResultsCsv(const std::string& sweep_name, const std::vector<Sw
         << ',' << number(d.z) << ',' << number(d.roll_deg) << ',' << number(d.pitch_deg) << ',' << number(d.yaw_deg)
         << ',' << number(r.fitness_score) << ',' << r.iterations << ',' << r.refine_iterations << ','
         << (r.converged ? 1 : 0) << ',' << time_ms << ',' << optionalNumber(run.rotation_error_deg) << ','
-        << optionalNumber(run.translation_error_m) << '\n';
+        << optionalNumber(run.translation_error_m) << ',' << (paperSuccess(run) ? 1 : 0) << ',';
+    if (const auto truth = truthSuccess(run)) csv << (*truth ? 1 : 0);
+    csv << '\n';
   }
   return csv.str();
 }
@@ -358,10 +400,28 @@ int plotAndPublish(const std::string& tool, io::AtomicFolder& folder) {
 }
 }  // namespace
 
+/// The paper's XY rule: further steps of paper_extension until one in which a strategy fails by the
+/// paper's rule (its runs included), or kPaperMaxExtensionSteps.
+void extendUntilFailure(const SweepDefinition& sweep, unsigned int k, const MapPair& maps,
+                        const AlignmentSettings& settings, const std::function<void(const SweepRun&)>& on_run,
+                        std::vector<SweepRun>& runs) {
+  const auto any_failed = [](const std::vector<SweepRun>& some) {
+    return std::any_of(some.begin(), some.end(), [](const SweepRun& run) { return !paperSuccess(run); });
+  };
+  if (any_failed(runs)) return;
+  for (int step = 1; step <= kPaperMaxExtensionSteps && !tools::interrupted(); ++step) {
+    const std::vector<SweepRun> more =
+        runSweep(sweep.paper_extension(k, step), maps, settings, on_run, tools::interrupted);
+    runs.insert(runs.end(), more.begin(), more.end());
+    if (any_failed(more)) return;
+  }
+}
+
 int runSweepTool(const std::string& tool, const SweepDefinition& sweep, int argc, const char* const argv[]) {
   tools::installInterruptHandlers();
   return tools::runTool(tool, [&] {
     std::string out_dir = "out/sweep_" + sweep.name;
+    std::string preset = "ours";
     MapSelection selection;
     std::string source_frames, target_frames;
     std::size_t min_observations = 2;
@@ -401,7 +461,11 @@ int runSweepTool(const std::string& tool, const SweepDefinition& sweep, int argc
          "search threads, 0 = all (at most 1024); results do not depend on it")
         ("out", po::value(&out_dir)->default_value(out_dir), "output folder (refused if not empty)")
         ("overwrite", "replace --out if it is not empty (nothing of an earlier sweep is left in it)")
-        ("no-plot", "write the CSV only");
+        ("no-plot", "write the CSV only")
+        ("preset", po::value(&preset)->default_value(preset),
+         "grid: 'ours' (this project's, see docs/experiments.md) or 'paper' (the paper's Section 4 grid and "
+         "stopping rule; the XY sweep then grows beyond 0.5 m in steps of 0.25 m until a strategy fails by "
+         "fitness >= 0.0037)");
     // clang-format on
     po::variables_map vm;
     if (!tools::parseCommandLine(argc, argv, options, vm)) return 0;
@@ -430,7 +494,9 @@ int runSweepTool(const std::string& tool, const SweepDefinition& sweep, int argc
     const bool plot = vm.count("no-plot") == 0;
 
     const MapPair maps = loadMapPair(selection);
-    const std::vector<SweepCase> cases = sweep.cases(k);
+    if (preset != "ours" && preset != "paper") throw po::error("--preset must be ours or paper (got " + preset + ")");
+    const bool paper = preset == "paper";
+    const std::vector<SweepCase> cases = paper ? sweep.paper_cases(k) : sweep.cases(k);
     std::cout << tool << ": " << maps.description << " (" << maps.source.landmarks.size() << " onto "
               << maps.target.landmarks.size() << " landmarks), " << cases.size() << " cases, " << countRuns(cases)
               << " runs" << (settings.refine ? ", with refinement" : "") << std::endl;
@@ -438,14 +504,16 @@ int runSweepTool(const std::string& tool, const SweepDefinition& sweep, int argc
     io::AtomicFolder folder = tools::openOutputFolder(out_dir, vm.count("overwrite") > 0);
 
     const auto start = std::chrono::steady_clock::now();
-    tools::Progress progress(tool, countRuns(cases));
-    const std::vector<SweepRun> runs = runSweep(
-        cases, maps, settings,
-        [&](const SweepRun& run) {
-          progress.step(toString(run.strategy) + " k " + std::to_string(run.k) + " (" + run.displacement.toString() +
-                        ")");
-        },
-        tools::interrupted);
+    // With the paper's XY rule the run count is an upper bound: the sweep stops at the first failing step.
+    std::size_t planned = countRuns(cases);
+    if (paper && sweep.paper_extension)
+      for (int step = 1; step <= kPaperMaxExtensionSteps; ++step) planned += countRuns(sweep.paper_extension(k, step));
+    tools::Progress progress(tool, planned);
+    const auto on_run = [&](const SweepRun& run) {
+      progress.step(toString(run.strategy) + " k " + std::to_string(run.k) + " (" + run.displacement.toString() + ")");
+    };
+    std::vector<SweepRun> runs = runSweep(cases, maps, settings, on_run, tools::interrupted);
+    if (paper && sweep.paper_extension) extendUntilFailure(sweep, k, maps, settings, on_run, runs);
     progress.finish();
     if (tools::interrupted()) return discardInterrupted(tool, folder, runs.size(), countRuns(cases));
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -454,6 +522,7 @@ int runSweepTool(const std::string& tool, const SweepDefinition& sweep, int argc
     tools::JsonObject run_info;
     run_info.add("tool", tool)
         .add("sweep", sweep.name)
+        .add("preset", preset)
         .add("maps", maps.description)
         .add("source_landmarks", maps.source.landmarks.size())
         .add("target_landmarks", maps.target.landmarks.size())

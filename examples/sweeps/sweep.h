@@ -35,7 +35,23 @@ struct SweepDefinition {
   /// The k sweep takes k from its cases; the others take it from --k.
   bool sweeps_k = false;
   std::function<std::vector<SweepCase>(unsigned int k)> cases;
+  /// The paper's grid for this sweep (`--preset paper`), read from its Section 4.
+  std::function<std::vector<SweepCase>(unsigned int k)> paper_cases;
+  /// Under `--preset paper`: after paper_cases, further cases from this function, one step at a time
+  /// (step 1, 2, ...), until a step in which at least one strategy fails by the paper's rule (the XY
+  /// sweep: "then increased until at least one ICP strategy stopped aligning successfully"), at most
+  /// kPaperMaxExtensionSteps steps. Empty: no extension.
+  std::function<std::vector<SweepCase>(unsigned int k, int step)> paper_extension;
 };
+
+/// The paper's success rule: PCL's fitness score below 0.0037 (for its map pair, Section 4).
+inline constexpr double kPaperSuccessFitness = 0.0037;
+/// Ours: the result within 2 degrees and 0.1 m of the truth (needs the truth).
+inline constexpr double kTruthSuccessRotationDeg = 2.0;
+inline constexpr double kTruthSuccessTranslationM = 0.1;
+/// Step of the paper's XY extension beyond 0.5 m, and the most steps taken (0.75 m .. 5.5 m).
+inline constexpr double kPaperXyStep = 0.25;
+inline constexpr int kPaperMaxExtensionSteps = 20;
 
 /// k in kSweepValues at each of kSweepDisplacements().
 SweepDefinition kSweep();
@@ -109,6 +125,11 @@ std::vector<SweepRun> runSweep(const std::vector<SweepCase>& cases, const MapPai
                                const std::function<bool()>& stop = {});
 /// How many runs runSweep() makes for `cases`.
 std::size_t countRuns(const std::vector<SweepCase>& cases);
+
+/// Whether a run succeeded by the paper's rule (fitness < kPaperSuccessFitness).
+bool paperSuccess(const SweepRun& run);
+/// Whether it succeeded by ours (errors within kTruthSuccess*); empty when the truth is unknown.
+std::optional<bool> truthSuccess(const SweepRun& run);
 
 /// The header row of results.csv.
 const std::vector<std::string>& csvColumns();

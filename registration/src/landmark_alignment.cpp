@@ -65,8 +65,7 @@ std::string shapeDegeneracy(const LandmarkCloud& cloud, std::size_t finite, cons
 
 struct LandmarkAligner::Pipeline {
   InspectableIcp icp;
-  Correspondence::Ptr weighted;
-  Correspondence::Ptr nearest;
+  Correspondence::Ptr weighted;  // k = settings.k; k = 1 during refinement
   pcl::search::KdTree<LandmarkPoint>::Ptr target_tree{new pcl::search::KdTree<LandmarkPoint>};
   bool has_target = false;
   std::size_t target_points = 0;  // finite ones
@@ -85,8 +84,7 @@ LandmarkAligner::LandmarkAligner(AlignmentSettings settings)
   if (!(settings_.max_correspondence_distance > 0.0))
     throw std::invalid_argument("AlignmentSettings::max_correspondence_distance must be > 0");
   pipeline_->weighted = std::make_shared<Correspondence>(settings_.k);
-  pipeline_->nearest = std::make_shared<Correspondence>(1);
-  for (const auto& ce : {pipeline_->weighted, pipeline_->nearest}) ce->setNumberOfThreads(settings_.threads);
+  pipeline_->weighted->setNumberOfThreads(settings_.threads);
   Icp& icp = pipeline_->icp;
   icp.setMaxCorrespondenceDistance(settings_.max_correspondence_distance);
   icp.setTransformationEpsilon(settings_.transformation_epsilon);
@@ -143,9 +141,18 @@ AlignmentResult LandmarkAligner::align(const LandmarkCloud::ConstPtr& source, co
   icp.align(aligned, guess);
   result.iterations = icp.iterations();
   if (settings_.refine) {
-    icp.setCorrespondenceEstimation(pipeline_->nearest);
+    // The same estimation with k = 1 (the nearest, whatever the weights): the candidates it gathered for
+    // k + 1 neighbours hold the 2 nearest too, so refinement starts from them instead of searching again.
+    Correspondence& ce = *pipeline_->weighted;
+    ce.setNumberOfNeighbors(1);
     icp.setMaximumIterations(settings_.refine_max_iterations);
-    icp.align(aligned, icp.getFinalTransformation());
+    try {
+      icp.align(aligned, icp.getFinalTransformation());
+    } catch (...) {
+      ce.setNumberOfNeighbors(settings_.k);
+      throw;
+    }
+    ce.setNumberOfNeighbors(settings_.k);
     result.refine_iterations = icp.iterations();
   }
   result.time_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();

@@ -1,8 +1,70 @@
+// NearestNeighborIndex: nanoflann for the search, FLANN (PCL's tree) for the order of ties.
 #include "weighted_icp/registration/nearest_neighbor_index.h"
 
+#include <algorithm>
+#include <atomic>
+#include <limits>
 #include <sstream>
 
+#include <flann/algorithms/dist.h>
+#include <flann/algorithms/kdtree_single_index.h>
+#include <flann/util/result_set.h>
+#include <nanoflann.hpp>
+
 namespace weighted_icp {
+
+namespace {
+
+/// nanoflann's view of the index's packed xyz.
+struct PackedXyz {
+  const std::vector<float>* xyz;
+  std::size_t kdtree_get_point_count() const { return xyz->size() / 3; }
+  float kdtree_get_pt(std::size_t row, std::size_t dim) const { return (*xyz)[3 * row + dim]; }
+  template <class Box>
+  bool kdtree_get_bbox(Box&) const {
+    return false;
+  }
+};
+
+using NanoTree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<float, PackedXyz, float>, PackedXyz,
+                                                     3, NearestNeighborIndex::Row>;
+using FlannTree = flann::KDTreeSingleIndex<flann::L2_Simple<float>>;
+
+/// Collects every row within a radius, straight into the caller's vector.
+class GatherResultSet {
+ public:
+  GatherResultSet(float radius_sq, std::size_t limit, std::vector<NearestNeighborIndex::Row>& rows)
+      : radius_sq_(radius_sq), limit_(limit), rows_(rows) {}
+  bool full() const { return true; }
+  float worstDist() const { return radius_sq_; }
+  /// false stops the search: more than the limit.
+  bool addPoint(float distance, NearestNeighborIndex::Row row) {
+    if (distance <= radius_sq_) rows_.push_back(row);
+    return rows_.size() <= limit_;
+  }
+
+ private:
+  float radius_sq_;
+  std::size_t limit_;
+  std::vector<NearestNeighborIndex::Row>& rows_;
+};
+
+/// Leaf size of the nanoflann tree: its default (not tuned; any size gives the same answers).
+constexpr std::size_t kNanoLeafSize = 10;
+
+}  // namespace
+
+struct NearestNeighborIndex::Trees {
+  explicit Trees(const std::vector<float>& xyz)
+      : packed{&xyz}, nano(3, packed, nanoflann::KDTreeSingleIndexAdaptorParams(kNanoLeafSize)) {}
+  PackedXyz packed;
+  NanoTree nano;
+  // Built on the first tie, under the mutex; read lock-free once published.
+  std::mutex flann_mutex;
+  std::unique_ptr<FlannTree> flann_storage;
+  std::atomic<const FlannTree*> flann{nullptr};
+  mutable std::atomic<std::size_t> tie_fallbacks{0};
+};
 
 void NearestNeighborIndex::throwUnindexable(std::size_t index, double x, double y, double z) {
   std::ostringstream message;
@@ -11,42 +73,98 @@ void NearestNeighborIndex::throwUnindexable(std::size_t index, double x, double 
   throw std::invalid_argument(message.str());
 }
 
+NearestNeighborIndex::NearestNeighborIndex() = default;
+NearestNeighborIndex::~NearestNeighborIndex() = default;
+NearestNeighborIndex::NearestNeighborIndex(NearestNeighborIndex&&) noexcept = default;
+
 NearestNeighborIndex::NearestNeighborIndex(const NearestNeighborIndex& other)
-    : xyz_(other.xyz_),
-      cloud_indices_(other.cloud_indices_),
-      tree_(other.tree_ ? std::make_unique<Tree>(*other.tree_) : nullptr) {}
+    : xyz_(other.xyz_), cloud_indices_(other.cloud_indices_) {
+  // The trees are deterministic functions of the points: rebuilding gives the same ones.
+  if (other.trees_) trees_ = std::make_unique<Trees>(xyz_);
+}
 
 NearestNeighborIndex& NearestNeighborIndex::operator=(NearestNeighborIndex other) {
   std::swap(xyz_, other.xyz_);
   std::swap(cloud_indices_, other.cloud_indices_);
-  std::swap(tree_, other.tree_);
+  std::swap(trees_, other.trees_);
+  // Swapping vectors keeps their buffers, so each tree still reads the points it was built on.
+  if (trees_) trees_->packed.xyz = &xyz_;
   return *this;
 }
 
 bool NearestNeighborIndex::buildFrom(std::vector<float> xyz, std::vector<pcl::index_t> cloud_indices) {
-  if (tree_ && xyz == xyz_ && cloud_indices == cloud_indices_) return false;
+  if (trees_ && xyz == xyz_ && cloud_indices == cloud_indices_) return false;
+  trees_.reset();
   xyz_ = std::move(xyz);
   cloud_indices_ = std::move(cloud_indices);
-  tree_.reset();
   if (cloud_indices_.empty()) return true;
-  // pcl::KdTreeFLANN's parameters: at most 15 points per leaf.
-  tree_ = std::make_unique<Tree>(flann::Matrix<float>(xyz_.data(), cloud_indices_.size(), 3),
-                                 flann::KDTreeSingleIndexParams(15));
-  tree_->buildIndex();
+  if (cloud_indices_.size() > std::numeric_limits<Row>::max())
+    throw std::invalid_argument("more than 4,294,967,295 points to index");
+  trees_ = std::make_unique<Trees>(xyz_);
   return true;
 }
 
-std::size_t NearestNeighborIndex::knn(const float* xyz, Scratch& scratch) const {
-  if (!tree_) return 0;
-  // What FLANN's knnSearch does for one query with k <= 250 and PCL's exact,
-  // sorted parameters, without its per-call allocations and OpenMP region.
+std::size_t NearestNeighborIndex::tieFallbacks() const { return trees_ ? trees_->tie_fallbacks.load() : 0; }
+
+std::size_t NearestNeighborIndex::flannKnn(const float* xyz, Scratch& scratch) const {
+  const FlannTree* tree = trees_->flann.load(std::memory_order_acquire);
+  if (!tree) {
+    std::lock_guard<std::mutex> lock(trees_->flann_mutex);
+    if (!trees_->flann_storage) {
+      // pcl::KdTreeFLANN's parameters: at most 15 points per leaf. FLANN reorders a copy of the data.
+      auto built =
+          std::make_unique<FlannTree>(flann::Matrix<float>(const_cast<float*>(xyz_.data()), cloud_indices_.size(), 3),
+                                      flann::KDTreeSingleIndexParams(15));
+      built->buildIndex();
+      trees_->flann_storage = std::move(built);
+      trees_->flann.store(trees_->flann_storage.get(), std::memory_order_release);
+    }
+    tree = trees_->flann_storage.get();
+  }
+  trees_->tie_fallbacks.fetch_add(1, std::memory_order_relaxed);
+  // What FLANN's knnSearch does for one query with PCL's exact, sorted parameters.
   static const flann::SearchParams exact_sorted(-1, 0.0f, true);
-  scratch.result_.clear();
-  tree_->findNeighbors(scratch.result_, xyz, exact_sorted);
-  const std::size_t found = scratch.result_.size();
-  scratch.result_.copy(scratch.indices_.data(), scratch.sq_distances_.data(), found, true);
-  for (std::size_t i = 0; i < found; ++i) scratch.cloud_indices_[i] = cloud_indices_[scratch.indices_[i]];
+  const std::size_t k = scratch.k();
+  flann::KNNSimpleResultSet<float> result(k);
+  tree->findNeighbors(result, xyz, exact_sorted);
+  const std::size_t found = result.size();
+  result.copy(scratch.flann_rows_.data(), scratch.sq_distances_.data(), found, true);
+  for (std::size_t i = 0; i < found; ++i) scratch.cloud_indices_[i] = cloud_indices_[scratch.flann_rows_[i]];
   return found;
+}
+
+std::size_t NearestNeighborIndex::resolve(const float* xyz, const Row* rows, const float* distances, std::size_t count,
+                                          Scratch& scratch) const {
+  for (std::size_t i = 1; i < count; ++i)
+    if (distances[i] == distances[i - 1]) return flannKnn(xyz, scratch);
+  const std::size_t found = std::min(count, scratch.k());
+  for (std::size_t i = 0; i < found; ++i) {
+    scratch.cloud_indices_[i] = cloud_indices_[rows[i]];
+    scratch.sq_distances_[i] = distances[i];
+  }
+  return found;
+}
+
+std::size_t NearestNeighborIndex::nearest(const float* xyz, std::size_t count, Row* rows, float* distances) const {
+  if (!trees_ || count == 0) return 0;
+  nanoflann::KNNResultSet<float, Row> result(std::min(count, size()));
+  result.init(rows, distances);
+  trees_->nano.findNeighbors(result, xyz, nanoflann::SearchParams());
+  return result.size();
+}
+
+std::size_t NearestNeighborIndex::knn(const float* xyz, Scratch& scratch) const {
+  if (!trees_) return 0;
+  // k + 1: a tie between the k-th and the (k + 1)-th decides which of them FLANN keeps.
+  const std::size_t found = nearest(xyz, scratch.k() + 1, scratch.rows_.data(), scratch.distances_.data());
+  return resolve(xyz, scratch.rows_.data(), scratch.distances_.data(), found, scratch);
+}
+
+bool NearestNeighborIndex::gather(const float* xyz, float radius_sq, std::size_t limit, std::vector<Row>& rows) const {
+  if (!trees_) return true;
+  GatherResultSet result(radius_sq, limit, rows);
+  trees_->nano.findNeighbors(result, xyz, nanoflann::SearchParams());
+  return rows.size() <= limit;
 }
 
 }  // namespace weighted_icp

@@ -1,23 +1,29 @@
 #pragma once
-// Exact k-nearest-neighbour search over the xyz of a point cloud.
+// Exact k-nearest-neighbour search over the xyz of a point cloud, with PCL's answers.
 //
-// It is FLANN's single kd-tree with exactly the parameters of pcl::KdTreeFLANN
-// (L2_Simple<float>, 15 points per leaf, non-finite points skipped), so it
-// returns the same neighbours, in the same order and with the same float
-// distances, ties included. What it adds: it is built once and then searched
-// from many threads, each with its own Scratch, with no allocation per query
-// on our side.
+// pcl::KdTreeFLANN (FLANN's single kd-tree, 15 points per leaf, float L2)
+// defines the answer: the k nearest in order, float squared distances, and
+// among equal distances the order in which FLANN's traversal met them. The
+// search itself runs on nanoflann's kd-tree, about twice as fast per query
+// (docs/performance.md), asking for k + 1 neighbours: when the k + 1 nearest
+// distances are all different, the k nearest and their order are determined
+// by the distances alone, so any exact index gives FLANN's answer; when two of
+// them are equal, the order is FLANN's traversal order, and the query is
+// answered by a FLANN tree built on the same points, as PCL's is. The FLANN
+// tree is built only when the first such tie appears.
+//
+// Built once, searched from many threads, each with its own Scratch: no
+// allocation per query on our side.
 
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
 #include <memory>
+#include <mutex>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
-#include <flann/algorithms/dist.h>
-#include <flann/algorithms/kdtree_single_index.h>
-#include <flann/util/result_set.h>
 #include <pcl/point_cloud.h>
 #include <pcl/types.h>
 
@@ -25,19 +31,26 @@ namespace weighted_icp {
 
 class NearestNeighborIndex {
  public:
+  /// Row of a point in the index (its position among the indexed points).
+  using Row = std::uint32_t;
+
   /// Per-thread search state for k-nearest searches with k = `k`.
   class Scratch {
    public:
-    explicit Scratch(std::size_t k) : result_(k), indices_(k), cloud_indices_(k), sq_distances_(k) {}
-    std::size_t k() const { return indices_.size(); }
+    /// @brief State for searches of the `k` nearest.
+    /// @param k  neighbours per search (>= 1)
+    explicit Scratch(std::size_t k)
+        : rows_(k + 1), distances_(k + 1), flann_rows_(k), cloud_indices_(k), sq_distances_(k) {}
+    std::size_t k() const { return cloud_indices_.size(); }
     /// Cloud indices and squared distances of the last search, nearest first.
     const std::vector<pcl::index_t>& indices() const { return cloud_indices_; }
     const std::vector<float>& squaredDistances() const { return sq_distances_; }
 
    private:
     friend class NearestNeighborIndex;
-    flann::KNNSimpleResultSet<float> result_;
-    std::vector<std::size_t> indices_;
+    std::vector<Row> rows_;         // k + 1 nearest rows, for the tie check
+    std::vector<float> distances_;  // their squared distances
+    std::vector<std::size_t> flann_rows_;
     std::vector<pcl::index_t> cloud_indices_;
     std::vector<float> sq_distances_;
   };
@@ -67,32 +80,85 @@ class NearestNeighborIndex {
   template <typename PointT>
   static void requireIndexable(const pcl::PointCloud<PointT>& cloud, const std::string& what);
 
-  NearestNeighborIndex() = default;
+  /// @brief The squared distance as FLANN's and nanoflann's L2_Simple<float> compute it, term by term in float.
+  /// @param a, b  two xyz triples
+  static float squaredDistance(const float* a, const float* b) {
+    const float d0 = a[0] - b[0];
+    const float d1 = a[1] - b[1];
+    const float d2 = a[2] - b[2];
+    float result = d0 * d0;
+    result += d1 * d1;
+    result += d2 * d2;
+    return result;
+  }
+
+  NearestNeighborIndex();
+  ~NearestNeighborIndex();
   NearestNeighborIndex(const NearestNeighborIndex& other);
   NearestNeighborIndex& operator=(NearestNeighborIndex other);
-  NearestNeighborIndex(NearestNeighborIndex&&) noexcept = default;
+  NearestNeighborIndex(NearestNeighborIndex&&) noexcept;
 
-  /// Builds on the finite points of `cloud` (or of `indices` into it); throws
-  /// std::invalid_argument naming the first point that does not fit(). Returns
-  /// false, keeping the current tree, when those points are exactly the ones
-  /// it was built on: re-setting an unchanged target costs one comparison.
+  /// @brief Builds on the finite points of `cloud` (or of `indices` into it).
+  /// Throws std::invalid_argument naming the first point that does not fit().
+  /// @return false, keeping the current tree, when those points are exactly the
+  ///         ones it was built on: re-setting an unchanged target costs one comparison
   template <typename PointT>
   bool build(const pcl::PointCloud<PointT>& cloud, const pcl::Indices* indices = nullptr);
 
   std::size_t size() const { return cloud_indices_.size(); }
   bool empty() const { return cloud_indices_.empty(); }
+  /// @brief xyz of an indexed point.
+  /// @param row  0 .. size() - 1
+  const float* point(Row row) const { return xyz_.data() + 3 * static_cast<std::size_t>(row); }
+  /// @brief Cloud index of an indexed point.
+  /// @param row  0 .. size() - 1
+  pcl::index_t cloudIndex(Row row) const { return cloud_indices_[row]; }
 
-  /// Searches the scratch.k() nearest points to (x, y, z). Returns how many
-  /// were found (fewer when the index is smaller); results are in scratch.
+  /// @brief The `count` nearest rows to `xyz` (fewer when the index is smaller), nearest first; among equal
+  /// distances in any order. Use resolve() to turn them into PCL's answer.
+  /// @param xyz        the query
+  /// @param count      how many
+  /// @param rows       receives the rows (room for `count`)
+  /// @param distances  receives their squared distances (room for `count`)
+  /// @return how many were found
+  std::size_t nearest(const float* xyz, std::size_t count, Row* rows, float* distances) const;
+
+  /// @brief Searches the scratch.k() nearest points to `xyz`, exactly as pcl::KdTreeFLANN::nearestKSearch.
+  /// @param xyz      the query
+  /// @param scratch  receives the results
+  /// @return how many were found (fewer than k when the index is smaller)
   std::size_t knn(const float* xyz, Scratch& scratch) const;
 
- private:
-  bool buildFrom(std::vector<float> xyz, std::vector<pcl::index_t> cloud_indices);
+  /// @brief The same, with the k + 1 nearest rows and distances known already (sorted, from any exact
+  /// search): copies them out, or asks FLANN when two of them tie.
+  /// @param xyz       the query
+  /// @param rows      the min(k + 1, size()) nearest rows, nearest first
+  /// @param distances their squared distances (squaredDistance())
+  /// @param count     how many entries rows and distances hold
+  /// @param scratch   receives the results
+  /// @return how many were found
+  std::size_t resolve(const float* xyz, const Row* rows, const float* distances, std::size_t count,
+                      Scratch& scratch) const;
 
-  using Tree = flann::KDTreeSingleIndex<flann::L2_Simple<float>>;
-  std::vector<float> xyz_;                   // the points the tree was built on
-  std::vector<pcl::index_t> cloud_indices_;  // tree row -> cloud index
-  std::unique_ptr<Tree> tree_;
+  /// @brief Appends every row within squared distance `radius_sq` of `xyz` to `rows` (any order), unless
+  /// there are more than `limit`: then it stops early and returns false (`rows` then holds a part).
+  /// @param xyz        the centre
+  /// @param radius_sq  squared radius
+  /// @param limit      most rows wanted
+  /// @param rows       appended to
+  bool gather(const float* xyz, float radius_sq, std::size_t limit, std::vector<Row>& rows) const;
+
+  /// Number of queries answered by FLANN because of a tie, since the last build (for benchmarks).
+  std::size_t tieFallbacks() const;
+
+ private:
+  struct Trees;
+  bool buildFrom(std::vector<float> xyz, std::vector<pcl::index_t> cloud_indices);
+  std::size_t flannKnn(const float* xyz, Scratch& scratch) const;
+
+  std::vector<float> xyz_;                   // the points the trees are built on
+  std::vector<pcl::index_t> cloud_indices_;  // row -> cloud index
+  std::unique_ptr<Trees> trees_;
 };
 
 template <typename PointT>

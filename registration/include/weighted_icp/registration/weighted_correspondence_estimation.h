@@ -17,8 +17,11 @@
 //
 // Unlike PCL's class it builds its target index once per target (re-setting
 // an unchanged target, as IterativeClosestPoint does on every align(), costs a
-// comparison, not a rebuild), searches in parallel with results independent of
-// the thread count, and allocates nothing per point. It keeps its own index,
+// comparison, not a rebuild), reuses each source point's candidates from one
+// ICP iteration to the next while the point stays within their margin
+// (CandidateCache: exact, the same correspondences bit for bit), searches in
+// parallel (WorkerPool) with results independent of the thread count, and
+// allocates nothing per point. It keeps its own index,
 // so the tree given by setSearchMethodTarget() is not used.
 //
 // Nor are a point representation or a source search tree: setPointRepresentation()
@@ -37,7 +40,9 @@
 #include <pcl/correspondence.h>
 #include <pcl/registration/correspondence_estimation.h>
 
+#include "weighted_icp/registration/candidate_cache.h"
 #include "weighted_icp/registration/nearest_neighbor_index.h"
+#include "weighted_icp/registration/worker_pool.h"
 
 namespace weighted_icp {
 
@@ -97,6 +102,19 @@ class WeightedCorrespondenceEstimation
   void setNumberOfThreads(unsigned int threads);
   unsigned int getNumberOfThreads() const { return threads_; }
 
+  /// @brief Whether the search reuses each source point's candidates across calls while the point moves
+  /// less than their margin (CandidateCache). On by default: the correspondences are bit-identical either
+  /// way; off, every call searches the index for every point.
+  /// @param reuse  true to reuse
+  void setCandidateReuse(bool reuse);
+  bool getCandidateReuse() const { return reuse_candidates_; }
+  /// @brief Source points the last determineCorrespondences() searched in the index.
+  std::size_t getLastSearchedCount() const;
+  /// @brief Source points the last determineCorrespondences() answered from reused candidates.
+  std::size_t getLastReusedCount() const;
+  /// @brief Candidates the reuse holds in all (memory: 4 bytes each).
+  std::size_t getCandidateCount() const { return cache_.candidateCount(); }
+
   /// Throws std::invalid_argument naming the point when a finite target point has a coordinate beyond
   /// NearestNeighborIndex::kMaxCoordinate (the float index would overflow), checked once per target.
   void determineCorrespondences(pcl::Correspondences& correspondences,
@@ -125,11 +143,11 @@ class WeightedCorrespondenceEstimation
   bool initComputeWeightedReciprocal();
   /// For every source index, the chosen target (or UNAVAILABLE) and its
   /// squared distance, written by slot so the thread count cannot matter.
-  void chooseTargets(double max_dist_sqr, pcl::Correspondences& per_source) const;
-  /// Builds `index` on `cloud`; a coordinate the index cannot hold is thrown as
+  void chooseTargets(double max_dist_sqr, pcl::Correspondences& per_source);
+  /// Builds `index` on `cloud` (true when it changed); a coordinate the index cannot hold is thrown as
   /// std::invalid_argument naming `what` ("target"/"source") and the point.
   template <typename PointT>
-  void buildIndex(NearestNeighborIndex& index, const pcl::PointCloud<PointT>& cloud, const pcl::Indices* indices,
+  bool buildIndex(NearestNeighborIndex& index, const pcl::PointCloud<PointT>& cloud, const pcl::Indices* indices,
                   const char* what);
 
   unsigned int k_;
@@ -139,7 +157,10 @@ class WeightedCorrespondenceEstimation
   std::string target_weight_field_ = kDefaultWeightField;
   std::string source_weight_field_ = kDefaultWeightField;
 
+  bool reuse_candidates_ = true;
   NearestNeighborIndex target_index_;
+  CandidateCache cache_;  // per source slot, rows of target_index_
+  WorkerPool pool_;       // a clone starts its own threads
   NearestNeighborIndex source_index_;
   std::vector<double> target_weights_in_use_;  // empty means uniform
   std::vector<double> source_weights_in_use_;

@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <cmath>
 #include <exception>
-#include <optional>
 #include <stdexcept>
 #include <thread>
 #include <utility>
@@ -47,33 +46,23 @@ bool loadXyz(const PointT& p, float* xyz) {
   return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
 }
 
-/// Carries the first exception thrown on any thread of an OpenMP region out of
-/// it: an exception that leaves a parallel region calls std::terminate, so each
-/// thread catches, records here, and the caller rethrows after the region.
-class RegionErrors {
- public:
-  void capture() noexcept {
-#pragma omp critical(weighted_icp_region_errors)
-    if (!first_) first_ = std::current_exception();
-  }
-  void rethrowFirst() const {
-    if (first_) std::rethrow_exception(first_);
-  }
-
- private:
-  std::exception_ptr first_;
-};
-
 /// Candidates a search can return: never more than the indexed points, so an
 /// absurd k costs no more memory than k = the index size (same results).
 inline std::size_t scratchSize(unsigned int k, const NearestNeighborIndex& index) {
   return std::max<std::size_t>(1, std::min<std::size_t>(k, index.size()));
 }
 
-inline int resolveThreads(unsigned int requested) {
-  if (requested > 0) return static_cast<int>(requested);
+/// Source points per chunk of the parallel loop: small enough to balance two threads on a loaded machine,
+/// large enough that claiming a chunk costs nothing in comparison.
+constexpr std::size_t kChunk = 256;
+
+/// Threads for a loop of `n` queries: `requested` (0: every hardware thread), one for short loops, where
+/// waking a thread costs more than it saves.
+inline unsigned threadsFor(unsigned int requested, std::size_t n) {
+  if (n <= 2 * kChunk) return 1;
+  if (requested > 0) return requested;
   const unsigned int hardware = std::thread::hardware_concurrency();
-  return hardware > 0 ? static_cast<int>(hardware) : 1;
+  return hardware > 0 ? hardware : 1;
 }
 
 /// Weights for `cloud`: the explicit vector if set (size checked), else the
@@ -124,11 +113,27 @@ void WeightedCorrespondenceEstimation<PointSource, PointTarget, Scalar>::setNumb
 
 template <typename PointSource, typename PointTarget, typename Scalar>
 void WeightedCorrespondenceEstimation<PointSource, PointTarget, Scalar>::setNumberOfThreads(unsigned int threads) {
-  // libgomp crashes creating ~100,000 threads; far fewer already only thrash.
+  // ~100,000 threads exhaust the process; far fewer already only thrash.
   if (threads > kMaxThreads)
     throw std::invalid_argument(getClassName() + ": " + std::to_string(threads) + " threads requested, at most " +
                                 std::to_string(kMaxThreads) + " (0 = every hardware thread)");
   threads_ = threads;
+}
+
+template <typename PointSource, typename PointTarget, typename Scalar>
+void WeightedCorrespondenceEstimation<PointSource, PointTarget, Scalar>::setCandidateReuse(bool reuse) {
+  reuse_candidates_ = reuse;
+  cache_.reset(0);
+}
+
+template <typename PointSource, typename PointTarget, typename Scalar>
+std::size_t WeightedCorrespondenceEstimation<PointSource, PointTarget, Scalar>::getLastSearchedCount() const {
+  return reuse_candidates_ ? cache_.count(CandidateCache::Action::kSearched) : (indices_ ? indices_->size() : 0);
+}
+
+template <typename PointSource, typename PointTarget, typename Scalar>
+std::size_t WeightedCorrespondenceEstimation<PointSource, PointTarget, Scalar>::getLastReusedCount() const {
+  return reuse_candidates_ ? cache_.count(CandidateCache::Action::kReused) : 0;
 }
 
 template <typename PointSource, typename PointTarget, typename Scalar>
@@ -177,10 +182,10 @@ void WeightedCorrespondenceEstimation<PointSource, PointTarget, Scalar>::setSear
 
 template <typename PointSource, typename PointTarget, typename Scalar>
 template <typename PointT>
-void WeightedCorrespondenceEstimation<PointSource, PointTarget, Scalar>::buildIndex(
+bool WeightedCorrespondenceEstimation<PointSource, PointTarget, Scalar>::buildIndex(
     NearestNeighborIndex& index, const pcl::PointCloud<PointT>& cloud, const pcl::Indices* indices, const char* what) {
   try {
-    index.build(cloud, indices);
+    return index.build(cloud, indices);
   } catch (const std::invalid_argument& e) {
     throw std::invalid_argument(getClassName() + ": " + what + " " + e.what());
   }
@@ -194,7 +199,8 @@ bool WeightedCorrespondenceEstimation<PointSource, PointTarget, Scalar>::initCom
   }
   if (!pcl::PCLBase<PointSource>::initCompute()) return false;
   if (target_cloud_updated_) {
-    buildIndex(target_index_, *target_, target_indices_.get(), "target");
+    // The cache holds rows of the index: a new index invalidates it (an unchanged target keeps both).
+    if (buildIndex(target_index_, *target_, target_indices_.get(), "target")) cache_.reset(0);
     std::string error;
     if (!detail::resolveWeights(*target_, target_weights_, target_weight_field_, kDefaultWeightField,
                                 target_weights_in_use_, error)) {
@@ -227,42 +233,33 @@ bool WeightedCorrespondenceEstimation<PointSource, PointTarget, Scalar>::initCom
 
 template <typename PointSource, typename PointTarget, typename Scalar>
 void WeightedCorrespondenceEstimation<PointSource, PointTarget, Scalar>::chooseTargets(
-    double max_dist_sqr, pcl::Correspondences& per_source) const {
-  const auto n = static_cast<std::ptrdiff_t>(indices_->size());
-  per_source.resize(indices_->size());
-  // Each source point is decided on its own and written to its own slot, so
-  // the result cannot depend on how the loop is split between threads.
+    double max_dist_sqr, pcl::Correspondences& per_source) {
+  const std::size_t n = indices_->size();
+  per_source.resize(n);
+  if (reuse_candidates_ && cache_.slots() != n) cache_.resize(n);
+  const unsigned threads = detail::threadsFor(threads_, n);
+  // One scratch per thread, made before the loop so that an allocation failure is thrown here.
   const std::size_t scratch_size = detail::scratchSize(k_, target_index_);
-  detail::RegionErrors errors;
-#pragma omp parallel num_threads(detail::resolveThreads(threads_)) if (n > 512)
-  {
-    std::optional<NearestNeighborIndex::Scratch> candidates;
-    try {
-      candidates.emplace(scratch_size);
-    } catch (...) {
-      errors.capture();
+  std::vector<NearestNeighborIndex::Scratch> scratches(threads, NearestNeighborIndex::Scratch(scratch_size));
+  std::vector<CandidateCache::Work> works(threads, CandidateCache::Work(scratch_size));
+  // Each source point is decided on its own and written to its own slot (and
+  // cache entry), so the result cannot depend on how the loop is split.
+  pool_.run(n, detail::kChunk, threads, [&](std::size_t begin, std::size_t end, unsigned worker) {
+    NearestNeighborIndex::Scratch& candidates = scratches[worker];
+    for (std::size_t i = begin; i < end; ++i) {
+      pcl::Correspondence& corr = per_source[i];
+      corr.index_query = (*indices_)[i];
+      corr.index_match = pcl::UNAVAILABLE;
+      float query[3];
+      if (!detail::loadXyz((*input_)[corr.index_query], query)) continue;
+      const std::size_t found = reuse_candidates_ ? cache_.knn(i, query, target_index_, works[worker], candidates)
+                                                  : target_index_.knn(query, candidates);
+      const int best = detail::heaviestCandidate(candidates, found, max_dist_sqr, target_weights_in_use_);
+      if (best < 0) continue;
+      corr.index_match = candidates.indices()[best];
+      corr.distance = candidates.squaredDistances()[best];
     }
-    // Every thread must reach the worksharing loop, even one that failed above.
-#pragma omp for schedule(static)
-    for (std::ptrdiff_t i = 0; i < n; ++i) {
-      if (!candidates) continue;
-      try {
-        pcl::Correspondence& corr = per_source[i];
-        corr.index_query = (*indices_)[i];
-        corr.index_match = pcl::UNAVAILABLE;
-        float query[3];
-        if (!detail::loadXyz((*input_)[corr.index_query], query)) continue;
-        const std::size_t found = target_index_.knn(query, *candidates);
-        const int best = detail::heaviestCandidate(*candidates, found, max_dist_sqr, target_weights_in_use_);
-        if (best < 0) continue;
-        corr.index_match = candidates->indices()[best];
-        corr.distance = candidates->squaredDistances()[best];
-      } catch (...) {
-        errors.capture();
-      }
-    }
-  }
-  errors.rethrowFirst();
+  });
 }
 
 namespace detail {
@@ -296,34 +293,22 @@ void WeightedCorrespondenceEstimation<PointSource, PointTarget, Scalar>::determi
   }
   const double max_dist_sqr = max_distance * max_distance;
   chooseTargets(max_dist_sqr, correspondences);
-  const auto n = static_cast<std::ptrdiff_t>(correspondences.size());
+  const std::size_t n = correspondences.size();
+  const unsigned threads = detail::threadsFor(threads_, n);
   const std::size_t scratch_size = detail::scratchSize(k_, source_index_);
-  detail::RegionErrors errors;
-#pragma omp parallel num_threads(detail::resolveThreads(threads_)) if (n > 512)
-  {
-    std::optional<NearestNeighborIndex::Scratch> candidates;
-    try {
-      candidates.emplace(scratch_size);
-    } catch (...) {
-      errors.capture();
+  std::vector<NearestNeighborIndex::Scratch> scratches(threads, NearestNeighborIndex::Scratch(scratch_size));
+  pool_.run(n, detail::kChunk, threads, [&](std::size_t begin, std::size_t end, unsigned worker) {
+    NearestNeighborIndex::Scratch& candidates = scratches[worker];
+    for (std::size_t i = begin; i < end; ++i) {
+      pcl::Correspondence& corr = correspondences[i];
+      if (corr.index_match == pcl::UNAVAILABLE) continue;
+      float query[3];
+      detail::loadXyz((*target_)[corr.index_match], query);  // finite: it is in the index
+      const std::size_t found = source_index_.knn(query, candidates);
+      const int back = detail::heaviestCandidate(candidates, found, max_dist_sqr, source_weights_in_use_);
+      if (back < 0 || candidates.indices()[back] != corr.index_query) corr.index_match = pcl::UNAVAILABLE;
     }
-#pragma omp for schedule(static)
-    for (std::ptrdiff_t i = 0; i < n; ++i) {
-      if (!candidates) continue;
-      try {
-        pcl::Correspondence& corr = correspondences[i];
-        if (corr.index_match == pcl::UNAVAILABLE) continue;
-        float query[3];
-        detail::loadXyz((*target_)[corr.index_match], query);  // finite: it is in the index
-        const std::size_t found = source_index_.knn(query, *candidates);
-        const int back = detail::heaviestCandidate(*candidates, found, max_dist_sqr, source_weights_in_use_);
-        if (back < 0 || candidates->indices()[back] != corr.index_query) corr.index_match = pcl::UNAVAILABLE;
-      } catch (...) {
-        errors.capture();
-      }
-    }
-  }
-  errors.rethrowFirst();
+  });
   detail::keepMatched(correspondences);
   this->deinitCompute();
 }
