@@ -10,8 +10,8 @@
 
 #include <cmath>
 #include <iomanip>
-#include <set>
 #include <iostream>
+#include <set>
 #include <sstream>
 
 #include <boost/program_options.hpp>
@@ -132,8 +132,8 @@ int main(int argc, char** argv) {
       const auto colon = item.find(':');
       xys.emplace_back(std::stod(item.substr(0, colon)), std::stod(item.substr(colon + 1)));
     }
-    const auto pairs = makePairs(map, parseList(overlaps_text), vm.count("disjoint") > 0, vm.count("halves") > 0,
-                                 min_observations);
+    const auto pairs =
+        makePairs(map, parseList(overlaps_text), vm.count("disjoint") > 0, vm.count("halves") > 0, min_observations);
     std::size_t total = 0, passed = 0;
     std::vector<double> all_times;
     for (const auto& pair : pairs) {
@@ -167,8 +167,8 @@ int main(int argc, char** argv) {
           } else if (method == "truth") {  // the trimmed ICP alone, started at the truth
             GlobalAlignment::Cloud xyz;
             pcl::copyPointCloud(*cloud, xyz);
-            const Eigen::Isometry3d off = perturb_text.empty() ? Eigen::Isometry3d::Identity()
-                                                               : Displacement::parse(perturb_text).toIsometry();
+            const Eigen::Isometry3d off =
+                perturb_text.empty() ? Eigen::Isometry3d::Identity() : Displacement::parse(perturb_text).toIsometry();
             const auto r = trimmed.refine(xyz, (off * d.toIsometry().inverse()).matrix());
             result.transformation = r.transformation, result.time_ms = r.time_ms;
             inlier_fraction = r.inlier_fraction;

@@ -32,8 +32,8 @@ Points finitePoints(const GlobalAlignment::Cloud& cloud, const char* what) {
   for (const auto& p : cloud)
     if (std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z)) points.emplace_back(p.x, p.y, p.z);
   if (points.size() < 3)
-    throw std::invalid_argument(std::string("GlobalAlignment: the ") + what + " has " +
-                                std::to_string(points.size()) + " finite points, fewer than 3");
+    throw std::invalid_argument(std::string("GlobalAlignment: the ") + what + " has " + std::to_string(points.size()) +
+                                " finite points, fewer than 3");
   return points;
 }
 
@@ -86,15 +86,15 @@ struct GlobalAlignment::Target {
   double spacing = 0.0;
   /// Target point indices by bucket of bucket_size (the fine window): the
   /// points within a window of p are in the 27 buckets around p's.
-  std::unordered_map<std::int64_t, std::vector<std::uint32_t>> buckets;
-  double bucket_size = 1.0;
+  std::unordered_map<std::int64_t, std::vector<std::uint32_t>> buckets, small_buckets;
+  double bucket_size = 1.0, small_bucket_size = 1.0;
 
   static std::int64_t bucketKey(const Eigen::Vector3i& c) {
     return (static_cast<std::int64_t>(c.x()) & 0x1fffff) | ((static_cast<std::int64_t>(c.y()) & 0x1fffff) << 21) |
            ((static_cast<std::int64_t>(c.z()) & 0x1fffff) << 42);
   }
-  Eigen::Vector3i bucketOf(const Eigen::Vector3f& p) const {
-    return (p.cast<double>() / bucket_size).array().floor().cast<int>();
+  static Eigen::Vector3i bucketOf(const Eigen::Vector3f& p, double size) {
+    return (p.cast<double>() / size).array().floor().cast<int>();
   }
 
   /// Distance from `p` to its nearest target point.
@@ -202,27 +202,38 @@ Eigen::Matrix4d yawPose(const Eigen::Vector3d& axis, double yaw, const Eigen::Ve
 /// The fine search around (yaw, t): per rotation, every pair of a sample point
 /// and a target point within the window votes for the translation correction
 /// in fine cells; the fullest cell over all rotations wins. Returns the pose and its votes.
+/// The search box: yaw range and step (degrees), translation window and cell (metres), and the target buckets
+/// (as large as the window) to look in.
+struct VoteBox {
+  double yaw_range_deg, yaw_step_deg, window, cell;
+  const std::unordered_map<std::int64_t, std::vector<std::uint32_t>>* buckets;
+  double bucket_size;
+};
+
 std::pair<Eigen::Matrix4d, std::size_t> fineVote(const Points& sample, const GlobalAlignment::Target& target,
-                                                 const GlobalAlignmentSettings& s, const Eigen::Vector3d& axis,
-                                                 double yaw, const Eigen::Vector3d& centroid,
-                                                 const Eigen::Vector3d& t) {
-  const double window = s.fine_window, cell = s.fine_cell;
+                                                 const VoteBox& box, const Eigen::Vector3d& axis, double yaw,
+                                                 const Eigen::Vector3d& centroid, const Eigen::Vector3d& t,
+                                                 double* refine_yaw = nullptr, Eigen::Vector3d* refine_t = nullptr) {
+  const double window = box.window, cell = box.cell;
   const int side = static_cast<int>(std::ceil(2.0 * window / cell));
   std::vector<std::uint16_t> grid(static_cast<std::size_t>(side) * side * side);
-  const int steps = static_cast<int>(std::floor(s.fine_yaw_range_deg / s.fine_yaw_step_deg));
+  const int steps = static_cast<int>(std::floor(box.yaw_range_deg / box.yaw_step_deg + 1e-9));
   std::pair<Eigen::Matrix4d, std::size_t> best{yawPose(axis, yaw, centroid, t), 0};
+  double best_yaw = yaw;
+  Eigen::Vector3d best_t = t;
   for (int step = -steps; step <= steps; ++step) {
-    const double angle = yaw + step * s.fine_yaw_step_deg * M_PI / 180.0;
+    const double angle = yaw + step * box.yaw_step_deg * M_PI / 180.0;
     const Eigen::Matrix3d rotation = Eigen::AngleAxisd(angle, axis).toRotationMatrix();
     std::fill(grid.begin(), grid.end(), 0);
     for (const auto& p : sample) {
       const Eigen::Vector3f moved = (rotation * (p.cast<double>() - centroid) + t).cast<float>();
-      const Eigen::Vector3i home = target.bucketOf(moved);
+      const Eigen::Vector3i home = GlobalAlignment::Target::bucketOf(moved, box.bucket_size);
       for (int dz = -1; dz <= 1; ++dz)
         for (int dy = -1; dy <= 1; ++dy)
           for (int dx = -1; dx <= 1; ++dx) {
-            const auto bucket = target.buckets.find(GlobalAlignment::Target::bucketKey(home + Eigen::Vector3i(dx, dy, dz)));
-            if (bucket == target.buckets.end()) continue;
+            const auto bucket =
+                box.buckets->find(GlobalAlignment::Target::bucketKey(home + Eigen::Vector3i(dx, dy, dz)));
+            if (bucket == box.buckets->end()) continue;
             for (const std::uint32_t i : bucket->second) {
               const Eigen::Vector3f d = target.points[i] - moved;
               if (d.cwiseAbs().maxCoeff() >= window) continue;
@@ -235,14 +246,19 @@ std::pair<Eigen::Matrix4d, std::size_t> fineVote(const Points& sample, const Glo
     const auto peak = std::max_element(grid.begin(), grid.end());
     if (*peak <= best.second) continue;
     const std::size_t i = static_cast<std::size_t>(peak - grid.begin());
-    const Eigen::Vector3d offset =
-        (Eigen::Vector3d(static_cast<double>(i % side), static_cast<double>(i / side % side),
-                         static_cast<double>(i / side / side))
-             .array() +
-         0.5) *
-            cell -
-        window;
+    const Eigen::Vector3d offset = (Eigen::Vector3d(static_cast<double>(i % side), static_cast<double>(i / side % side),
+                                                    static_cast<double>(i / side / side))
+                                        .array() +
+                                    0.5) *
+                                       cell -
+                                   window;
     best = {yawPose(axis, angle, centroid, t + offset), *peak};
+    best_yaw = angle;
+    best_t = t + offset;
+  }
+  if (refine_yaw) {
+    *refine_yaw = best_yaw;
+    *refine_t = best_t;
   }
   return best;
 }
@@ -272,6 +288,15 @@ GlobalAlignment::GlobalAlignment(GlobalAlignmentSettings settings)
                                     {s.min_distance, "min_distance must be >= 0"},
                                     {s.inlier_distance, "inlier_distance must be >= 0"}})
     require(std::isfinite(value) && value >= 0.0, name);
+  for (const auto& [value, name] : {std::pair{s.fine_yaw_range_deg, "fine_yaw_range_deg must be > 0"},
+                                    {s.medium_yaw_step_deg, "medium_yaw_step_deg must be > 0"},
+                                    {s.fine_yaw_step_deg, "fine_yaw_step_deg must be > 0"},
+                                    {s.fine_window, "fine_window must be > 0"},
+                                    {s.medium_cell, "medium_cell must be > 0"},
+                                    {s.fine_cell, "fine_cell must be > 0"}})
+    require(std::isfinite(value) && value > 0.0, name);
+  require(s.fine_window / s.medium_cell <= 200 && 2.0 * s.medium_cell / s.fine_cell <= 200,
+          "fine vote grids may have at most 200 cells a side");
   require(s.max_source_samples >= 3 && s.max_target_samples >= 3, "sample caps must be >= 3");
   require(s.peaks_per_rotation >= 1 && s.refined_hypotheses >= 1, "peaks and refined hypotheses must be >= 1");
   require(s.hypothesis_iterations >= 1 && s.final_iterations >= 1, "iteration counts must be >= 1");
@@ -293,12 +318,16 @@ void GlobalAlignment::setTarget(const Cloud& target) {
     Eigen::Vector3f lo = fresh->points[0], hi = lo;
     for (const auto& p : fresh->points) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
     fresh->spacing = 1e-3 * static_cast<double>((hi - lo).norm());
-    if (!(fresh->spacing > 0.0))
-      throw std::invalid_argument("GlobalAlignment: all finite target points are identical");
+    if (!(fresh->spacing > 0.0)) throw std::invalid_argument("GlobalAlignment: all finite target points are identical");
   }
   fresh->bucket_size = settings_.fine_window;
-  for (std::size_t i = 0; i < fresh->points.size(); ++i)
-    fresh->buckets[Target::bucketKey(fresh->bucketOf(fresh->points[i]))].push_back(static_cast<std::uint32_t>(i));
+  fresh->small_bucket_size = 2.0 * settings_.medium_cell;
+  for (std::size_t i = 0; i < fresh->points.size(); ++i) {
+    const auto index = static_cast<std::uint32_t>(i);
+    fresh->buckets[Target::bucketKey(Target::bucketOf(fresh->points[i], fresh->bucket_size))].push_back(index);
+    fresh->small_buckets[Target::bucketKey(Target::bucketOf(fresh->points[i], fresh->small_bucket_size))].push_back(
+        index);
+  }
   const double sample_cell = settings_.sample_cell > 0.0 ? settings_.sample_cell : settings_.vote_cell / 3.0;
   fresh->sample = voxelSample(fresh->points, sample_cell, settings_.max_target_samples);
   target_ = std::move(fresh);
@@ -339,10 +368,15 @@ GlobalAlignmentResult GlobalAlignment::align(const Cloud& source_cloud) const {
   const std::size_t refined = std::min<std::size_t>(hypotheses.size(), s.refined_hypotheses);
   Eigen::Matrix4d best = Eigen::Matrix4d::Identity();
   std::size_t best_inliers = 0;
+  const VoteBox medium{s.fine_yaw_range_deg, s.medium_yaw_step_deg, s.fine_window,
+                       s.medium_cell,        &target_->buckets,     target_->bucket_size};
+  const VoteBox fine{s.medium_yaw_step_deg, s.fine_yaw_step_deg,     2.0 * s.medium_cell,
+                     s.fine_cell,           &target_->small_buckets, target_->small_bucket_size};
   for (std::size_t h = 0; h < refined; ++h) {
-    const auto [pose, votes] = fineVote(sample, *target_, s, axis, hypotheses[h].yaw, centroid.cast<double>(),
-                                        hypotheses[h].translation);
-    (void)votes;
+    double yaw = hypotheses[h].yaw;
+    Eigen::Vector3d t = hypotheses[h].translation;
+    fineVote(sample, *target_, medium, axis, yaw, centroid.cast<double>(), t, &yaw, &t);
+    const Eigen::Matrix4d pose = fineVote(sample, *target_, fine, axis, yaw, centroid.cast<double>(), t).first;
     const TrimmedFit fit = trimmedIcp(source, *target_, pose, 2.0 * s.fine_cell, min_distance, s.tight_shrink_factor,
                                       s.hypothesis_iterations);
     const std::size_t inliers = countInliers(source, *target_, fit.transformation, inlier_distance);
@@ -373,8 +407,8 @@ GlobalAlignmentResult GlobalAlignment::finish(const Points& source, const Eigen:
   const double spacing = target_->spacing;
   const double min_distance = s.min_distance > 0.0 ? s.min_distance : 2.0 * spacing;
   const double inlier_distance = s.inlier_distance > 0.0 ? s.inlier_distance : 2.0 * spacing;
-  const TrimmedFit fit = trimmedIcp(source, *target_, start, start_distance, min_distance, s.tight_shrink_factor,
-                                    s.final_iterations);
+  const TrimmedFit fit =
+      trimmedIcp(source, *target_, start, start_distance, min_distance, s.tight_shrink_factor, s.final_iterations);
   GlobalAlignmentResult result;
   result.transformation = fit.transformation;
   result.inliers = countInliers(source, *target_, fit.transformation, inlier_distance);

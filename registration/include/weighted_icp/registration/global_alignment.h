@@ -12,9 +12,9 @@
 #include <string>
 #include <vector>
 
-#include <Eigen/Core>
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
+#include <Eigen/Core>
 
 namespace weighted_icp {
 
@@ -39,15 +39,20 @@ struct GlobalAlignmentSettings {
   std::size_t max_target_samples = 1500;
   /// Vote peaks kept per rotation, and hypotheses (best voted overall) refined.
   unsigned int peaks_per_rotation = 3;
-  unsigned int refined_hypotheses = 24;
+  unsigned int refined_hypotheses = 12;
   /// Fine search around each refined hypothesis: rotations within
   /// ±fine_yaw_range_deg in fine_yaw_step_deg steps, translations within
   /// ±fine_window of the hypothesis voted in fine_cell cells with every target
   /// point (not a sample), so the pose where many points have a close
   /// counterpart stands out even where the maps share only part of the scene.
+  /// Two levels: first ±fine_yaw_range_deg in medium_yaw_step_deg steps with
+  /// medium_cell cells within ±fine_window, then ±medium_yaw_step_deg in
+  /// fine_yaw_step_deg steps with fine_cell cells within ±2 medium cells.
   double fine_yaw_range_deg = 6.0;
+  double medium_yaw_step_deg = 1.5;
   double fine_yaw_step_deg = 0.5;
   double fine_window = 0.3;
+  double medium_cell = 0.05;
   double fine_cell = 0.02;
   /// Trimmed ICP: iterations per hypothesis and for the final, full-cloud pass.
   int hypothesis_iterations = 20;
