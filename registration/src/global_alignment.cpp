@@ -161,7 +161,8 @@ std::vector<std::pair<Eigen::Vector3d, std::size_t>> voteTranslations(const Poin
 TrimmedFit trimmedIcp(const Points& source, const GlobalAlignment::Target& target, Eigen::Matrix4d transformation,
                       double distance, double min_distance, double shrink_factor, int iterations) {
   NearestNeighborIndex::Scratch scratch(1);
-  TrimmedFit fit{transformation, distance, std::numeric_limits<double>::infinity()};
+  // A start below the floor (a sparse target, spacing above the fine cell) would leave too few pairs.
+  TrimmedFit fit{transformation, std::max(distance, min_distance), std::numeric_limits<double>::infinity()};
   Eigen::Matrix3Xd from(3, source.size()), to(3, source.size());
   std::vector<double> residuals;
   for (int iteration = 0; iteration < iterations; ++iteration) {
