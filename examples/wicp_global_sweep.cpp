@@ -106,7 +106,6 @@ int main(int argc, char** argv) {
         ("method", po::value(&method)->default_value(method), "global | icp (today's, from the identity)")
         ("min-observations", po::value(&min_observations)->default_value(min_observations), "as wicp_align")
         ("shrink", po::value(&settings.shrink_factor)->default_value(settings.shrink_factor), "trimmed ICP shrink factor")
-        ("tight", po::value(&settings.tight_shrink_factor)->default_value(settings.tight_shrink_factor), "tight factor")
         ("min-distance", po::value(&settings.min_distance)->default_value(settings.min_distance), "trimmed ICP floor")
         ("inlier-distance", po::value(&settings.inlier_distance)->default_value(settings.inlier_distance), "inlier radius")
         ("yaw-hypotheses", po::value(&settings.yaw_hypotheses)->default_value(settings.yaw_hypotheses), "rotations")

@@ -301,8 +301,7 @@ GlobalAlignment::GlobalAlignment(GlobalAlignmentSettings settings)
   require(s.max_source_samples >= 3 && s.max_target_samples >= 3, "sample caps must be >= 3");
   require(s.peaks_per_rotation >= 1 && s.refined_hypotheses >= 1, "peaks and refined hypotheses must be >= 1");
   require(s.hypothesis_iterations >= 1 && s.final_iterations >= 1, "iteration counts must be >= 1");
-  require(std::isfinite(s.shrink_factor) && s.shrink_factor >= 1.0, "shrink_factor must be >= 1");
-  require(std::isfinite(s.tight_shrink_factor) && s.tight_shrink_factor > 0.0, "tight_shrink_factor must be > 0");
+  require(std::isfinite(s.shrink_factor) && s.shrink_factor > 0.0, "shrink_factor must be > 0");
 }
 
 GlobalAlignment::~GlobalAlignment() = default;
@@ -378,8 +377,8 @@ GlobalAlignmentResult GlobalAlignment::align(const Cloud& source_cloud) const {
     Eigen::Vector3d t = hypotheses[h].translation;
     fineVote(sample, *target_, medium, axis, yaw, centroid.cast<double>(), t, &yaw, &t);
     const Eigen::Matrix4d pose = fineVote(sample, *target_, fine, axis, yaw, centroid.cast<double>(), t).first;
-    const TrimmedFit fit = trimmedIcp(source, *target_, pose, 2.0 * s.fine_cell, min_distance, s.tight_shrink_factor,
-                                      s.hypothesis_iterations);
+    const TrimmedFit fit =
+        trimmedIcp(source, *target_, pose, 2.0 * s.fine_cell, min_distance, s.shrink_factor, s.hypothesis_iterations);
     const std::size_t inliers = countInliers(source, *target_, fit.transformation, inlier_distance);
     if (h == 0 || inliers > best_inliers) best = fit.transformation, best_inliers = inliers;
   }
@@ -409,7 +408,7 @@ GlobalAlignmentResult GlobalAlignment::finish(const Points& source, const Eigen:
   const double min_distance = s.min_distance > 0.0 ? s.min_distance : 2.0 * spacing;
   const double inlier_distance = s.inlier_distance > 0.0 ? s.inlier_distance : 2.0 * spacing;
   const TrimmedFit fit =
-      trimmedIcp(source, *target_, start, start_distance, min_distance, s.tight_shrink_factor, s.final_iterations);
+      trimmedIcp(source, *target_, start, start_distance, min_distance, s.shrink_factor, s.final_iterations);
   GlobalAlignmentResult result;
   result.transformation = fit.transformation;
   result.inliers = countInliers(source, *target_, fit.transformation, inlier_distance);

@@ -57,16 +57,16 @@ struct GlobalAlignmentSettings {
   /// Trimmed ICP: iterations per hypothesis and for the final, full-cloud pass.
   int hypothesis_iterations = 20;
   int final_iterations = 50;
-  /// First distance limit of the trimmed ICP; 0: 2 vote cells.
+  /// First distance limit of the trimmed ICP: refine() starts there (0: 2
+  /// vote cells); align() starts at 2 fine cells, the fine vote's accuracy.
   double initial_distance = 0.0;
   /// Each iteration the limit becomes `shrink_factor` times the median residual
   /// of the pairs kept, never growing and never below `min_distance`
-  /// (0: 2 target spacings). Two passes: a wide one (3: converges from a
-  /// hypothesis a few degrees and cells off), then a tight one (1: only the
-  /// closer half of the pairs pull, so parts without counterpart and the
-  /// fringe of the overlap do not bias the result).
-  double shrink_factor = 3.0;
-  double tight_shrink_factor = 1.0;
+  /// (0: 2 target spacings). 1 lets only the closer half of the pairs pull, so
+  /// parts without counterpart and the fringe of the overlap do not bias the
+  /// result; a wider 3 was measured to leave the truth on partial overlaps of
+  /// the real map (docs/global_alignment.md).
+  double shrink_factor = 1.0;
   double min_distance = 0.0;
   /// A source point counts as an inlier when a target point is this close
   /// (0: 2 target spacings); hypotheses are ranked by inlier count.
