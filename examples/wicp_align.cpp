@@ -15,6 +15,7 @@
 #include "plotting.h"
 #include "tool_support.h"
 #include "weighted_icp/io/map_format.h"
+#include "weighted_icp/registration/global_landmark_alignment.h"
 #include "weighted_icp/registration/landmark_alignment.h"
 #include "weighted_icp/registration/rigid_motion.h"
 
@@ -26,6 +27,7 @@ int main(int argc, char** argv) {
     std::string source_path, target_path, strategy_name = "covariance", displacement_text, plot_path;
     AlignmentSettings settings;
     std::size_t min_observations = 2;
+    bool global = false;
     po::options_description options(
         "wicp_align --source A.txt --target B.txt [options]\n"
         "Aligns landmark map A onto B (paper map format).\n"
@@ -52,6 +54,8 @@ int main(int argc, char** argv) {
                                  ->default_value(min_observations),
          "drop landmarks observed fewer times (the paper uses 2)")
         ("refine", po::bool_switch(&settings.refine), "finish with nearest-neighbour ICP after the weighted stage")
+        ("global", po::bool_switch(&global), "find the start from geometry alone, any yaw and translation, partial "
+                                              "overlap allowed (docs/global_alignment.md); implies --refine")
         ("threads", tools::rangedValue(&settings.threads, 0u, 1024u)->default_value(settings.threads),
          "search threads, 0 = all (at most 1024)")
         ("json", "print the result as one JSON object on the last line of stdout")
@@ -77,9 +81,20 @@ int main(int argc, char** argv) {
     source.transform(displacement.toIsometry());
 
     const WeightFunction weight = weightFunction(strategy);
-    LandmarkAligner aligner(settings);
-    aligner.setTarget(toLandmarkCloud(target, weight));
-    const AlignmentResult result = aligner.align(toLandmarkCloud(source, weight));
+    AlignmentResult result;
+    if (global) {
+      settings.refine = true;
+      GlobalLandmarkAligner aligner({}, settings);
+      aligner.setTarget(toLandmarkCloud(target, weight));
+      const GlobalLandmarkAlignmentResult both = aligner.align(toLandmarkCloud(source, weight));
+      result = both.alignment;
+      std::cout << "global search: " << both.global.hypotheses_refined << " hypotheses refined, inlier fraction "
+                << both.global.inlier_fraction << ", distance limit " << both.global.distance_limit << " m\n";
+    } else {
+      LandmarkAligner aligner(settings);
+      aligner.setTarget(toLandmarkCloud(target, weight));
+      result = aligner.align(toLandmarkCloud(source, weight));
+    }
 
     std::cout << "source " << source.landmarks.size() << " landmarks, target " << target.landmarks.size()
               << " landmarks, strategy " << toString(strategy) << ", k " << settings.k << '\n'

@@ -1,0 +1,56 @@
+#pragma once
+// Landmark maps aligned from any start: GlobalAlignment finds the pose from
+// geometry alone, then the paper's weighted ICP with its refinement stage
+// finishes, its correspondence distance limited to what the global stage's
+// residuals say, so landmarks with no counterpart in the other map (partial
+// overlap) stay out of it.
+
+#include <memory>
+#include <string>
+
+#include <Eigen/Core>
+
+#include "weighted_icp/registration/global_alignment.h"
+#include "weighted_icp/registration/landmark_alignment.h"
+#include "weighted_icp/registration/landmark_point.h"
+
+namespace weighted_icp {
+
+/// @brief Both stages' results.
+struct GlobalLandmarkAlignmentResult {
+  /// The final (weighted ICP) stage: its transformation maps the source as
+  /// given onto the target; time_ms covers both stages.
+  AlignmentResult alignment;
+  /// The global stage alone.
+  GlobalAlignmentResult global;
+};
+
+/// @brief PCL-style aligner of weighted landmark clouds from any start.
+class GlobalLandmarkAligner {
+ public:
+  using Ptr = std::shared_ptr<GlobalLandmarkAligner>;
+  using ConstPtr = std::shared_ptr<const GlobalLandmarkAligner>;
+
+  /// @brief Checks both stages' settings (std::invalid_argument names the one out of range).
+  /// @param global  the search's settings
+  /// @param icp     the final weighted ICP's; its refinement stage always runs, and its distance limit
+  ///                is the smaller of its own and the global stage's final one
+  explicit GlobalLandmarkAligner(GlobalAlignmentSettings global = {}, AlignmentSettings icp = {});
+
+  /// @brief PCL-style class name, for messages.
+  static std::string getClassName() { return "GlobalLandmarkAligner"; }
+
+  /// @brief Sets the target of both stages.
+  /// @param target  as LandmarkAligner::setTarget() and GlobalAlignment::setTarget() require
+  void setTarget(LandmarkCloud::ConstPtr target);
+  /// @brief Aligns `source` onto the target from any rotation about the up axis and any translation.
+  /// @param source  as LandmarkAligner::align() requires; a degenerate problem is reported in the result
+  GlobalLandmarkAlignmentResult align(const LandmarkCloud::ConstPtr& source);
+
+ private:
+  GlobalAlignment global_;
+  AlignmentSettings icp_settings_;
+  LandmarkCloud::ConstPtr target_;
+};
+
+}  // namespace weighted_icp

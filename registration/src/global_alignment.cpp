@@ -1,0 +1,423 @@
+// Global registration: rotation hypotheses about the up axis, a translation
+// vote per rotation, trimmed ICP with a shrinking distance limit, inlier count.
+#include "weighted_icp/registration/global_alignment.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <stdexcept>
+#include <unordered_set>
+#include <utility>
+
+#include <Eigen/Geometry>
+
+#include "weighted_icp/core/statistics.h"
+#include "weighted_icp/registration/nearest_neighbor_index.h"
+
+namespace weighted_icp {
+
+namespace {
+
+using Points = std::vector<Eigen::Vector3f>;
+
+/// Dense vote grids larger than this are coarsened (a 30 m map at 15 cm is 8e6 cells).
+constexpr std::size_t kMaxVoteCells = std::size_t{1} << 24;
+
+Points finitePoints(const GlobalAlignment::Cloud& cloud, const char* what) {
+  NearestNeighborIndex::requireIndexable(cloud, what);
+  Points points;
+  points.reserve(cloud.size());
+  for (const auto& p : cloud)
+    if (std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z)) points.emplace_back(p.x, p.y, p.z);
+  if (points.size() < 3)
+    throw std::invalid_argument(std::string("GlobalAlignment: the ") + what + " has " + std::to_string(points.size()) +
+                                " finite points, fewer than 3");
+  return points;
+}
+
+/// One point (the first seen, a real point: its residuals are those of the
+/// cloud) per occupied voxel, in input order so the sample does not depend on
+/// hashing; then every n-th to stay within `max_points`.
+Points voxelSample(const Points& points, double cell, std::size_t max_points) {
+  std::unordered_set<std::int64_t> occupied;
+  Points firsts;
+  for (const auto& p : points) {
+    const auto key = [&](int axis) { return static_cast<std::int64_t>(std::floor(p[axis] / cell)) & 0x1fffff; };
+    if (occupied.insert(key(0) | (key(1) << 21) | (key(2) << 42)).second) firsts.push_back(p);
+  }
+  const std::size_t stride = (firsts.size() + max_points - 1) / max_points;
+  Points sample;
+  for (std::size_t i = 0; i < firsts.size(); i += stride) sample.push_back(firsts[i]);
+  return sample;
+}
+
+pcl::PointCloud<pcl::PointXYZ> toCloud(const Points& points) {
+  pcl::PointCloud<pcl::PointXYZ> cloud;
+  for (const auto& p : points) cloud.push_back(pcl::PointXYZ(p.x(), p.y(), p.z()));
+  return cloud;
+}
+
+Eigen::Vector3f apply(const Eigen::Matrix4d& t, const Eigen::Vector3f& p) {
+  return (t.topLeftCorner<3, 3>() * p.cast<double>() + t.topRightCorner<3, 1>()).cast<float>();
+}
+
+/// A rotation with a translation from the vote, and how many votes it got.
+struct Hypothesis {
+  double yaw;                   // radians about the up axis, about the sample's centroid
+  Eigen::Vector3d translation;  // where the centroid goes
+  std::size_t votes;
+};
+
+/// The result of a trimmed ICP run.
+struct TrimmedFit {
+  Eigen::Matrix4d transformation;
+  double distance_limit;
+  double median_residual;
+};
+
+}  // namespace
+
+struct GlobalAlignment::Target {
+  Points points;
+  Points sample;
+  NearestNeighborIndex index;
+  double spacing = 0.0;
+  /// Target point indices by bucket of bucket_size (the fine window): the
+  /// points within a window of p are in the 27 buckets around p's.
+  std::unordered_map<std::int64_t, std::vector<std::uint32_t>> buckets, small_buckets;
+  double bucket_size = 1.0, small_bucket_size = 1.0;
+
+  static std::int64_t bucketKey(const Eigen::Vector3i& c) {
+    return (static_cast<std::int64_t>(c.x()) & 0x1fffff) | ((static_cast<std::int64_t>(c.y()) & 0x1fffff) << 21) |
+           ((static_cast<std::int64_t>(c.z()) & 0x1fffff) << 42);
+  }
+  static Eigen::Vector3i bucketOf(const Eigen::Vector3f& p, double size) {
+    return (p.cast<double>() / size).array().floor().cast<int>();
+  }
+
+  /// Distance from `p` to its nearest target point.
+  double nearest(const Eigen::Vector3f& p, NearestNeighborIndex::Scratch& scratch) const {
+    if (index.knn(p.data(), scratch) == 0) return std::numeric_limits<double>::infinity();
+    return std::sqrt(static_cast<double>(scratch.squaredDistances()[0]));
+  }
+};
+
+namespace {
+
+/// Median distance from a target point to its nearest other target point, over
+/// at most 2000 evenly strided points.
+double medianSpacing(const Points& points, const NearestNeighborIndex& index) {
+  NearestNeighborIndex::Scratch scratch(2);
+  std::vector<double> distances;
+  const std::size_t stride = std::max<std::size_t>(1, points.size() / 2000);
+  for (std::size_t i = 0; i < points.size(); i += stride)
+    if (index.knn(points[i].data(), scratch) == 2) distances.push_back(std::sqrt(scratch.squaredDistances()[1]));
+  return distances.empty() ? 0.0 : median(distances);
+}
+
+/// Translations that bring many (rotated) source samples onto target samples:
+/// every source-target pair votes for their difference in a dense grid; the
+/// `peaks` fullest cells, each at least 2 cells from the others, win.
+std::vector<std::pair<Eigen::Vector3d, std::size_t>> voteTranslations(const Points& source, const Points& target,
+                                                                      double cell, unsigned int peaks) {
+  Eigen::Vector3f smin = source[0], smax = source[0], tmin = target[0], tmax = target[0];
+  for (const auto& p : source) smin = smin.cwiseMin(p), smax = smax.cwiseMax(p);
+  for (const auto& p : target) tmin = tmin.cwiseMin(p), tmax = tmax.cwiseMax(p);
+  const Eigen::Vector3d origin = (tmin - smax).cast<double>();
+  const Eigen::Vector3d extent = (tmax - smin).cast<double>() - origin;
+  while ((extent / cell).prod() > static_cast<double>(kMaxVoteCells)) cell *= 2.0;
+  const Eigen::Vector3i size = (extent / cell).array().floor().cast<int>() + 1;
+  std::vector<std::uint32_t> grid(static_cast<std::size_t>(size.prod()), 0);
+  const auto cellIndex = [&](const Eigen::Vector3d& t) {
+    const Eigen::Vector3i c = ((t - origin) / cell).array().floor().cast<int>().cwiseMax(0).cwiseMin(size.array() - 1);
+    return (static_cast<std::size_t>(c.z()) * size.y() + c.y()) * size.x() + c.x();
+  };
+  for (const auto& s : source)
+    for (const auto& t : target) ++grid[cellIndex((t - s).cast<double>())];
+
+  std::vector<std::pair<Eigen::Vector3d, std::size_t>> found;
+  for (unsigned int n = 0; n < peaks; ++n) {
+    const auto best = std::max_element(grid.begin(), grid.end());
+    if (*best == 0) break;
+    const std::size_t i = static_cast<std::size_t>(best - grid.begin());
+    const Eigen::Vector3i c(static_cast<int>(i % size.x()), static_cast<int>(i / size.x() % size.y()),
+                            static_cast<int>(i / size.x() / size.y()));
+    found.emplace_back(origin + (c.cast<double>().array() + 0.5).matrix() * cell, *best);
+    // Suppress the neighbourhood so the next peak is a different translation.
+    for (int z = std::max(0, c.z() - 2); z <= std::min(size.z() - 1, c.z() + 2); ++z)
+      for (int y = std::max(0, c.y() - 2); y <= std::min(size.y() - 1, c.y() + 2); ++y)
+        for (int x = std::max(0, c.x() - 2); x <= std::min(size.x() - 1, c.x() + 2); ++x)
+          grid[(static_cast<std::size_t>(z) * size.y() + y) * size.x() + x] = 0;
+  }
+  return found;
+}
+
+/// Point-to-point ICP on the pairs closer than a limit that starts at
+/// `distance` and then follows shrink_factor x the median residual (never
+/// growing, never below min_distance): parts of the source with no
+/// counterpart in the target fall outside it and do not pull.
+TrimmedFit trimmedIcp(const Points& source, const GlobalAlignment::Target& target, Eigen::Matrix4d transformation,
+                      double distance, double min_distance, double shrink_factor, int iterations) {
+  NearestNeighborIndex::Scratch scratch(1);
+  // A start below the floor (a sparse target, spacing above the fine cell) would leave too few pairs.
+  TrimmedFit fit{transformation, std::max(distance, min_distance), std::numeric_limits<double>::infinity()};
+  Eigen::Matrix3Xd from(3, source.size()), to(3, source.size());
+  std::vector<double> residuals;
+  for (int iteration = 0; iteration < iterations; ++iteration) {
+    residuals.clear();
+    Eigen::Index pairs = 0;
+    for (const auto& p : source) {
+      const Eigen::Vector3f moved = apply(fit.transformation, p);
+      if (target.index.knn(moved.data(), scratch) == 0) continue;
+      const double d = std::sqrt(static_cast<double>(scratch.squaredDistances()[0]));
+      if (d > fit.distance_limit) continue;
+      from.col(pairs) = moved.cast<double>();
+      to.col(pairs) = target.points[static_cast<std::size_t>(scratch.indices()[0])].cast<double>();
+      residuals.push_back(d);
+      ++pairs;
+    }
+    if (pairs < 3) break;
+    const Eigen::Matrix4d step = Eigen::umeyama(from.leftCols(pairs), to.leftCols(pairs), false);
+    fit.transformation = step * fit.transformation;
+    fit.median_residual = median(residuals);
+    const double next = std::clamp(shrink_factor * fit.median_residual, min_distance, fit.distance_limit);
+    const bool settled = (step - Eigen::Matrix4d::Identity()).norm() < 1e-7 && next == fit.distance_limit;
+    fit.distance_limit = next;
+    if (settled) break;
+  }
+  return fit;
+}
+
+/// A yaw about `axis` (about `centroid`) and a translation: x -> R (x - centroid) + t.
+Eigen::Matrix4d yawPose(const Eigen::Vector3d& axis, double yaw, const Eigen::Vector3d& centroid,
+                        const Eigen::Vector3d& t) {
+  Eigen::Matrix4d pose = Eigen::Matrix4d::Identity();
+  const Eigen::Matrix3d rotation = Eigen::AngleAxisd(yaw, axis).toRotationMatrix();
+  pose.topLeftCorner<3, 3>() = rotation;
+  pose.topRightCorner<3, 1>() = t - rotation * centroid;
+  return pose;
+}
+
+/// The fine search around (yaw, t): per rotation, every pair of a sample point
+/// and a target point within the window votes for the translation correction
+/// in fine cells; the fullest cell over all rotations wins. Returns the pose and its votes.
+/// The search box: yaw range and step (degrees), translation window and cell (metres), and the target buckets
+/// (as large as the window) to look in.
+struct VoteBox {
+  double yaw_range_deg, yaw_step_deg, window, cell;
+  const std::unordered_map<std::int64_t, std::vector<std::uint32_t>>* buckets;
+  double bucket_size;
+};
+
+std::pair<Eigen::Matrix4d, std::size_t> fineVote(const Points& sample, const GlobalAlignment::Target& target,
+                                                 const VoteBox& box, const Eigen::Vector3d& axis, double yaw,
+                                                 const Eigen::Vector3d& centroid, const Eigen::Vector3d& t,
+                                                 double* refine_yaw = nullptr, Eigen::Vector3d* refine_t = nullptr) {
+  const double window = box.window, cell = box.cell;
+  const int side = static_cast<int>(std::ceil(2.0 * window / cell));
+  std::vector<std::uint16_t> grid(static_cast<std::size_t>(side) * side * side);
+  const int steps = static_cast<int>(std::floor(box.yaw_range_deg / box.yaw_step_deg + 1e-9));
+  std::pair<Eigen::Matrix4d, std::size_t> best{yawPose(axis, yaw, centroid, t), 0};
+  double best_yaw = yaw;
+  Eigen::Vector3d best_t = t;
+  for (int step = -steps; step <= steps; ++step) {
+    const double angle = yaw + step * box.yaw_step_deg * M_PI / 180.0;
+    const Eigen::Matrix3d rotation = Eigen::AngleAxisd(angle, axis).toRotationMatrix();
+    std::fill(grid.begin(), grid.end(), 0);
+    for (const auto& p : sample) {
+      const Eigen::Vector3f moved = (rotation * (p.cast<double>() - centroid) + t).cast<float>();
+      const Eigen::Vector3i home = GlobalAlignment::Target::bucketOf(moved, box.bucket_size);
+      for (int dz = -1; dz <= 1; ++dz)
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dx = -1; dx <= 1; ++dx) {
+            const auto bucket =
+                box.buckets->find(GlobalAlignment::Target::bucketKey(home + Eigen::Vector3i(dx, dy, dz)));
+            if (bucket == box.buckets->end()) continue;
+            for (const std::uint32_t i : bucket->second) {
+              const Eigen::Vector3f d = target.points[i] - moved;
+              if (d.cwiseAbs().maxCoeff() >= window) continue;
+              const Eigen::Vector3i c = ((d.cast<double>().array() + window) / cell).floor().cast<int>().min(side - 1);
+              std::uint16_t& votes = grid[(static_cast<std::size_t>(c.z()) * side + c.y()) * side + c.x()];
+              if (votes < 0xffff) ++votes;
+            }
+          }
+    }
+    const auto peak = std::max_element(grid.begin(), grid.end());
+    if (*peak <= best.second) continue;
+    const std::size_t i = static_cast<std::size_t>(peak - grid.begin());
+    const Eigen::Vector3d offset = (Eigen::Vector3d(static_cast<double>(i % side), static_cast<double>(i / side % side),
+                                                    static_cast<double>(i / side / side))
+                                        .array() +
+                                    0.5) *
+                                       cell -
+                                   window;
+    best = {yawPose(axis, angle, centroid, t + offset), *peak};
+    best_yaw = angle;
+    best_t = t + offset;
+  }
+  if (refine_yaw) {
+    *refine_yaw = best_yaw;
+    *refine_t = best_t;
+  }
+  return best;
+}
+
+std::size_t countInliers(const Points& source, const GlobalAlignment::Target& target,
+                         const Eigen::Matrix4d& transformation, double radius) {
+  NearestNeighborIndex::Scratch scratch(1);
+  std::size_t inliers = 0;
+  for (const auto& p : source)
+    if (target.nearest(apply(transformation, p), scratch) <= radius) ++inliers;
+  return inliers;
+}
+
+}  // namespace
+
+GlobalAlignment::GlobalAlignment(GlobalAlignmentSettings settings)
+    : settings_(std::move(settings)), target_(std::make_unique<Target>()) {
+  const auto& s = settings_;
+  const auto require = [](bool ok, const char* what) {
+    if (!ok) throw std::invalid_argument(std::string("GlobalAlignmentSettings::") + what);
+  };
+  require(s.yaw_hypotheses >= 1 && s.yaw_hypotheses <= 3600, "yaw_hypotheses must be in 1-3600");
+  require(s.up_axis.allFinite() && s.up_axis.norm() > 0.0, "up_axis must be a finite non-zero vector");
+  require(std::isfinite(s.vote_cell) && s.vote_cell > 0.0, "vote_cell must be > 0");
+  for (const auto& [value, name] : {std::pair{s.sample_cell, "sample_cell must be >= 0"},
+                                    {s.initial_distance, "initial_distance must be >= 0"},
+                                    {s.min_distance, "min_distance must be >= 0"},
+                                    {s.inlier_distance, "inlier_distance must be >= 0"}})
+    require(std::isfinite(value) && value >= 0.0, name);
+  for (const auto& [value, name] : {std::pair{s.fine_yaw_range_deg, "fine_yaw_range_deg must be > 0"},
+                                    {s.medium_yaw_step_deg, "medium_yaw_step_deg must be > 0"},
+                                    {s.fine_yaw_step_deg, "fine_yaw_step_deg must be > 0"},
+                                    {s.fine_window, "fine_window must be > 0"},
+                                    {s.medium_cell, "medium_cell must be > 0"},
+                                    {s.fine_cell, "fine_cell must be > 0"}})
+    require(std::isfinite(value) && value > 0.0, name);
+  require(s.fine_window / s.medium_cell <= 200 && 2.0 * s.medium_cell / s.fine_cell <= 200,
+          "fine vote grids may have at most 200 cells a side");
+  require(s.max_source_samples >= 3 && s.max_target_samples >= 3, "sample caps must be >= 3");
+  require(s.peaks_per_rotation >= 1 && s.refined_hypotheses >= 1, "peaks and refined hypotheses must be >= 1");
+  require(s.hypothesis_iterations >= 1 && s.final_iterations >= 1, "iteration counts must be >= 1");
+  require(std::isfinite(s.shrink_factor) && s.shrink_factor > 0.0, "shrink_factor must be > 0");
+}
+
+GlobalAlignment::~GlobalAlignment() = default;
+GlobalAlignment::GlobalAlignment(GlobalAlignment&&) noexcept = default;
+GlobalAlignment& GlobalAlignment::operator=(GlobalAlignment&&) noexcept = default;
+
+void GlobalAlignment::setTarget(const Cloud& target) {
+  auto fresh = std::make_unique<Target>();
+  fresh->points = finitePoints(target, "target");
+  fresh->index.build(toCloud(fresh->points));
+  fresh->spacing = medianSpacing(fresh->points, fresh->index);
+  if (!(fresh->spacing > 0.0)) {
+    // Half the points or more sit on top of each other; use the extent instead.
+    Eigen::Vector3f lo = fresh->points[0], hi = lo;
+    for (const auto& p : fresh->points) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+    fresh->spacing = 1e-3 * static_cast<double>((hi - lo).norm());
+    if (!(fresh->spacing > 0.0)) throw std::invalid_argument("GlobalAlignment: all finite target points are identical");
+  }
+  fresh->bucket_size = settings_.fine_window;
+  fresh->small_bucket_size = 2.0 * settings_.medium_cell;
+  for (std::size_t i = 0; i < fresh->points.size(); ++i) {
+    const auto index = static_cast<std::uint32_t>(i);
+    fresh->buckets[Target::bucketKey(Target::bucketOf(fresh->points[i], fresh->bucket_size))].push_back(index);
+    fresh->small_buckets[Target::bucketKey(Target::bucketOf(fresh->points[i], fresh->small_bucket_size))].push_back(
+        index);
+  }
+  const double sample_cell = settings_.sample_cell > 0.0 ? settings_.sample_cell : settings_.vote_cell / 3.0;
+  fresh->sample = voxelSample(fresh->points, sample_cell, settings_.max_target_samples);
+  target_ = std::move(fresh);
+}
+
+GlobalAlignmentResult GlobalAlignment::align(const Cloud& source_cloud) const {
+  if (target_->points.empty()) throw std::invalid_argument("GlobalAlignment::align: no target set");
+  const Points source = finitePoints(source_cloud, "source");
+  const auto start = std::chrono::steady_clock::now();
+  const GlobalAlignmentSettings& s = settings_;
+  const double spacing = target_->spacing;
+  const double min_distance = s.min_distance > 0.0 ? s.min_distance : 2.0 * spacing;
+  const double inlier_distance = s.inlier_distance > 0.0 ? s.inlier_distance : 2.0 * spacing;
+  const Points sample =
+      voxelSample(source, s.sample_cell > 0.0 ? s.sample_cell : s.vote_cell / 3.0, s.max_source_samples);
+
+  // 1. Rotations about the up axis (about the sample's centroid), each with its voted translations.
+  Eigen::Vector3f centroid = Eigen::Vector3f::Zero();
+  for (const auto& p : sample) centroid += p;
+  centroid /= static_cast<float>(sample.size());
+  const Eigen::Vector3d axis = s.up_axis.normalized();
+  std::vector<Hypothesis> hypotheses;
+  for (unsigned int r = 0; r < s.yaw_hypotheses; ++r) {
+    const Eigen::Matrix3d rotation = Eigen::AngleAxisd(2.0 * M_PI * r / s.yaw_hypotheses, axis).toRotationMatrix();
+    Points rotated;
+    rotated.reserve(sample.size());
+    for (const auto& p : sample) rotated.push_back((rotation * (p - centroid).cast<double>()).cast<float>());
+    for (const auto& [translation, votes] :
+         voteTranslations(rotated, target_->sample, s.vote_cell, s.peaks_per_rotation)) {
+      hypotheses.push_back({2.0 * M_PI * r / s.yaw_hypotheses, translation, votes});
+    }
+  }
+
+  // 2. The best-voted hypotheses, each searched finely around, refined with the tight pass on every source
+  // point and ranked by inliers (stable: ties keep vote order).
+  std::stable_sort(hypotheses.begin(), hypotheses.end(),
+                   [](const Hypothesis& a, const Hypothesis& b) { return a.votes > b.votes; });
+  const std::size_t refined = std::min<std::size_t>(hypotheses.size(), s.refined_hypotheses);
+  Eigen::Matrix4d best = Eigen::Matrix4d::Identity();
+  std::size_t best_inliers = 0;
+  const VoteBox medium{s.fine_yaw_range_deg, s.medium_yaw_step_deg, s.fine_window,
+                       s.medium_cell,        &target_->buckets,     target_->bucket_size};
+  const VoteBox fine{s.medium_yaw_step_deg, s.fine_yaw_step_deg,     2.0 * s.medium_cell,
+                     s.fine_cell,           &target_->small_buckets, target_->small_bucket_size};
+  for (std::size_t h = 0; h < refined; ++h) {
+    double yaw = hypotheses[h].yaw;
+    Eigen::Vector3d t = hypotheses[h].translation;
+    fineVote(sample, *target_, medium, axis, yaw, centroid.cast<double>(), t, &yaw, &t);
+    const Eigen::Matrix4d pose = fineVote(sample, *target_, fine, axis, yaw, centroid.cast<double>(), t).first;
+    const TrimmedFit fit =
+        trimmedIcp(source, *target_, pose, 2.0 * s.fine_cell, min_distance, s.shrink_factor, s.hypothesis_iterations);
+    const std::size_t inliers = countInliers(source, *target_, fit.transformation, inlier_distance);
+    if (h == 0 || inliers > best_inliers) best = fit.transformation, best_inliers = inliers;
+  }
+
+  // 3. The winner refined on every source point.
+  GlobalAlignmentResult result = finish(source, best, 2.0 * s.fine_cell);
+  result.hypotheses_voted = hypotheses.size();
+  result.hypotheses_refined = refined;
+  result.time_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  return result;
+}
+
+GlobalAlignmentResult GlobalAlignment::refine(const Cloud& source_cloud, const Eigen::Matrix4d& guess) const {
+  if (target_->points.empty()) throw std::invalid_argument("GlobalAlignment::refine: no target set");
+  const Points source = finitePoints(source_cloud, "source");
+  const auto start = std::chrono::steady_clock::now();
+  GlobalAlignmentResult result =
+      finish(source, guess, settings_.initial_distance > 0.0 ? settings_.initial_distance : 2.0 * settings_.vote_cell);
+  result.time_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  return result;
+}
+
+GlobalAlignmentResult GlobalAlignment::finish(const Points& source, const Eigen::Matrix4d& start,
+                                              double start_distance) const {
+  const GlobalAlignmentSettings& s = settings_;
+  const double spacing = target_->spacing;
+  const double min_distance = s.min_distance > 0.0 ? s.min_distance : 2.0 * spacing;
+  const double inlier_distance = s.inlier_distance > 0.0 ? s.inlier_distance : 2.0 * spacing;
+  const TrimmedFit fit =
+      trimmedIcp(source, *target_, start, start_distance, min_distance, s.shrink_factor, s.final_iterations);
+  GlobalAlignmentResult result;
+  result.transformation = fit.transformation;
+  result.inliers = countInliers(source, *target_, fit.transformation, inlier_distance);
+  result.inlier_fraction = static_cast<double>(result.inliers) / static_cast<double>(source.size());
+  result.distance_limit = fit.distance_limit;
+  result.median_residual = fit.median_residual;
+  result.target_spacing = spacing;
+  result.inlier_distance = inlier_distance;
+  return result;
+}
+
+}  // namespace weighted_icp

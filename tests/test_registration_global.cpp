@@ -1,0 +1,99 @@
+// Alignment from any start (GlobalAlignment, GlobalLandmarkAligner): a yaw of
+// 180° and metres of translation on real landmarks, a partial overlap whose
+// shared landmarks are dealt out between the maps, and bad input.
+
+#include <cmath>
+#include <limits>
+#include <set>
+#include <stdexcept>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "test_support.h"
+#include "weighted_icp/io/map_format.h"
+#include "weighted_icp/registration/global_landmark_alignment.h"
+#include "weighted_icp/registration/rigid_motion.h"
+
+namespace {
+
+using namespace weighted_icp;
+
+/// Aligns `source`, displaced by `d`, onto `target` and checks the result undoes the displacement.
+void expectRecovered(const LandmarkMap& source, const LandmarkMap& target, const Displacement& d) {
+  LandmarkMap moved = source;
+  moved.transform(d.toIsometry());
+  GlobalLandmarkAligner aligner;
+  aligner.setTarget(toLandmarkCloud(target, CovarianceWeight{}));
+  const GlobalLandmarkAlignmentResult result = aligner.align(toLandmarkCloud(moved, CovarianceWeight{}));
+  const Eigen::Isometry3d truth = d.toIsometry().inverse(), estimate(result.alignment.transformation);
+  EXPECT_LT(rotationErrorDeg(estimate, truth), 2.0) << d.toString();
+  EXPECT_LT(translationError(estimate, truth), 0.05) << d.toString();
+  EXPECT_GT(result.global.inlier_fraction, 0.0);
+  EXPECT_FALSE(result.alignment.degenerate);
+}
+
+TEST(GlobalAlignment, RecoversYaw180OnDisjointHalvesOfTheRealMap) {
+  WEIGHTED_ICP_REQUIRE_FILE(weighted_icp::testing::realMapPath());
+  const auto [even, odd] =
+      io::readLandmarkMap(weighted_icp::testing::realMapPath().string()).withMinObservations(2).alternateHalves();
+  expectRecovered(odd, even, Displacement{1.5, -1.0, 0.0, 0.0, 0.0, 180.0});
+}
+
+TEST(GlobalAlignment, RecoversAPartialOverlapWithNoSharedLandmark) {
+  WEIGHTED_ICP_REQUIRE_FILE(weighted_icp::testing::realMapPath());
+  const LandmarkMap map = io::readLandmarkMap(weighted_icp::testing::realMapPath().string());
+  // Frames 0-143 and 96-239: a third of each one's frames shared; landmarks both saw dealt out by id parity.
+  LandmarkMap a = map.miniMap(0, 143), b = map.miniMap(96, 239);
+  std::set<LandmarkId> in_a;
+  for (const auto& l : a.landmarks) in_a.insert(l.id);
+  std::set<LandmarkId> shared;
+  for (const auto& l : b.landmarks)
+    if (in_a.count(l.id)) shared.insert(l.id);
+  ASSERT_GT(shared.size(), 100u);
+  const auto keep = [&](LandmarkMap& m, LandmarkId parity) {
+    std::vector<Landmark> kept;
+    for (const auto& l : m.landmarks)
+      if (!shared.count(l.id) || l.id % 2 == parity) kept.push_back(l);
+    m.landmarks = kept;
+  };
+  keep(a, 0);
+  keep(b, 1);
+  expectRecovered(b.withMinObservations(2), a.withMinObservations(2), Displacement{-2.0, 1.0, 0.0, 0.0, 0.0, 135.0});
+}
+
+TEST(GlobalAlignment, BadInputIsRefusedWithAClearMessage) {
+  GlobalAlignment::Cloud two;
+  two.push_back(pcl::PointXYZ(0, 0, 0));
+  two.push_back(pcl::PointXYZ(1, 0, 0));
+  GlobalAlignment global;
+  EXPECT_THROW(global.align(two), std::invalid_argument);  // no target yet
+  try {
+    global.setTarget(two);
+    ADD_FAILURE() << "two points accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("fewer than 3"), std::string::npos) << e.what();
+  }
+  GlobalAlignment::Cloud same;
+  for (int i = 0; i < 5; ++i) same.push_back(pcl::PointXYZ(1, 2, 3));
+  EXPECT_THROW(global.setTarget(same), std::invalid_argument);
+  GlobalAlignment::Cloud nans = same;
+  for (auto& p : nans) p.x = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_THROW(global.setTarget(nans), std::invalid_argument);
+
+  GlobalAlignmentSettings settings;
+  settings.yaw_hypotheses = 0;
+  EXPECT_THROW(GlobalAlignment{settings}, std::invalid_argument);
+  settings = {};
+  settings.fine_cell = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(GlobalAlignment{settings}, std::invalid_argument);
+  settings = {};
+  settings.up_axis = Eigen::Vector3d::Zero();
+  EXPECT_THROW(GlobalAlignment{settings}, std::invalid_argument);
+
+  GlobalLandmarkAligner landmarks;
+  EXPECT_THROW(landmarks.setTarget(std::make_shared<LandmarkCloud>()), std::invalid_argument);
+  EXPECT_THROW(landmarks.align(std::make_shared<LandmarkCloud>()), std::invalid_argument);
+}
+
+}  // namespace
