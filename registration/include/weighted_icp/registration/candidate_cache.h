@@ -47,10 +47,10 @@ class CandidateCache {
     /// @brief Room for the k + 1 best candidates.
     /// @param k  neighbours per query
     explicit Work(std::size_t k)
-        : rows_(k + 1),
-          distances_(k + 1),
-          gather_rows_(kGatherFactor * (k + 1)),
-          gather_distances_(kGatherFactor * (k + 1)) {}
+        : gather_rows_(kGatherFactor * (k + 1)),
+          gather_distances_(kGatherFactor * (k + 1)),
+          rows_(k + 1),
+          distances_(k + 1) {}
 
    private:
     friend class CandidateCache;
