@@ -12,18 +12,14 @@
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 seconds="${1:-60}"
-build="$root/build-fuzz"
 jobs=2
 
-# The gcc build's wicp_map converts the map seeds to PCD/PLY (skipped when it is not built).
-if [ ! -f "$build/build.ninja" ]; then
-  CC=clang-14 CXX=clang++-14 cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-    -DWEIGHTED_ICP_FUZZ=ON -DWEIGHTED_ICP_BUILD_TESTS=OFF -DWEIGHTED_ICP_BUILD_EXAMPLES=OFF \
-    -DWEIGHTED_ICP_BUILD_BENCHMARKS=OFF > "$build.configure.log" 2>&1 || { cat "$build.configure.log"; exit 1; }
-fi
+"$root/scripts/install_deps.sh"
+build="$(bash "$root/scripts/configure_fuzz_build.sh")"
 mapfile -t targets < "$build/fuzz/fuzzers.txt"
 cmake --build "$build" -j "$(nproc)" --target "${targets[@]/#/fuzz_}"
 
+# The gcc build's wicp_map converts the map seeds to PCD/PLY (skipped when it is not built).
 data="$root/../shared/data"
 rm -rf "$build/fuzz-seeds"
 if [ -d "$data" ]; then

@@ -1,0 +1,14 @@
+#!/usr/bin/env bash
+# Configures ./build-fuzz once: clang-14 with libFuzzer's coverage instrumentation and ASan+UBSan on
+# everything this project compiles (-DWEIGHTED_ICP_FUZZ=ON), tests and tools included. scripts/run_fuzzers.sh
+# builds its fuzz_<name> binaries there and scripts/run_sanitizers.sh its ASan+UBSan test programs, so CI
+# compiles the libraries once for both. Prints the build folder.
+set -euo pipefail
+root="$(cd "$(dirname "$0")/.." && pwd)"
+build="$root/build-fuzz"
+if [ ! -f "$build/build.ninja" ]; then
+  CC=clang-14 CXX=clang++-14 cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+    -DWEIGHTED_ICP_FUZZ=ON -DWEIGHTED_ICP_BUILD_BENCHMARKS=OFF -DWEIGHTED_ICP_BUILD_PYTHON=OFF \
+    > "$build.configure.log" 2>&1 || { cat "$build.configure.log" >&2; exit 1; }
+fi
+echo "$build"
