@@ -94,17 +94,6 @@ class SyntheticSource : public FrameSource {
   simulation::SyntheticRgbdSequence sequence_;
 };
 
-/// TUM folders are named after their sensor (rgbd_dataset_freiburg3_teddy, tum_fr1_xyz_head).
-std::string cameraFromFolderName(const std::string& dir) {
-  // The folder's own name only ("data/", "data/." and "data" alike), not its parents'.
-  const std::string name = fs::weakly_canonical(fs::absolute(dir)).filename().string();
-  for (const char* sensor : {"1", "2", "3"})
-    if (name.find(std::string("freiburg") + sensor) != std::string::npos ||
-        name.find(std::string("fr") + sensor) != std::string::npos)
-      return std::string("fr") + sensor;
-  throw std::runtime_error("cannot tell the camera of " + dir + " from its name; pass --camera fr1|fr2|fr3|FILE.yaml");
-}
-
 /// A quantile of the per-frame times; 0 when no frame was timed.
 double percentile(const std::vector<double>& values, double q) { return values.empty() ? 0.0 : quantile(values, q); }
 
@@ -331,7 +320,7 @@ int main(int argc, char** argv) {
     if (dataset.empty()) {
       source = std::make_unique<SyntheticSource>(synthetic);
     } else {
-      const std::string spec = camera_spec.empty() ? cameraFromFolderName(dataset) : camera_spec;
+      const std::string spec = camera_spec.empty() ? tools::cameraFromFolderName(dataset) : camera_spec;
       source = std::make_unique<TumSource>(dataset, io::loadCamera(spec));
     }
     const std::size_t frames = max_frames > 0 ? std::min(max_frames, source->size()) : source->size();

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <iostream>
@@ -195,6 +196,17 @@ void writeTextFile(const std::string& path, const std::string& content) {
     out.close();
     if (!out) throw std::runtime_error("cannot write " + path);
   });
+}
+
+std::string cameraFromFolderName(const std::string& dir) {
+  // The folder's own name only ("data/", "data/." and "data" alike), not its parents'.
+  namespace fs = std::filesystem;
+  const std::string name = fs::weakly_canonical(fs::absolute(dir)).filename().string();
+  for (const char* sensor : {"1", "2", "3"})
+    if (name.find(std::string("freiburg") + sensor) != std::string::npos ||
+        name.find(std::string("fr") + sensor) != std::string::npos)
+      return std::string("fr") + sensor;
+  throw std::runtime_error("cannot tell the camera of " + dir + " from its name; pass --camera fr1|fr2|fr3|FILE.yaml");
 }
 
 }  // namespace weighted_icp::tools

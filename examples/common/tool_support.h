@@ -158,6 +158,11 @@ class JsonObject {
   std::vector<std::pair<std::string, std::string>> members_;
 };
 
+/// @brief The camera preset of a TUM folder, from its own name (rgbd_dataset_freiburg3_teddy, tum_fr1_xyz_head).
+/// @param dir the dataset folder
+/// @return "fr1", "fr2" or "fr3"; std::runtime_error asking for --camera when the name tells none
+std::string cameraFromFolderName(const std::string& dir);
+
 /// Writes a text file atomically (temporary file, then rename).
 void writeTextFile(const std::string& path, const std::string& content);
 

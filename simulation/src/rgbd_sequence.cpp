@@ -35,6 +35,10 @@ constexpr double kRoomTexelsPerMetre = 250.0, kObjectTexelsPerMetre = 500.0;
 
 const Eigen::Vector3d kRoomSize(6.0, 5.0, 3.0);
 
+// The repeated texture's tile (perceptual aliasing): a square metre, about what the camera sees of a wall
+// two metres away in a third of the image, so every view holds a few copies of it.
+constexpr double kRepeatedTileMetres = 1.0;
+
 // A desk with a monitor and a box on it against the +y wall, a cabinet, a low
 // shelf and boxes along the others: all outside the camera's path (below).
 const std::vector<SceneBox>& furnitureLayout() {
@@ -56,8 +60,7 @@ const std::vector<SceneBox>& furnitureLayout() {
 // outwards at the walls and furniture, with slow sway and hand tremor. Rates
 // are per frame (not per second) since they set how far a tracker must follow.
 constexpr double kPathSemiAxisX = 1.1, kPathSemiAxisY = 0.85, kCameraHeight = 1.4;
-constexpr double kFramesPerLoop = 800.0;  // about 9 mm and 0.6 deg per frame
-constexpr double kTiltDownDeg = 12.0;     // to see the desk and floor below the horizon
+constexpr double kTiltDownDeg = 12.0;  // to see the desk and floor below the horizon
 
 // The moving object: a box carried past, kObjectDistance in front of the
 // camera, crossing the view in kCrossingFrames frames every kCrossingPeriod
@@ -124,6 +127,8 @@ void validate(const SyntheticRgbdOptions& options) {
   };
   const PinholeCamera& camera = options.camera;
   require(options.frames > 0, "frames must be at least 1");
+  require(std::isfinite(options.frames_per_loop) && options.frames_per_loop >= 10.0,
+          "frames_per_loop must be finite and at least 10");
   // Timestamps are written with microseconds: faster frames would share names.
   require(options.fps > 0.0 && options.fps <= 1000.0, "fps must be in (0, 1000]");
   require(camera.fx > 0.0 && camera.fy > 0.0, "camera fx and fy must be positive");
@@ -148,13 +153,21 @@ SyntheticRgbdSequence::SyntheticRgbdSequence(const SyntheticRgbdOptions& options
   // One job per box, each with its own seed: the result does not depend on threads.
   const int jobs = static_cast<int>(layout.size()) + 2;
   const std::uint64_t seed = options_.seed;
+  // One square metre of texture, repeated on every face, when aliasing is asked for.
+  const cv::Mat tile = options_.repeated_texture
+                           ? makeTexture(kRepeatedTileMetres, kRepeatedTileMetres, kRoomTexelsPerMetre,
+                                         subSeed(seed, Stream::RoomTextures, 0))
+                           : cv::Mat();
+  const auto boxTextures = [&](const Eigen::Vector3d& size, std::uint64_t box_seed) {
+    return options_.repeated_texture ? makeRepeatedBoxTextures(size, kRoomTexelsPerMetre, tile)
+                                     : makeBoxTextures(size, kRoomTexelsPerMetre, box_seed);
+  };
   cv::parallel_for_(cv::Range(0, jobs), [&](const cv::Range& range) {
     for (int job = range.start; job < range.end; ++job) {
       if (job < static_cast<int>(layout.size()))
-        scene->furniture_faces[job] =
-            makeBoxTextures(layout[job].size, kRoomTexelsPerMetre, subSeed(seed, Stream::RoomTextures, job + 1));
+        scene->furniture_faces[job] = boxTextures(layout[job].size, subSeed(seed, Stream::RoomTextures, job + 1));
       else if (job == static_cast<int>(layout.size()))
-        scene->room_faces = makeBoxTextures(kRoomSize, kRoomTexelsPerMetre, subSeed(seed, Stream::RoomTextures, 0));
+        scene->room_faces = boxTextures(kRoomSize, subSeed(seed, Stream::RoomTextures, 0));
       else if (options_.moving_object)
         scene->object_faces =
             makeBoxTextures(kObjectSize, kObjectTexelsPerMetre, subSeed(seed, Stream::ObjectTextures));
@@ -185,12 +198,12 @@ struct PathPoint {
   double heading;  // radians from +x about +z, the direction the camera faces
 };
 
-PathPoint pathPoint(double angle_start, const std::array<double, 6>& phase, std::size_t i) {
+PathPoint pathPoint(double angle_start, const std::array<double, 6>& phase, double frames_per_loop, std::size_t i) {
   const double frame = static_cast<double>(i);
   const auto wave = [&](double amplitude, double period_frames, double phase_offset) {
     return amplitude * std::sin(2.0 * kPi * frame / period_frames + phase_offset);
   };
-  const double angle = angle_start + 2.0 * kPi * frame / kFramesPerLoop;
+  const double angle = angle_start + 2.0 * kPi * frame / frames_per_loop;
   const Eigen::Vector3d on_ellipse(kPathSemiAxisX * std::cos(angle), kPathSemiAxisY * std::sin(angle), kCameraHeight);
   const Eigen::Vector3d tremor(wave(0.02, 110.0, phase[3]), wave(0.02, 130.0, phase[4]), wave(0.015, 90.0, phase[5]));
   const double heading = std::atan2(on_ellipse.y(), on_ellipse.x()) + wave(12.0 * kDegree, 300.0, phase[0]);
@@ -201,7 +214,7 @@ PathPoint pathPoint(double angle_start, const std::array<double, 6>& phase, std:
 
 Eigen::Isometry3d SyntheticRgbdSequence::cameraToWorld(std::size_t i) const {
   const auto& phase = scene_->path_phases;
-  const PathPoint point = pathPoint(scene_->path_start_angle, phase, i);
+  const PathPoint point = pathPoint(scene_->path_start_angle, phase, options_.frames_per_loop, i);
   const double frame = static_cast<double>(i);
   const double tilt_down = (kTiltDownDeg + 4.0 * std::sin(2.0 * kPi * frame / 210.0 + phase[1])) * kDegree;
   const double roll = 2.0 * kDegree * std::sin(2.0 * kPi * frame / 170.0 + phase[2]);
@@ -224,7 +237,8 @@ std::optional<SceneBox> SyntheticRgbdSequence::movingObject(std::size_t i) const
   if (step >= kCrossingFrames) return std::nullopt;
   // A straight line in the world, across the view of the crossing's middle frame.
   const std::size_t middle_frame = kFirstCrossing + crossing * kCrossingPeriod + kCrossingFrames / 2;
-  const PathPoint middle = pathPoint(scene_->path_start_angle, scene_->path_phases, middle_frame);
+  const PathPoint middle =
+      pathPoint(scene_->path_start_angle, scene_->path_phases, options_.frames_per_loop, middle_frame);
   const Eigen::Vector3d forward(std::cos(middle.heading), std::sin(middle.heading), 0.0);
   const Eigen::Vector3d left(-forward.y(), forward.x(), 0.0);
   const double progress = (static_cast<double>(step) + 0.5) / kCrossingFrames;  // (0, 1)

@@ -140,4 +140,16 @@ FaceTextures makeBoxTextures(const Eigen::Vector3d& size, double texels_per_metr
   return faces;
 }
 
+FaceTextures makeRepeatedBoxTextures(const Eigen::Vector3d& size, double texels_per_metre, const cv::Mat& tile) {
+  FaceTextures faces;
+  for (int face = 0; face < 6; ++face) {
+    const int cols = std::max(8, static_cast<int>(std::ceil(size[faceU(face / 2)] * texels_per_metre)) + 1);
+    const int rows = std::max(8, static_cast<int>(std::ceil(size[faceV(face / 2)] * texels_per_metre)) + 1);
+    cv::Mat repeated;
+    cv::repeat(tile, rows / tile.rows + 1, cols / tile.cols + 1, repeated);
+    faces[face] = repeated(cv::Rect(0, 0, cols, rows)).clone();
+  }
+  return faces;
+}
+
 }  // namespace weighted_icp::simulation

@@ -32,6 +32,11 @@ cv::Mat makeTexture(double width_m, double height_m, double texels_per_metre, st
 /// face k drawn from a hash of seed + k.
 FaceTextures makeBoxTextures(const Eigen::Vector3d& size, double texels_per_metre, std::uint64_t seed);
 
+/// @brief The six face textures of a box of `size`, every one the same `tile` repeated across it from its
+/// top-left corner: what perceptual aliasing looks like (one wallpaper everywhere).
+/// @param tile CV_8UC3, e.g. a makeTexture of a square metre
+FaceTextures makeRepeatedBoxTextures(const Eigen::Vector3d& size, double texels_per_metre, const cv::Mat& tile);
+
 /// @brief Bilinear sample of a CV_8UC3 texture at (col, row), clamped to its
 /// edges (inline: the renderer calls it for every pixel).
 inline cv::Vec3d sampleBilinear(const cv::Mat& texture, double col, double row) {

@@ -39,6 +39,15 @@ struct SyntheticRgbdOptions {
   /// Must have no distortion: the renderer casts undistorted rays.
   PinholeCamera camera = syntheticRgbdCamera();
 
+  /// Frames the camera takes to go once round its elliptic path (about 2.2 x 1.7 m) and come back to
+  /// where it started: with frames > frames_per_loop the sequence revisits its beginning (a loop). The
+  /// default, 800, is about 9 mm and 0.6 deg per frame; loop-closure tests use fewer for a short loop.
+  double frames_per_loop = 800.0;
+  /// Perceptual aliasing: every face of the room and of the furniture shows the same texture tile
+  /// (kRepeatedTileMetres square, drawn from the seed) repeated, so distinct places look alike and only
+  /// geometry tells them apart. Off: every face has its own texture.
+  bool repeated_texture = false;
+
   /// A textured box carried across the view now and then, covering up to
   /// about a fifth of the image while it passes.
   bool moving_object = false;

@@ -1,0 +1,66 @@
+// Speed of loop detection per keyframe, on a synthetic loop (keyframes at
+// true poses, as the mapping tests build them): the bag-of-words query
+// (transform, inverted file, consistency) against databases of growing size,
+// and the geometric verification of a true revisit (matching, RANSAC PnP,
+// weighted ICP, information matrix).
+//
+//   wicp_benchmark_place_recognition [Google Benchmark flags]
+//
+// CPU is process time; on a shared machine it is the fairer figure.
+
+#include <benchmark/benchmark.h>
+
+#include "mapping_fixtures.h"
+#include "weighted_icp/mapping/loop_verifier.h"
+#include "weighted_icp/mapping/place_recognizer.h"
+
+namespace {
+
+using namespace weighted_icp;
+
+const testing::SyntheticKeyframes& loopKeyframes() {
+  static const testing::SyntheticKeyframes data =
+      testing::syntheticKeyframes(7, false, 180.0, testing::everyNth(228, 6));
+  return data;
+}
+
+/// Transform + detect for the last keyframe, the database holding `range(0)` keyframes (the loop's keyframes
+/// repeated under new ids, so that the inverted file lists as many as a long session would).
+void BM_PlaceRecognitionQuery(benchmark::State& state) {
+  const auto& data = loopKeyframes();
+  const auto vocabulary = testing::trainedVocabulary();
+  std::vector<mapping::BowVector> bows;
+  for (const auto& [id, keyframe] : data.snapshot.keyframes)
+    bows.push_back(vocabulary->transform(keyframe.descriptors));
+  const auto database_size = static_cast<std::size_t>(state.range(0));
+  const frontend::Keyframe& query = data.snapshot.keyframes.rbegin()->second;
+  for (auto _ : state) {
+    state.PauseTiming();
+    mapping::PlaceRecognizer recognizer(vocabulary);
+    for (std::size_t i = 0; i < database_size; ++i) recognizer.add(i, bows[i % (bows.size() - 1)]);
+    state.ResumeTiming();
+    const mapping::BowVector bow = vocabulary->transform(query.descriptors);
+    benchmark::DoNotOptimize(recognizer.detect(database_size + 50, bow, {}));
+  }
+}
+BENCHMARK(BM_PlaceRecognitionQuery)->Arg(38)->Arg(500)->Arg(2000)->Unit(benchmark::kMillisecond);
+
+/// Verification of a true revisit (keyframe 32, frame 192, against keyframe 3, frame 18) with the odometry prior.
+void BM_LoopVerification(benchmark::State& state) {
+  const auto& data = loopKeyframes();
+  const mapping::LoopVerifier verifier(data.camera);
+  const frontend::KeyframeId query = 32, match = 3;
+  const mapping::LoopPrior prior = mapping::odometryPrior(data.snapshot, query, match);
+  std::size_t accepted = 0;
+  for (auto _ : state) {
+    const mapping::LoopVerification result = verifier.verify(data.snapshot, query, data.snapshot, match, prior);
+    accepted += result.accepted;
+    benchmark::DoNotOptimize(result);
+  }
+  state.counters["accepted_fraction"] = static_cast<double>(accepted) / static_cast<double>(state.iterations());
+}
+BENCHMARK(BM_LoopVerification)->Unit(benchmark::kMillisecond);
+
+}  // namespace
+
+BENCHMARK_MAIN();

@@ -1,0 +1,281 @@
+// Loop verification (see loop_verifier.h): descriptor matching to the
+// candidate's landmarks, RANSAC PnP, the weighted ICP check between local
+// landmark clouds, and the information matrix of the result.
+
+#include "weighted_icp/mapping/loop_verifier.h"
+
+#include <algorithm>
+#include <cmath>
+#include <iterator>
+#include <limits>
+#include <stdexcept>
+#include <vector>
+
+#include <pcl/kdtree/kdtree_flann.h>
+
+#include "weighted_icp/mapping/binary_vocabulary.h"
+#include "weighted_icp/registration/landmark_alignment.h"
+#include "weighted_icp/registration/landmark_point.h"
+
+namespace weighted_icp::mapping {
+
+namespace {
+
+constexpr double kRadiansToDegrees = 180.0 / 3.14159265358979323846;
+
+/// Query features matched to landmarks: the 3D point (match map's world frame) and the query's pixel.
+struct Matches {
+  std::vector<Eigen::Vector3d> points;
+  std::vector<Eigen::Vector2d> pixels;
+};
+
+/// Nearest landmark descriptor per query feature, kept when close enough and clearly better than the second.
+Matches matchToLandmarks(const frontend::Keyframe& query, const KeyframeSnapshot& match_map, const LandmarkMap& local,
+                         const LoopVerificationOptions& options) {
+  std::vector<BinaryDescriptor> landmark_descriptors;
+  std::vector<Eigen::Vector3d> landmark_positions;
+  for (const Landmark& landmark : local.landmarks) {
+    const frontend::MapPoint& point = match_map.points.at(landmark.id);
+    if (point.descriptor.empty() || !point.position.allFinite()) continue;
+    landmark_descriptors.push_back(toBinaryDescriptors(point.descriptor).front());
+    landmark_positions.push_back(point.position);
+  }
+  Matches matches;
+  const std::vector<BinaryDescriptor> features = toBinaryDescriptors(query.descriptors);
+  const std::size_t usable = std::min(features.size(), query.pixels.size());
+  for (std::size_t f = 0; f < usable; ++f) {
+    if (!query.pixels[f].allFinite()) continue;
+    int best = std::numeric_limits<int>::max(), second = best;
+    std::size_t best_index = 0;
+    for (std::size_t l = 0; l < landmark_descriptors.size(); ++l) {
+      const int d = hammingDistance(features[f], landmark_descriptors[l]);
+      if (d < best) {
+        second = best, best = d, best_index = l;
+      } else if (d < second) {
+        second = d;
+      }
+    }
+    if (best > options.max_hamming_distance) continue;
+    if (second != std::numeric_limits<int>::max() && best >= options.ratio * second) continue;
+    matches.points.push_back(landmark_positions[best_index]);
+    matches.pixels.push_back(query.pixels[f]);
+  }
+  return matches;
+}
+
+Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
+  Eigen::Matrix3d m;
+  m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
+  return m;
+}
+
+/// Overlap of the aligned query cloud with the match cloud: which query points have a match point within
+/// inlier_distance, and PCL's fitness (mean squared distance) over them.
+struct Overlap {
+  std::vector<std::pair<std::size_t, std::size_t>> pairs;  // (query index, match index)
+  double fitness = std::numeric_limits<double>::quiet_NaN();
+  double fraction = 0.0;
+};
+
+Overlap measureOverlap(const LandmarkCloud& query_cloud, const LandmarkCloud::ConstPtr& match_cloud,
+                       const Eigen::Isometry3d& correction, double inlier_distance) {
+  pcl::KdTreeFLANN<LandmarkPoint> tree;
+  tree.setInputCloud(match_cloud);
+  Overlap overlap;
+  std::vector<int> index(1);
+  std::vector<float> squared(1);
+  double sum = 0.0;
+  std::size_t finite = 0;
+  for (std::size_t i = 0; i < query_cloud.size(); ++i) {
+    const LandmarkPoint& p = query_cloud[i];
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) continue;
+    ++finite;
+    const Eigen::Vector3d moved = correction * Eigen::Vector3d(p.x, p.y, p.z);
+    LandmarkPoint probe = p;
+    probe.x = static_cast<float>(moved.x()), probe.y = static_cast<float>(moved.y());
+    probe.z = static_cast<float>(moved.z());
+    if (tree.nearestKSearch(probe, 1, index, squared) < 1) continue;
+    if (squared[0] > inlier_distance * inlier_distance) continue;
+    overlap.pairs.emplace_back(i, static_cast<std::size_t>(index[0]));
+    sum += squared[0];
+  }
+  if (!overlap.pairs.empty()) overlap.fitness = sum / static_cast<double>(overlap.pairs.size());
+  overlap.fraction = finite ? static_cast<double>(overlap.pairs.size()) / static_cast<double>(finite) : 0.0;
+  return overlap;
+}
+
+/// Gauss-Newton Hessian of the point-to-point residuals r_i = X q_i - m_i at X = query_in_match, in the match
+/// camera's frame, for the perturbation X Exp(delta) (delta = translation, rotation vector, on the right):
+/// J_i = [R, -R [q_i]x]. Each residual is whitened by the sum of both landmarks' covariances (rotated into
+/// the match camera), and the whole is scaled down when the residuals are larger than those covariances say
+/// (mean whitened square above 3, its expectation), so the information never claims more than the data show.
+Eigen::Matrix<double, 6, 6> icpInformation(const LandmarkMap& query_local, const LandmarkMap& match_local,
+                                           const Overlap& overlap, const Eigen::Isometry3d& query_wc,
+                                           const Eigen::Isometry3d& match_wc, const Eigen::Isometry3d& correction,
+                                           const Eigen::Isometry3d& query_in_match) {
+  Eigen::Matrix<double, 6, 6> information = Eigen::Matrix<double, 6, 6>::Zero();
+  const Eigen::Matrix3d R = query_in_match.linear();
+  const Eigen::Matrix3d to_match_camera = match_wc.linear().transpose();
+  const Eigen::Matrix3d query_to_match_world = correction.linear();
+  const Eigen::Matrix3d floor = Eigen::Matrix3d::Identity() * 1e-6;  // 1 mm: no landmark is known better
+  double chi2 = 0.0;
+  for (const auto& [qi, mi] : overlap.pairs) {
+    const Landmark& q = query_local.landmarks[qi];
+    const Landmark& m = match_local.landmarks[mi];
+    const Eigen::Vector3d q_camera = query_wc.inverse() * q.position;
+    const Eigen::Vector3d m_camera = match_wc.inverse() * m.position;
+    const Eigen::Matrix3d world =
+        query_to_match_world * q.covariance * query_to_match_world.transpose() + m.covariance + floor;
+    const Eigen::Matrix3d covariance = to_match_camera * world * to_match_camera.transpose();
+    const Eigen::Matrix3d whitening = covariance.inverse();
+    Eigen::Matrix<double, 3, 6> J;
+    J.leftCols<3>() = R;
+    J.rightCols<3>() = -R * skew(q_camera);
+    information += J.transpose() * whitening * J;
+    const Eigen::Vector3d r = query_in_match * q_camera - m_camera;
+    chi2 += r.dot(whitening * r);
+  }
+  if (!overlap.pairs.empty()) {
+    const double mean = chi2 / static_cast<double>(overlap.pairs.size());
+    if (mean > 3.0) information *= 3.0 / mean;
+  }
+  return 0.5 * (information + information.transpose());
+}
+
+/// The paper's weighted ICP with its refinement stage, from the PnP guess, correspondences limited so that
+/// the parts of the mini-maps without a counterpart do not pull.
+AlignmentResult alignMiniMaps(const LandmarkCloud::Ptr& query_cloud, const LandmarkCloud::Ptr& match_cloud,
+                              const Eigen::Isometry3d& guess, const LoopVerificationOptions& options) {
+  AlignmentSettings settings;
+  settings.k = neighboursFor(options.weight, options.k);
+  settings.max_iterations = 50;
+  settings.refine = true;
+  settings.refine_max_iterations = 50;
+  settings.max_correspondence_distance = options.icp_max_correspondence_m;
+  settings.threads = 1;  // the loop closer runs beside tracking: it must not take every core
+  LandmarkAligner aligner(settings);
+  aligner.setTarget(match_cloud);
+  return aligner.align(query_cloud, guess.matrix());
+}
+
+/// Why the measured loop is refused (empty when every test passes): PnP and ICP disagree, the clouds
+/// overlap too little or too loosely, or the result needs more drift than one session can have had.
+std::string disagreement(const LoopVerification& result, const LoopVerificationOptions& options,
+                         const std::optional<LoopPrior>& prior) {
+  if (result.icp_correction_m > options.max_icp_correction_m ||
+      result.icp_correction_deg > options.max_icp_correction_deg)
+    return "ICP moved the PnP pose too far (" + std::to_string(result.icp_correction_m) + " m, " +
+           std::to_string(result.icp_correction_deg) + " deg)";
+  if (result.overlap < options.min_overlap) return "too little overlap (" + std::to_string(result.overlap) + ")";
+  if (!(result.constraint.fitness <= options.max_fitness))
+    return "fitness " + std::to_string(result.constraint.fitness);
+  if (prior) {
+    const Eigen::Isometry3d drift = prior->expected_query_in_match.inverse() * result.constraint.query_in_match;
+    const double drift_deg = Eigen::AngleAxisd(drift.linear()).angle() * kRadiansToDegrees;
+    if (drift.translation().norm() > prior->max_translation_m || drift_deg > prior->max_rotation_deg)
+      return "implausible drift for one session (" + std::to_string(drift.translation().norm()) + " m, " +
+             std::to_string(drift_deg) + " deg)";
+  }
+  return "";
+}
+
+}  // namespace
+
+LoopVerifier::LoopVerifier(const PinholeCamera& camera, LoopVerificationOptions options)
+    : camera_(camera), options_(options) {
+  camera_.distortion = {};  // keyframe pixels are undistorted already
+  const auto positive = [](double x) { return std::isfinite(x) && x > 0.0; };
+  const auto fraction = [](double x) { return x >= 0.0 && x <= 1.0; };
+  if (!(camera_.fx > 0.0 && camera_.fy > 0.0)) throw std::invalid_argument("LoopVerifier: camera fx, fy must be > 0");
+  if (!positive(options_.icp_max_correspondence_m) || !positive(options_.inlier_distance_m) ||
+      !positive(options_.max_fitness) || !positive(options_.max_icp_correction_m) ||
+      !positive(options_.max_icp_correction_deg) || options_.max_hamming_distance <= 0)
+    throw std::invalid_argument("LoopVerifier: distances, fitness, corrections and max_hamming_distance must be > 0");
+  if (!fraction(options_.ratio) || !fraction(options_.min_overlap))
+    throw std::invalid_argument("LoopVerifier: ratio and min_overlap must be in [0, 1]");
+  if (options_.k < 1) throw std::invalid_argument("LoopVerifier: k must be at least 1");
+}
+
+LoopPrior odometryPrior(const KeyframeSnapshot& map, frontend::KeyframeId query, frontend::KeyframeId match,
+                        const DriftBounds& bounds) {
+  const auto q = map.keyframes.find(query);
+  const auto m = map.keyframes.find(match);
+  if (q == map.keyframes.end() || m == map.keyframes.end())
+    throw std::invalid_argument("odometryPrior: unknown keyframe " +
+                                std::to_string(q == map.keyframes.end() ? query : match));
+  double path = 0.0;
+  const auto first = map.keyframes.find(std::min(query, match));
+  const auto last = map.keyframes.find(std::max(query, match));
+  for (auto it = first; it != last; ++it)
+    path += (std::next(it)->second.pose_wc.translation() - it->second.pose_wc.translation()).norm();
+  LoopPrior prior;
+  prior.expected_query_in_match = m->second.pose_wc.inverse() * q->second.pose_wc;
+  prior.max_translation_m = bounds.translation_floor_m + bounds.translation_per_metre * path;
+  prior.max_rotation_deg = bounds.rotation_floor_deg + bounds.rotation_per_metre_deg * path;
+  return prior;
+}
+
+LoopVerification LoopVerifier::verify(const KeyframeSnapshot& query_map, frontend::KeyframeId query,
+                                      const KeyframeSnapshot& match_map, frontend::KeyframeId match,
+                                      const std::optional<LoopPrior>& prior) const {
+  const auto query_keyframe = query_map.keyframes.find(query);
+  const auto match_keyframe = match_map.keyframes.find(match);
+  if (query_keyframe == query_map.keyframes.end())
+    throw std::invalid_argument("LoopVerifier: no query keyframe " + std::to_string(query));
+  if (match_keyframe == match_map.keyframes.end())
+    throw std::invalid_argument("LoopVerifier: no candidate keyframe " + std::to_string(match));
+  const Eigen::Isometry3d query_wc = query_keyframe->second.pose_wc;
+  const Eigen::Isometry3d match_wc = match_keyframe->second.pose_wc;
+
+  LoopVerification result;
+  result.constraint.query = query;
+  result.constraint.match = match;
+  const auto refuse = [&](const std::string& why) {
+    result.reason = why;
+    return result;
+  };
+
+  // 1. Where is the query camera in the match map? Descriptor matches, then RANSAC PnP (any rotation).
+  const LandmarkMap match_local =
+      match_map.localLandmarks(match_map.neighbourhood(match, options_.neighbour_keyframes));
+  const Matches matches = matchToLandmarks(query_keyframe->second, match_map, match_local, options_);
+  result.matches = matches.points.size();
+  if (matches.points.size() < options_.min_inliers)
+    return refuse("too few descriptor matches (" + std::to_string(matches.points.size()) + ")");
+  const frontend::PoseEstimate pnp =
+      frontend::estimatePosePnp(matches.points, matches.pixels, camera_, std::nullopt, options_.pnp);
+  result.constraint.inliers = pnp.inliers.size();
+  if (!pnp.ok) return refuse("PnP failed: " + pnp.failure);
+  if (pnp.inliers.size() < options_.min_inliers)
+    return refuse("too few PnP inliers (" + std::to_string(pnp.inliers.size()) + ")");
+
+  // 2. The weighted ICP between the local landmark clouds, started where PnP put the query.
+  const LandmarkMap query_local =
+      query_map.localLandmarks(query_map.neighbourhood(query, options_.query_neighbour_keyframes));
+  const WeightFunction weight = weightFunction(options_.weight);
+  const LandmarkCloud::Ptr query_cloud = toLandmarkCloud(query_local, weight);
+  const LandmarkCloud::Ptr match_cloud = toLandmarkCloud(match_local, weight);
+  if (query_cloud->size() < 3 || match_cloud->size() < 3) return refuse("too few landmarks for ICP");
+  const Eigen::Isometry3d guess = pnp.pose_wc * query_wc.inverse();
+  result.pnp_query_in_match = match_wc.inverse() * pnp.pose_wc;
+  const AlignmentResult icp = alignMiniMaps(query_cloud, match_cloud, guess, options_);
+  if (icp.degenerate) return refuse("ICP degenerate: " + icp.reason);
+  Eigen::Isometry3d correction(icp.transformation);
+
+  // 3. Do PnP and the landmark geometry agree, and do the clouds overlap closely?
+  const Eigen::Isometry3d change = (guess * query_wc).inverse() * (correction * query_wc);
+  result.icp_correction_m = change.translation().norm();
+  result.icp_correction_deg = Eigen::AngleAxisd(change.linear()).angle() * kRadiansToDegrees;
+  const Overlap overlap = measureOverlap(*query_cloud, match_cloud, correction, options_.inlier_distance_m);
+  result.overlap = overlap.fraction;
+  result.constraint.fitness = overlap.fitness;
+  result.constraint.query_in_match = match_wc.inverse() * correction * query_wc;
+  if (const std::string why = disagreement(result, options_, prior); !why.empty()) return refuse(why);
+
+  result.constraint.information = icpInformation(query_local, match_local, overlap, query_wc, match_wc, correction,
+                                                 result.constraint.query_in_match);
+  result.accepted = true;
+  return result;
+}
+
+}  // namespace weighted_icp::mapping
