@@ -209,4 +209,16 @@ std::string cameraFromFolderName(const std::string& dir) {
   throw std::runtime_error("cannot tell the camera of " + dir + " from its name; pass --camera fr1|fr2|fr3|FILE.yaml");
 }
 
+std::string findToolDataFile(const std::string& name) {
+  namespace fs = std::filesystem;
+  std::error_code error;
+  // The executable's own folder, whatever the working directory: Linux names it in /proc.
+  const fs::path self = fs::read_symlink("/proc/self/exe", error);
+  if (error) return {};
+  const fs::path bin = self.parent_path();
+  for (const fs::path& candidate : {bin / name, bin.parent_path() / "share" / "weighted_icp" / name})
+    if (fs::is_regular_file(candidate, error)) return candidate.string();
+  return {};
+}
+
 }  // namespace weighted_icp::tools

@@ -166,4 +166,10 @@ std::string cameraFromFolderName(const std::string& dir);
 /// Writes a text file atomically (temporary file, then rename).
 void writeTextFile(const std::string& path, const std::string& content);
 
+/// @brief A data file that ships with the tools (the default vocabulary): next to the running executable (the
+/// build tree), else in <prefix>/share/weighted_icp/ beside its bin/ (the install tree).
+/// @param name the file's name
+/// @return its path, or empty when neither exists
+std::string findToolDataFile(const std::string& name);
+
 }  // namespace weighted_icp::tools
