@@ -1,6 +1,7 @@
 // wicp_merge: merges SLAM sessions (the session/ folders wicp_rgbd_slam writes)
 // into the first one's frame. Writes, in --out DIR (published by one rename):
 //   trajectory.txt  every frame of every merged session, TUM format, original timestamps
+//   trajectory_session_N.txt  the same, session N's frames only (unique timestamps)
 //   map.ply         the merged landmarks with weights
 //   graph.txt       the joint mini-map graph (sequential and merge edges)
 //   report.json     per session: merged or not, loops found and agreeing, its frame in the first one's
@@ -103,6 +104,11 @@ int main(int argc, char** argv) {
 
     const mapping::SessionMerge merge = mapping::mergeSessions(sessions, vocabulary, options);
     io::writeTrajectory(merge.trajectory, (folder.path() / "trajectory.txt").string());
+    // Per session too: runs of one sequence that overlap in time repeat timestamps in trajectory.txt.
+    for (std::size_t s = 0; s < sessions.size(); ++s)
+      if (merge.sessions[s].merged)
+        io::writeTrajectory(merge.session_trajectories[s],
+                            (folder.path() / ("trajectory_session_" + std::to_string(s) + ".txt")).string());
     io::saveLandmarkCloud(*toLandmarkCloud(merge.graph.mergedMap(), CovarianceWeight{}),
                           (folder.path() / "map.ply").string());
     mapping::saveMiniMapGraph(merge.graph, (folder.path() / "graph.txt").string());

@@ -188,7 +188,8 @@ void buildGraphAndTrajectory(const std::vector<Session>& sessions, const Session
   for (std::size_t s = 0; s < sessions.size(); ++s) {
     if (!merge.sessions[s].merged) continue;
     const Session moved = corrected(sessions[s], s, poses);
-    for (const auto& frame : moved.trajectory()) merge.trajectory.push_back(frame);
+    merge.session_trajectories[s] = moved.trajectory();
+    for (const auto& frame : merge.session_trajectories[s]) merge.trajectory.push_back(frame);
     append(merge.graph, MiniMapGraph::fromSlamMap(*moved.toMap(), options.keyframes_per_minimap, s, options.odometry));
     // The first keyframe's pose after and before: the session's world in the first one's, optimised.
     const frontend::Keyframe& first = sessions[s].keyframes.front();
@@ -222,6 +223,7 @@ SessionMerge mergeSessions(const std::vector<Session>& sessions, const BinaryVoc
   }
   SessionMerge merge;
   merge.sessions.resize(sessions.size());
+  merge.session_trajectories.resize(sessions.size());
   linkSessions(prepared, vocabulary, options, sessions, merge);
   const auto poses = optimise(prepared, options, merge);
   buildGraphAndTrajectory(sessions, options, poses, merge);

@@ -52,8 +52,11 @@ struct SessionMerge {
   std::vector<SessionLink> sessions;
   /// @brief The agreeing loops between sessions; keyframe ids are session * MiniMapGraph::kSessionIdStride + id.
   std::vector<LoopConstraint> loops;
-  /// @brief Every frame of every merged session in the first session's frame (original timestamps, in order).
+  /// @brief Every frame of every merged session in the first session's frame (original timestamps, session by
+  /// session: runs of one sequence that overlap in time repeat timestamps).
   Trajectory trajectory;
+  /// @brief The same frames per session (empty for a session not merged); each has unique timestamps.
+  std::vector<Trajectory> session_trajectories;
   /// @brief The mini-maps of the merged sessions, sequential edges per session and merge edges between them.
   MiniMapGraph graph;
   /// @brief The joint pose graph's outcome.
