@@ -348,7 +348,7 @@ int main(int argc, char** argv) {
         ("quality-gate", po::value(&gate_mode)->default_value(gate_mode),
          "relative (sharpness against the sequence's recent frames, robust z-score), absolute (BRISQUE above 47) or paper "
          "(BRISQUE on every frame, above 47)")
-                ("deterministic", "run bundle adjustment and loop closing inline instead of in their threads (reproducible)")
+        ("deterministic", "run bundle adjustment and loop closing inline instead of in their threads (reproducible)")
         ("no-loop-closure", "track and map only: no place recognition, no pose graph")
         ("vocabulary", po::value(&vocabulary_path), "place-recognition vocabulary (wicp_vocabulary train); "
                                                     "default: the one built with the tools")
