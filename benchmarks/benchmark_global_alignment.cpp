@@ -62,16 +62,8 @@ BENCHMARK(BM_GlobalWithWeightedIcp)->Name("with_weighted_icp")->Unit(benchmark::
 
 int main(int argc, char** argv) {
   weighted_icp::benchmarks::takeOption(argc, argv, "--map", map_path);
-  try {
+  return weighted_icp::benchmarks::runBenchmarks("wicp_benchmark_global_alignment", argc, argv, [] {
     std::cerr << "map " << map_path << ": " << pair().source->size() << " + " << pair().target->size()
               << " landmarks with >= 2 observations\n";
-  } catch (const std::exception& e) {
-    std::cerr << "wicp_benchmark_global_alignment: error: " << e.what() << '\n';
-    return 1;
-  }
-  benchmark::Initialize(&argc, argv);
-  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 2;
-  benchmark::RunSpecifiedBenchmarks();
-  benchmark::Shutdown();
-  return 0;
+  });
 }

@@ -214,16 +214,8 @@ int main(int argc, char** argv) {
     return 2;
   }
   registerAll(repeat_count);
-  try {
+  return weighted_icp::benchmarks::runBenchmarks("wicp_benchmark_icp", argc, argv, [&] {
     std::cerr << "map " << map_path << " (" << case_name << "): " << clouds().source->size() << " onto "
               << clouds().target->size() << " landmarks with >= 2 observations\n";
-  } catch (const std::exception& e) {
-    std::cerr << "wicp_benchmark_icp: error: " << e.what() << '\n';
-    return 1;
-  }
-  benchmark::Initialize(&argc, argv);
-  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 2;
-  benchmark::RunSpecifiedBenchmarks();
-  benchmark::Shutdown();
-  return 0;
+  });
 }

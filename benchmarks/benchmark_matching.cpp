@@ -158,15 +158,5 @@ void registerBenchmarks() {
 
 int main(int argc, char** argv) {
   weighted_icp::benchmarks::takeOption(argc, argv, "--data", data_dir);
-  try {
-    registerBenchmarks();
-  } catch (const std::exception& e) {
-    std::cerr << "wicp_benchmark_matching: error: " << e.what() << '\n';
-    return 1;
-  }
-  benchmark::Initialize(&argc, argv);
-  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 2;
-  benchmark::RunSpecifiedBenchmarks();
-  benchmark::Shutdown();
-  return 0;
+  return weighted_icp::benchmarks::runBenchmarks("wicp_benchmark_matching", argc, argv, [] { registerBenchmarks(); });
 }

@@ -240,18 +240,6 @@ int discardInterrupted(io::AtomicFolder& folder, std::size_t processed, std::siz
   return tools::interruptExitCode(signal);
 }
 
-/// `--out`, refused when not empty unless --overwrite, before the long run.
-io::AtomicFolder openOutput(const std::string& out_dir, bool overwrite) {
-  try {
-    return io::AtomicFolder(out_dir, overwrite);
-  } catch (const std::runtime_error& e) {
-    const std::string what = e.what();
-    if (!overwrite && what.find("not empty") != std::string::npos)
-      throw std::runtime_error(what + " (--overwrite replaces it)");
-    throw;
-  }
-}
-
 /// Builds every output in the folder's temporary copy, then publishes it; an
 /// exception (or a signal, checked last) leaves `--out` as it was.
 int writeAndPublish(io::AtomicFolder& folder, const FrameSource& source, std::size_t frames,
@@ -394,7 +382,7 @@ int main(int argc, char** argv) {
     mapping::LoopDetector detector;
     if (closing_options.loop_closure) detector = makeDetector(vocabulary_path, source->camera());
     // Checked and created before the long run, so a refused --out costs nothing.
-    io::AtomicFolder folder = openOutput(out_dir, vm.count("overwrite") > 0);
+    io::AtomicFolder folder = tools::openOutputFolder(out_dir, vm.count("overwrite") > 0);
     std::cout << "running on " << source->describe() << ", frames " << first_frame << " to " << frames
               << (closing_options.loop_closure ? ", closing loops\n" : ", no loop closure\n");
 

@@ -5,6 +5,7 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <tuple>
 
 #include <gtest/gtest.h>
 
@@ -128,15 +129,16 @@ TEST(CloudIo, GarbageFiles) {
   }
   // A valid header followed by 10 bytes of the first point.
   const LandmarkCloud::Ptr cloud = toLandmarkCloud(threeLandmarks(), UniformWeight{});
-  for (const auto& [name, header_end] :
-       {std::pair{"truncated.pcd", "DATA binary\n"}, std::pair{"truncated.ply", "end_header\n"}}) {
+  for (const auto& [name, header_end, error] :
+       {std::tuple{"truncated.pcd", "DATA binary\n", "more points than the file holds (3 points of 32 bytes, 10 bytes"},
+        std::tuple{"truncated.ply", "end_header\n", "not a readable"}}) {
     const fs::path path = scratch / name;
     io::saveLandmarkCloud(*cloud, path.string());
     const std::string text = readFile(path);
     const std::size_t data = text.find(header_end);
     ASSERT_NE(data, std::string::npos) << name;
     writeFile(path, text.substr(0, data + std::string(header_end).size() + 10));
-    expectError([&] { io::loadLandmarkCloud(path.string()); }, path, "not a readable");
+    expectError([&] { io::loadLandmarkCloud(path.string()); }, path, error);
   }
 }
 
@@ -207,6 +209,23 @@ fs::path pcdDeclaring(const fs::path& path, const std::string& count) {
 TEST(CloudIo, NegativePointCountIsNamed) {
   const fs::path path = pcdDeclaring(scratchDir("cloud_negative_count") / "negative.pcd", "-5");
   expectError([&] { io::loadLandmarkCloud(path.string()); }, path, "number of points");
+}
+
+// Found by fuzz/fuzz_cloud_pcd in CI: PCL allocates what POINTS declares before reading the data, so a
+// header of a few hundred bytes asked for gigabytes. Every encoding is checked against the file's size.
+TEST(CloudIo, AHeaderDeclaringMorePointsThanTheFileHoldsIsRefusedBeforeReading) {
+  const fs::path scratch = scratchDir("cloud_huge_count");
+  for (const std::string data : {"binary", "ascii", "binary_compressed"}) {
+    const fs::path path = pcdDeclaring(scratch / (data + ".pcd"), "100000000");
+    std::string text = readFile(path);
+    const std::size_t at = text.find("DATA binary\n");
+    ASSERT_NE(at, std::string::npos);
+    writeFile(path, text.replace(at, 12, "DATA " + data + "\n"));
+    expectError([&] { io::loadLandmarkCloud(path.string()); }, path, "more points than the file holds (100000000 points");
+  }
+  const fs::path ply = scratch / "huge.ply";
+  writeFile(ply, "ply\nformat binary_little_endian 1.0\nelement vertex 100000000\nproperty float x\nend_header\n");
+  expectError([&] { io::loadLandmarkCloud(ply.string()); }, ply, "more points than the file holds (100000000 vertices");
 }
 
 // Found by fuzz/fuzz_cloud_pcd: PCL's header parser let std::out_of_range escape on a DATA line without a type.

@@ -5,10 +5,12 @@
 #include <tuple>
 
 #include <gtest/gtest.h>
+
 #include <pcl/common/transforms.h>
 #include <pcl/point_types.h>
 #include <pcl/registration/correspondence_estimation.h>
 #include <pcl/registration/icp.h>
+#include "random_clouds.h"
 
 #include "test_support.h"
 #include "weighted_icp/io/map_format.h"
@@ -88,15 +90,7 @@ TEST(CandidateReuse, WholeIcpRunsAreBitIdenticalToTheUncachedSearch) {
 }
 
 /// Random points with exact duplicates, so that distance ties (FLANN's order) occur.
-Cloud::Ptr randomCloud(std::size_t n, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<float> coordinate(-1.0f, 1.0f);
-  auto cloud = std::make_shared<Cloud>();
-  for (std::size_t i = 0; i < n; ++i)
-    cloud->push_back(pcl::PointXYZ(coordinate(rng), coordinate(rng), coordinate(rng)));
-  for (std::size_t i = 0; i < n / 10; ++i) cloud->push_back((*cloud)[i * 7 % n]);
-  return cloud;
-}
+Cloud::Ptr randomCloud(std::size_t n, unsigned seed) { return weighted_icp::testing::randomCloud(n, seed, 1.0f, 10); }
 
 pcl::Correspondences correspondencesOf(
     pcl::registration::CorrespondenceEstimationBase<pcl::PointXYZ, pcl::PointXYZ>& ce, const Cloud::Ptr& source) {

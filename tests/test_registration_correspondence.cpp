@@ -6,6 +6,7 @@
 #include <random>
 
 #include <gtest/gtest.h>
+
 #include <pcl/common/transforms.h>
 #include <pcl/console/print.h>
 #include <pcl/point_representation.h>
@@ -13,6 +14,7 @@
 #include <pcl/registration/correspondence_estimation.h>
 #include <pcl/registration/icp.h>
 #include <pcl/search/kdtree.h>
+#include "random_clouds.h"
 
 #include "test_support.h"
 #include "weighted_icp/io/map_format.h"
@@ -34,16 +36,8 @@ Cloud::Ptr cloudOf(std::initializer_list<std::array<float, 3>> points) {
   return cloud;
 }
 
-/// Random points with some exact duplicates, so that distance ties occur.
-Cloud::Ptr randomCloud(std::size_t n, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<float> coordinate(-1.0f, 1.0f);
-  auto cloud = std::make_shared<Cloud>();
-  for (std::size_t i = 0; i < n; ++i)
-    cloud->push_back(pcl::PointXYZ(coordinate(rng), coordinate(rng), coordinate(rng)));
-  for (std::size_t i = 0; i < n / 20; ++i) cloud->push_back((*cloud)[i * 7 % n]);
-  return cloud;
-}
+/// Random points with exact duplicates, so that distance ties (FLANN's order) occur.
+Cloud::Ptr randomCloud(std::size_t n, unsigned seed) { return weighted_icp::testing::randomCloud(n, seed, 1.0f, 20); }
 
 Cloud::Ptr displaced(const Cloud& cloud, const weighted_icp::Displacement& d) {
   auto out = std::make_shared<Cloud>();

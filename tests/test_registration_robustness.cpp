@@ -9,7 +9,9 @@
 #include <string>
 
 #include <gtest/gtest.h>
+
 #include <pcl/point_types.h>
+#include "random_clouds.h"
 
 #include "weighted_icp/registration/landmark_alignment.h"
 #include "weighted_icp/registration/weighted_correspondence_estimation.h"
@@ -26,14 +28,8 @@ Cloud::Ptr identicalCloud(std::size_t n, float coordinate) {
   return cloud;
 }
 
-Cloud::Ptr randomCloud(std::size_t n, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<float> coordinate(-5.0f, 5.0f);
-  auto cloud = std::make_shared<Cloud>();
-  for (std::size_t i = 0; i < n; ++i)
-    cloud->push_back(pcl::PointXYZ(coordinate(rng), coordinate(rng), coordinate(rng)));
-  return cloud;
-}
+/// Random points in a 10 m cube.
+Cloud::Ptr randomCloud(std::size_t n, unsigned seed) { return weighted_icp::testing::randomCloud(n, seed, 5.0f, 0); }
 
 LandmarkCloud::Ptr landmarks(const Cloud& points) {
   auto cloud = std::make_shared<LandmarkCloud>();

@@ -26,13 +26,7 @@ ToolRun run(const std::string& tool, const std::string& args, const fs::path& sc
   return weighted_icp::testing::runBuiltTool(tool, args, scratch);
 }
 
-std::string lastLine(const std::string& text) {
-  std::istringstream in(text);
-  std::string line, last;
-  while (std::getline(in, line))
-    if (!line.empty()) last = line;
-  return last;
-}
+using weighted_icp::testing::lastLine;
 
 double numberAfter(const std::string& json, const std::string& key) {
   const std::regex pattern("\"" + key + "\":(-?[0-9.eE+-]+)");
@@ -56,11 +50,7 @@ TEST(WicpAlign, JsonLineRecoversTheDisplacementOnTheRealMap) {
                           "\"correspondences\":", "\"time_ms\":"})
     EXPECT_NE(json.find(key), std::string::npos) << key << " missing from " << json;
   // The transformation, row-major as 4 rows, must undo the displacement.
-  const std::regex number("-?[0-9.]+(e[-+]?[0-9]+)?");
-  const std::string rows = json.substr(json.find("[["), json.find("]]") - json.find("[[") + 2);
-  Eigen::Matrix4d t;
-  auto it = std::sregex_iterator(rows.begin(), rows.end(), number);
-  for (int i = 0; i < 16; ++i, ++it) t(i / 4, i % 4) = std::stod(it->str());
+  const Eigen::Matrix4d t = weighted_icp::testing::alignTransformation(json);
   const Eigen::Isometry3d truth = weighted_icp::Displacement{0.1, 0.05, 0, 0, 0, 8}.toIsometry().inverse();
   EXPECT_LT(weighted_icp::rotationErrorDeg(Eigen::Isometry3d(t), truth), 0.01);
   EXPECT_LT(weighted_icp::translationError(Eigen::Isometry3d(t), truth), 0.001);

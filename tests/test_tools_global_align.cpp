@@ -2,8 +2,6 @@
 // from geometry alone (a yaw of 180° no local ICP recovers).
 
 #include <filesystem>
-#include <regex>
-#include <sstream>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -24,18 +22,11 @@ TEST(WicpAlignGlobal, RecoversYaw180AndKeepsTheJsonContract) {
       "wicp_align", "--source " + map + " --target " + map + " --displace \"1 -1.5 0 0 0 180\" --global --json",
       scratch);
   ASSERT_EQ(r.status, 0) << r.err;
-  std::istringstream lines(r.out);
-  std::string line, json;
-  while (std::getline(lines, line))
-    if (!line.empty()) json = line;
+  const std::string json = weighted_icp::testing::lastLine(r.out);
   for (const char* key : {"\"transformation\":[[", "\"fitness_score\":", "\"iterations\":", "\"converged\":true",
                           "\"correspondences\":", "\"time_ms\":"})
     EXPECT_NE(json.find(key), std::string::npos) << key << " missing from " << json;
-  const std::regex number("-?[0-9.]+(e[-+]?[0-9]+)?");
-  const std::string rows = json.substr(json.find("[["), json.find("]]") - json.find("[[") + 2);
-  Eigen::Matrix4d t;
-  auto it = std::sregex_iterator(rows.begin(), rows.end(), number);
-  for (int i = 0; i < 16; ++i, ++it) t(i / 4, i % 4) = std::stod(it->str());
+  const Eigen::Matrix4d t = weighted_icp::testing::alignTransformation(json);
   const Eigen::Isometry3d truth = weighted_icp::Displacement{1, -1.5, 0, 0, 0, 180}.toIsometry().inverse();
   EXPECT_LT(weighted_icp::rotationErrorDeg(Eigen::Isometry3d(t), truth), 2.0);
   EXPECT_LT(weighted_icp::translationError(Eigen::Isometry3d(t), truth), 0.05);

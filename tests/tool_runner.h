@@ -9,7 +9,11 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <regex>
+#include <sstream>
 #include <string>
+
+#include <Eigen/Core>
 
 #include "test_support.h"
 
@@ -40,6 +44,25 @@ inline ToolRun runBuiltTool(const std::string& tool, const std::string& args, co
   std::ifstream err(err_file);
   result.err.assign(std::istreambuf_iterator<char>(err), {});
   return result;
+}
+
+/// The last non-empty line of a tool's output: where --json puts its object.
+inline std::string lastLine(const std::string& text) {
+  std::istringstream in(text);
+  std::string line, last;
+  while (std::getline(in, line))
+    if (!line.empty()) last = line;
+  return last;
+}
+
+/// The `transformation` of wicp_align's JSON object (4 rows of 4 numbers).
+inline Eigen::Matrix4d alignTransformation(const std::string& json) {
+  const std::regex number("-?[0-9.]+(e[-+]?[0-9]+)?");
+  const std::string rows = json.substr(json.find("[["), json.find("]]") - json.find("[[") + 2);
+  Eigen::Matrix4d t;
+  auto it = std::sregex_iterator(rows.begin(), rows.end(), number);
+  for (int i = 0; i < 16; ++i, ++it) t(i / 4, i % 4) = std::stod(it->str());
+  return t;
 }
 
 }  // namespace weighted_icp::testing

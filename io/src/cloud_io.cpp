@@ -6,6 +6,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <optional>
 #include <sstream>
 #include <stdexcept>
@@ -100,22 +101,6 @@ void requireConsistentBlob(const pcl::PCLPointCloud2& blob, const std::string& p
                              std::to_string(blob.data.size()) + " bytes of data)");
 }
 
-pcl::PCLPointCloud2 readPcd(const std::string& path) {
-  pcl::PCDReader reader;
-  pcl::PCLPointCloud2 blob;
-  Eigen::Vector4f origin;
-  Eigen::Quaternionf orientation;
-  int version = 0, data_type = 0;
-  unsigned int data_index = 0;
-  // PCL's reader crashes on a file whose header has no FIELDS (any non-PCD
-  // file), so the header is checked before the data is read.
-  if (reader.readHeader(path, blob, origin, orientation, version, data_type, data_index) != 0 || blob.fields.empty() ||
-      data_index == 0)
-    throw std::runtime_error(path + ": not a PCD file (no valid header)");
-  if (reader.read(path, blob) != 0) throw std::runtime_error(path + ": not a readable pcd point cloud");
-  return blob;
-}
-
 /// The vertex count a PLY header declares; nullopt if the file is not PLY or declares none.
 std::optional<std::uint64_t> plyVertexCount(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
@@ -168,10 +153,27 @@ std::optional<std::uintmax_t> plyExpectedSize(std::istream& in) {
   return static_cast<std::uintmax_t>(in.tellg()) + data;
 }
 
-/// The same for a binary PCD file: header, then POINTS times the bytes of a point.
-std::optional<std::uintmax_t> pcdExpectedSize(std::istream& in) {
+/// a x b, or the largest value when the product does not fit.
+std::uintmax_t saturatingProduct(std::uintmax_t a, std::uintmax_t b) {
+  const std::uintmax_t largest = std::numeric_limits<std::uintmax_t>::max();
+  return b != 0 && a > largest / b ? largest : a * b;
+}
+
+/// What a PCD header declares about the data that follows it.
+struct PcdLayout {
+  std::uintmax_t points = 0;       ///< the larger of POINTS and WIDTH x HEIGHT
+  bool negative = false;           ///< POINTS, WIDTH or HEIGHT is negative
+  std::uintmax_t point_bytes = 0;  ///< sum of SIZE x COUNT over the fields
+  std::string data;                ///< the DATA line: "DATA ascii", "DATA binary", ...
+  std::uintmax_t data_offset = 0;  ///< the first byte after the DATA line
+};
+
+/// Reads a PCD header up to its DATA line; nullopt when there is none or SIZE
+/// and COUNT disagree.
+std::optional<PcdLayout> readPcdLayout(std::istream& in) {
+  PcdLayout layout;
   std::string line;
-  std::uintmax_t points = 0, point_bytes = 0;
+  long long points = 0, width = 0, height = 1;
   std::vector<std::uintmax_t> sizes, counts;
   while (std::getline(in, line) && line.rfind("DATA", 0) != 0) {
     std::istringstream fields(line);
@@ -180,10 +182,69 @@ std::optional<std::uintmax_t> pcdExpectedSize(std::istream& in) {
     std::vector<std::uintmax_t>* target = keyword == "SIZE" ? &sizes : keyword == "COUNT" ? &counts : nullptr;
     for (std::uintmax_t value = 0; target && fields >> value;) target->push_back(value);
     if (keyword == "POINTS") fields >> points;
+    if (keyword == "WIDTH") fields >> width;
+    if (keyword == "HEIGHT") fields >> height;
   }
-  if (!in || line != "DATA binary" || sizes.size() != counts.size()) return std::nullopt;
-  for (std::size_t i = 0; i < sizes.size(); ++i) point_bytes += sizes[i] * counts[i];
-  return static_cast<std::uintmax_t>(in.tellg()) + points * point_bytes;
+  if (!in || sizes.size() != counts.size()) return std::nullopt;
+  layout.negative = points < 0 || width < 0 || height < 0;
+  if (!layout.negative)
+    layout.points = std::max<std::uintmax_t>(
+        points, saturatingProduct(static_cast<std::uintmax_t>(width), static_cast<std::uintmax_t>(height)));
+  for (std::size_t i = 0; i < sizes.size(); ++i)
+    layout.point_bytes += saturatingProduct(sizes[i], counts[i]);  // few fields: the sum cannot wrap in practice
+  layout.data = line;
+  while (!layout.data.empty() && std::isspace(static_cast<unsigned char>(layout.data.back()))) layout.data.pop_back();
+  layout.data_offset = static_cast<std::uintmax_t>(in.tellg());
+  return layout;
+}
+
+/// The same for a binary PCD file: header, then POINTS times the bytes of a point.
+std::optional<std::uintmax_t> pcdExpectedSize(std::istream& in) {
+  const auto layout = readPcdLayout(in);
+  if (!layout || layout->data != "DATA binary" || layout->negative) return std::nullopt;
+  return layout->data_offset + saturatingProduct(layout->points, layout->point_bytes);
+}
+
+/// PCL's header reader allocates what POINTS declares before it reads one byte
+/// of data: a fuzzed PCD of a few hundred bytes asked for gigabytes
+/// (fuzz/fuzz_cloud_pcd). The declared points are checked against what the
+/// file can hold first: binary data holds exactly the points' bytes, ASCII at
+/// least one byte per point, and LZF-compressed data expands at most about 90
+/// times (a 3-byte back-reference copies at most 264 bytes), taken as 100.
+void requirePcdDataFitsFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  const auto layout = readPcdLayout(in);
+  if (!layout) return;  // not a PCD header: PCL's own header check names it
+  if (layout->negative)
+    throw std::runtime_error(path + ": the header declares an impossible number of points (negative)");
+  std::error_code error;
+  const std::uintmax_t size = std::filesystem::file_size(path, error);
+  const std::uintmax_t available = error || size < layout->data_offset ? 0 : size - layout->data_offset;
+  const std::uintmax_t declared = saturatingProduct(layout->points, layout->point_bytes);
+  const bool fits = layout->data == "DATA binary"              ? declared <= available
+                    : layout->data == "DATA binary_compressed" ? declared <= saturatingProduct(available, 100)
+                                                               : layout->points <= available;
+  if (!fits)
+    throw std::runtime_error(path + ": the header declares more points than the file holds (" +
+                             std::to_string(layout->points) + " points of " + std::to_string(layout->point_bytes) +
+                             " bytes, " + std::to_string(available) + " bytes of data)");
+}
+
+pcl::PCLPointCloud2 readPcd(const std::string& path) {
+  pcl::PCDReader reader;
+  pcl::PCLPointCloud2 blob;
+  Eigen::Vector4f origin;
+  Eigen::Quaternionf orientation;
+  int version = 0, data_type = 0;
+  unsigned int data_index = 0;
+  requirePcdDataFitsFile(path);
+  // PCL's reader crashes on a file whose header has no FIELDS (any non-PCD
+  // file), so the header is checked before the data is read.
+  if (reader.readHeader(path, blob, origin, orientation, version, data_type, data_index) != 0 || blob.fields.empty() ||
+      data_index == 0)
+    throw std::runtime_error(path + ": not a PCD file (no valid header)");
+  if (reader.read(path, blob) != 0) throw std::runtime_error(path + ": not a readable pcd point cloud");
+  return blob;
 }
 
 /// PCL's writers do not check their streams (its PLY writer reports nothing on
@@ -256,6 +317,11 @@ LandmarkCloud::Ptr loadLandmarkCloud(const std::string& path) {
       if (!vertices) throw std::runtime_error(path + ": not a PLY file with a vertex element");
       // PCL's PLY reader crashes on a file without vertices; it is an empty cloud.
       if (*vertices == 0) return cloud;
+      // As PCD's: PCL allocates the declared vertices first; each takes at least one byte of the file.
+      if (*vertices > std::filesystem::file_size(path))
+        throw std::runtime_error(path + ": the header declares more points than the file holds (" +
+                                 std::to_string(*vertices) + " vertices in a file of " +
+                                 std::to_string(std::filesystem::file_size(path)) + " bytes)");
       if (pcl::io::loadPLYFile(path, blob) != 0) throw std::runtime_error(path + ": not a readable ply point cloud");
     }
   } catch (const std::bad_alloc&) {  // PCL allocates what the header declares
