@@ -4,7 +4,12 @@
 //   minimaps/       mini-maps in the paper's map format, ready for wicp_align
 //   session.txt     the whole session map in the same format
 //   map.ply         landmarks with weights and raw metrics
-//   report.json     counts, timing, skipped frames, ATE when ground truth exists
+//   graph.txt       the mini-map graph (docs/mapping.md), loop edges included
+//   session/        the session folder wicp_merge reads
+//   report.json     counts, timing, skipped frames, loops, ATE when ground truth exists
+// Loops are closed by default (place recognition with the default vocabulary
+// trained at build time, geometric verification, pose graph); --no-loop-closure
+// turns that off.
 // all built in a temporary folder beside DIR and published by one rename
 // (io::AtomicFolder), so DIR never mixes runs and a failed or interrupted run
 // leaves it as it was. A run that tracked no frame or mapped no landmark fails.
@@ -24,12 +29,15 @@
 #include "plotting.h"
 #include "tool_support.h"
 #include "weighted_icp/core/statistics.h"
-#include "weighted_icp/frontend/slam/rgbd_slam.h"
 #include "weighted_icp/io/atomic_folder.h"
 #include "weighted_icp/io/cloud_io.h"
 #include "weighted_icp/io/map_format.h"
 #include "weighted_icp/io/trajectory.h"
 #include "weighted_icp/io/tum_sequence.h"
+#include "weighted_icp/mapping/loop_closing_slam.h"
+#include "weighted_icp/mapping/loop_detector.h"
+#include "weighted_icp/mapping/minimap_graph.h"
+#include "weighted_icp/mapping/session.h"
 #include "weighted_icp/metrics/trajectory_error.h"
 #include "weighted_icp/registration/landmark_point.h"
 #include "weighted_icp/simulation/rgbd_sequence.h"
@@ -85,8 +93,8 @@ class SyntheticSource : public FrameSource {
   const PinholeCamera& camera() const override { return sequence_.options().camera; }
   std::string describe() const override {
     std::ostringstream out;
-    out << "synthetic sequence (seed " << sequence_.options().seed
-        << (sequence_.options().moving_object ? ", moving object" : "")
+    out << "synthetic sequence (seed " << sequence_.options().seed << ", " << sequence_.options().frames_per_loop
+        << " frames per loop" << (sequence_.options().moving_object ? ", moving object" : "")
         << (sequence_.options().dim_lighting ? ", dim lighting" : "") << ")";
     return out.str();
   }
@@ -104,12 +112,13 @@ struct RunCounts {
   std::vector<double> tracking_ms;
 };
 
-/// Feeds frames [0, frames) to `slam`, stopping early when SIGINT or SIGTERM
+/// Feeds frames [first, frames) to `slam`, stopping early when SIGINT or SIGTERM
 /// arrives (checked between frames, so a frame is never half processed).
-RunCounts trackFrames(const FrameSource& source, std::size_t frames, frontend::RgbdSlam& slam) {
+RunCounts trackFrames(const FrameSource& source, std::size_t first, std::size_t frames,
+                      mapping::LoopClosingSlam& slam) {
   RunCounts counts;
-  tools::Progress progress("tracking", frames);
-  for (std::size_t i = 0; i < frames && !tools::interrupted(); ++i, ++counts.processed) {
+  tools::Progress progress("tracking", frames - first);
+  for (std::size_t i = first; i < frames && !tools::interrupted(); ++i, ++counts.processed) {
     RgbdFrame image;
     try {
       image = source.load(i);
@@ -177,8 +186,9 @@ void addAte(const Trajectory& truth, const Trajectory& trajectory, tools::JsonOb
   }
 }
 
-/// Writes trajectory.txt, session.txt, minimaps/ and map.ply into `dir`.
-void writeMaps(const fs::path& dir, const Trajectory& trajectory, const LandmarkMap& session,
+/// Writes trajectory.txt, session.txt, minimaps/, map.ply, graph.txt and session/ into `dir`.
+void writeMaps(const fs::path& dir, const mapping::LoopClosingSlam& slam, const PinholeCamera& camera,
+               std::size_t minimap_keyframes, const Trajectory& trajectory, const LandmarkMap& session,
                const std::vector<LandmarkMap>& minimaps) {
   fs::create_directories(dir / "minimaps");
   io::writeTrajectory(trajectory, (dir / "trajectory.txt").string());
@@ -189,10 +199,16 @@ void writeMaps(const fs::path& dir, const Trajectory& trajectory, const Landmark
     io::writeLandmarkMap(minimaps[m], (dir / "minimaps" / name.str()).string());
   }
   io::saveLandmarkCloud(*toLandmarkCloud(session, CovarianceWeight{}), (dir / "map.ply").string());
+  // The graph of the corrected map: its sequential edges carry the loop's correction.
+  mapping::saveMiniMapGraph(mapping::MiniMapGraph::fromSlamMap(slam.slam().map(), minimap_keyframes),
+                            (dir / "graph.txt").string());
+  mapping::saveSession(mapping::captureSession(slam.slam(), camera), (dir / "session").string());
 }
 
-tools::JsonObject makeReport(const FrameSource& source, std::size_t frames, const frontend::RgbdSlam& slam,
+tools::JsonObject makeReport(const FrameSource& source, std::size_t frames, const mapping::LoopClosingSlam& closing,
                              const RunCounts& counts, std::size_t minimaps) {
+  const frontend::RgbdSlam& slam = closing.slam();
+  const mapping::LoopClosingStats loops = closing.loopStats();
   tools::JsonObject report;
   report.add("source", source.describe())
       .add("frames", frames)
@@ -207,7 +223,10 @@ tools::JsonObject makeReport(const FrameSource& source, std::size_t frames, cons
       .add("lost_frames", counts.lost)
       .add("clahe_frames", counts.clahe)
       .add("dynamic_matches", counts.dynamic)
-      .add("bundle_adjustments", slam.optimizationsRun());
+      .add("bundle_adjustments", slam.optimizationsRun())
+      .add("loops_detected", loops.loops_detected)
+      .add("loops_accepted", loops.loops_accepted)
+      .add("pose_graph_optimisations", loops.pose_graph_optimisations);
   return report;
 }
 
@@ -224,14 +243,15 @@ int discardInterrupted(io::AtomicFolder& folder, std::size_t processed, std::siz
 /// Builds every output in the folder's temporary copy, then publishes it; an
 /// exception (or a signal, checked last) leaves `--out` as it was.
 int writeAndPublish(io::AtomicFolder& folder, const FrameSource& source, std::size_t frames,
-                    const frontend::RgbdSlam& slam, RunCounts& counts) {
+                    std::size_t minimap_keyframes, const mapping::LoopClosingSlam& closing, RunCounts& counts) {
+  const frontend::RgbdSlam& slam = closing.slam();
   countResults(slam, counts);
   const LandmarkMap session = slam.sessionMap();
   requireUsableRun(counts, frames, session);
   const Trajectory trajectory = slam.trajectory();
   const std::vector<LandmarkMap> minimaps = slam.miniMaps();
-  writeMaps(folder.path(), trajectory, session, minimaps);
-  tools::JsonObject report = makeReport(source, frames, slam, counts, minimaps.size());
+  writeMaps(folder.path(), closing, source.camera(), minimap_keyframes, trajectory, session, minimaps);
+  tools::JsonObject report = makeReport(source, frames, closing, counts, minimaps.size());
   std::optional<metrics::AbsoluteTrajectoryError> ate;
   addAte(source.groundTruth(), trajectory, report, ate);
   // The picture beside trajectory.txt; a missing matplotlib is a warning, not a failed run.
@@ -244,15 +264,29 @@ int writeAndPublish(io::AtomicFolder& folder, const FrameSource& source, std::si
 
   std::cout << std::fixed << std::setprecision(1) << "tracked " << counts.tracked << "/" << frames << " frames, "
             << slam.map().keyframeCount() << " keyframes, " << slam.map().mapPointCount() << " landmarks, "
-            << minimaps.size() << " mini-maps; median " << percentile(counts.tracking_ms, 0.5) << " ms/frame (p90 "
-            << percentile(counts.tracking_ms, 0.9) << "); skipped " << counts.skipped << ", lost " << counts.lost
-            << '\n';
+            << minimaps.size() << " mini-maps, " << closing.loopStats().loops_accepted << " loop(s) closed; median "
+            << percentile(counts.tracking_ms, 0.5) << " ms/frame (p90 " << percentile(counts.tracking_ms, 0.9)
+            << "); skipped " << counts.skipped << ", lost " << counts.lost << '\n';
   if (ate)
     std::cout << std::setprecision(2) << "ATE RMSE " << ate->translation.rmse * 100 << " cm over " << ate->pairs
               << " poses\n";
   std::cout << "wrote " << folder.target().string()
-            << "/{trajectory.txt, session.txt, minimaps/, map.ply, report.json}\n";
+            << "/{trajectory.txt, session.txt, minimaps/, map.ply, graph.txt, session/, report.json}\n";
   return 0;
+}
+
+/// The loop detector over the vocabulary given, else the default one installed with the tools.
+mapping::LoopDetector makeDetector(const std::string& vocabulary_option, const PinholeCamera& camera) {
+  std::string path = vocabulary_option;
+  if (path.empty()) {
+    path = tools::findToolDataFile("default_vocabulary.txt");
+    if (path.empty())
+      throw std::runtime_error(
+          "no default vocabulary (default_vocabulary.txt) next to the tool or in share/weighted_icp; "
+          "give --vocabulary FILE (wicp_vocabulary train makes one) or --no-loop-closure");
+  }
+  auto vocabulary = std::make_shared<const mapping::BinaryVocabulary>(mapping::BinaryVocabulary::load(path));
+  return mapping::asLoopDetector(std::make_shared<mapping::BowLoopDetector>(std::move(vocabulary), camera));
 }
 
 }  // namespace
@@ -263,13 +297,18 @@ int main(int argc, char** argv) {
   tools::installInterruptHandlers();
   return tools::runTool("wicp_rgbd_slam", [&] {
     std::string dataset, camera_spec, out_dir, matcher_name = "flann", gate_mode = "relative";
-    std::size_t max_frames = 0;
-    frontend::RgbdSlamOptions options;
+    std::string vocabulary_path;
+    std::size_t max_frames = 0, first_frame = 0;
+    mapping::LoopClosingSlamOptions closing_options;
+    frontend::RgbdSlamOptions& options = closing_options.slam;
     simulation::SyntheticRgbdOptions synthetic;
     po::options_description description(
-        "wicp_rgbd_slam [--dataset DIR] [--camera fr1|fr2|fr3|FILE.yaml] [--max-frames N]\n"
-        "               [--minimap-keyframes N] --out DIR [--overwrite]\n"
-        "Feature-based RGB-D SLAM producing weighted landmark maps. The outputs are built beside DIR\n"
+        "wicp_rgbd_slam [--dataset DIR] [--camera fr1|fr2|fr3|FILE.yaml] [--first-frame N] [--max-frames N]\n"
+        "               [--minimap-keyframes N] [--no-loop-closure | --vocabulary FILE] --out DIR [--overwrite]\n"
+        "Feature-based RGB-D SLAM producing weighted landmark maps, closing loops (place recognition with\n"
+        "the default vocabulary built with the tools, geometric verification, pose graph) unless\n"
+        "--no-loop-closure. DIR gets trajectory.txt, session.txt, minimaps/, map.ply, graph.txt, session/\n"
+        "(for wicp_merge) and report.json (docs/mapping.md). The outputs are built beside DIR\n"
         "and published in one rename: DIR holds a whole run or is left as it was.\n"
         "Exit 0: done (no ATE when the ground truth shares too few timestamps: a warning, and\n"
         "report.json says why under \"ate_unavailable\"). Exit 1, with an error line and nothing\n"
@@ -283,23 +322,36 @@ int main(int argc, char** argv) {
         ("dataset", po::value(&dataset), "TUM RGB-D folder (rgb.txt, depth.txt, optional groundtruth.txt); "
                                          "default: the synthetic sequence")
         ("camera", po::value(&camera_spec), "fr1, fr2, fr3 or a camera YAML; default: DIR/camera.yaml, else from the folder name")
-        ("max-frames", tools::rangedValue(&max_frames, std::size_t{0})->default_value(0), "stop after N frames (0 = all)")
+        ("first-frame", tools::rangedValue(&first_frame, std::size_t{0})->default_value(0),
+         "start at frame N (e.g. one run of a sequence cut in two for wicp_merge)")
+        ("max-frames", tools::rangedValue(&max_frames, std::size_t{0})->default_value(0),
+         "stop before frame N (0 = at the end)")
         ("minimap-keyframes", tools::rangedValue(&options.minimap_keyframes, std::size_t{1}, std::size_t{100000})
                                   ->default_value(options.minimap_keyframes),
          "keyframes per mini-map (1-100000)")
         ("out", po::value(&out_dir)->required(), "output folder (created; published complete or not at all)")
         ("overwrite", "replace --out if it exists and is not empty")
         ("matcher", po::value(&matcher_name)->default_value(matcher_name), "flann (LSH) or brute-force")
-        ("no-quality-gate", "do not skip frames by BRISQUE score")
+        ("no-quality-gate", "do not judge frame quality (no frame is refused as a keyframe)")
         ("quality-gate", po::value(&gate_mode)->default_value(gate_mode),
-         "relative (BRISQUE against the sequence's recent scores), absolute (above 47) or paper (every frame, above 47)")
-        ("deterministic", "run bundle adjustment inline instead of in its own thread (reproducible)")
+         "relative (sharpness against the sequence's recent frames, robust z-score), absolute (BRISQUE above 47) or paper "
+         "(BRISQUE on every frame, above 47)")
+        ("deterministic", "run bundle adjustment and loop closing inline instead of in their threads (reproducible)")
+        ("no-loop-closure", "track and map only: no place recognition, no pose graph")
+        ("vocabulary", po::value(&vocabulary_path), "place-recognition vocabulary (wicp_vocabulary train); "
+                                                    "default: the one built with the tools")
         ("synthetic-frames", tools::rangedValue(&synthetic.frames, std::size_t{1}, std::size_t{100000})
                                  ->default_value(synthetic.frames),
          "synthetic: frames (1-100000)")
         ("seed", tools::rangedValue(&synthetic.seed, std::uint64_t{0})->default_value(synthetic.seed), "synthetic: seed")
         ("moving-object", po::bool_switch(&synthetic.moving_object), "synthetic: a box moves through the view")
-        ("dim", po::bool_switch(&synthetic.dim_lighting), "synthetic: dim, low-contrast, noisy images");
+        ("dim", po::bool_switch(&synthetic.dim_lighting), "synthetic: dim, low-contrast, noisy images")
+        ("frames-per-loop", tools::rangedValue(&synthetic.frames_per_loop, 10.0, 1e6)
+                                ->default_value(synthetic.frames_per_loop),
+         "synthetic: frames to go once round; fewer than --synthetic-frames makes a loop (10-1e6)")
+        ("depth-noise", tools::rangedValue(&synthetic.depth_noise_coefficient, 0.0, 1.0)
+                            ->default_value(synthetic.depth_noise_coefficient),
+         "synthetic: depth noise sigma_z = COEFF * z^2 (0-1)");
     // clang-format on
     po::variables_map vm;
     if (!tools::parseCommandLine(argc, argv, description, vm)) return 0;
@@ -311,6 +363,10 @@ int main(int argc, char** argv) {
       throw po::error(std::string("--quality-gate: ") + e.what());
     }
     options.backend.background_thread = !vm.count("deterministic");
+    closing_options.loop_closing.background_thread = !vm.count("deterministic");
+    closing_options.loop_closure = !vm.count("no-loop-closure");
+    if (!closing_options.loop_closure && !vocabulary_path.empty())
+      throw po::error("--vocabulary has no use with --no-loop-closure");
 
     std::unique_ptr<FrameSource> source;
     if (dataset.empty()) {
@@ -319,14 +375,21 @@ int main(int argc, char** argv) {
       source = std::make_unique<TumSource>(dataset, tools::datasetCamera(dataset, camera_spec));
     }
     const std::size_t frames = max_frames > 0 ? std::min(max_frames, source->size()) : source->size();
+    if (first_frame >= frames)
+      throw po::error("--first-frame " + std::to_string(first_frame) + " leaves no frame (the run has " +
+                      std::to_string(frames) + ")");
+    // Loaded before the long run, so a bad vocabulary costs nothing.
+    mapping::LoopDetector detector;
+    if (closing_options.loop_closure) detector = makeDetector(vocabulary_path, source->camera());
     // Checked and created before the long run, so a refused --out costs nothing.
     io::AtomicFolder folder = tools::openOutputFolder(out_dir, vm.count("overwrite") > 0);
-    std::cout << "running on " << source->describe() << ", " << frames << " frames\n";
+    std::cout << "running on " << source->describe() << ", frames " << first_frame << " to " << frames
+              << (closing_options.loop_closure ? ", closing loops\n" : ", no loop closure\n");
 
-    frontend::RgbdSlam slam(source->camera(), options);
-    RunCounts counts = trackFrames(*source, frames, slam);
-    slam.finish();  // joins the bundle-adjustment thread, also when interrupted
-    if (tools::interrupted()) return discardInterrupted(folder, counts.processed, frames);
-    return writeAndPublish(folder, *source, frames, slam, counts);
+    mapping::LoopClosingSlam slam(source->camera(), std::move(detector), closing_options);
+    RunCounts counts = trackFrames(*source, first_frame, frames, slam);
+    slam.finish();  // joins the bundle-adjustment and loop-closing threads, also when interrupted
+    if (tools::interrupted()) return discardInterrupted(folder, counts.processed, frames - first_frame);
+    return writeAndPublish(folder, *source, frames - first_frame, options.minimap_keyframes, slam, counts);
   });
 }

@@ -164,6 +164,11 @@ TEST(MiniMapGraph, CorruptFilesAreRefusedNamingFileAndLine) {
                            "frame 77");
   expectCorruptLineRefused("short_record", "FRAME 0", "FRAME 0 1 2", "fields");
   expectCorruptLineRefused("header", "WICP_MINIMAP_GRAPH", "WICP_MINIMAP_GRAPH 7", "version");
+  // Found by fuzz_minimap_graph: a record too short to name its node threw std::out_of_range.
+  expectCorruptLineRefused("no_node_field", "LANDMARK 0", "LANDMARK", "field 2 is missing");
+  // 16 + 3 n wraps round to 20 fields for this n: the record was read past its end.
+  expectCorruptLineRefused("wrapping_count", "LANDMARK 0",
+                           "LANDMARK 0 1 0 0 1 1 0 0 0 1 0 0 0 1 12297829382473034412 0 3 4 5", "does not match");
   EXPECT_THROW(mapping::loadMiniMapGraph((scratchDir("missing") / "none.txt").string()), io::MapFormatError);
 }
 

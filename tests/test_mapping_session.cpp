@@ -230,6 +230,21 @@ TEST(Session, CorruptFilesFailNamingFileAndLine) {
     replaceLine(file, lineStarting(file, "FEATURE", 5), "KEYFRAME_OOPS");
     expectErrorAt(folder, file, line + 1, "expected a FEATURE record");  // the second keyframe's first feature
   }
+  {
+    // A feature count of 2^40 with 32-byte descriptors: read feature by feature, never allocated up front.
+    const fs::path folder = fresh("huge_feature_count");
+    const fs::path file = folder / "keyframes.txt";
+    replaceLine(file, lineStarting(file, "KEYFRAME", 0), "KEYFRAME 0 0 0 0 0 0 0 1 0 0 0 1099511627776 32");
+    expectErrorAt(folder, file, lineStarting(file, "KEYFRAME", 1), "expected a FEATURE record");
+  }
+  {
+    // 16 + 4 n wraps round to 20 fields for n = 2^62 + 1: refused for the count, not read past the record.
+    const fs::path folder = fresh("wrapping_count");
+    const fs::path file = folder / "landmarks.txt";
+    const std::size_t line = lineStarting(file, "LANDMARK", 0);
+    replaceLine(file, line, "LANDMARK 0 0 0 1 1 0 0 0 1 0 0 0 1 - 4611686018427387905 0 320 240 1.5");
+    expectErrorAt(folder, file, line, "does not match");
+  }
 }
 
 TEST(Session, AMissingFolderOrFileIsAClearError) {

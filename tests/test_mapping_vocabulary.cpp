@@ -1,6 +1,7 @@
 // The vocabulary tree: training, words and scores, the text format's round
 // trip, and errors that name the file and line.
 
+#include <cmath>
 #include <fstream>
 #include <random>
 #include <sstream>
@@ -106,6 +107,24 @@ std::string loadError(const std::string& folder, const std::string& content, std
     return error.what();
   }
   return "";
+}
+
+TEST(Vocabulary, HugeWeightsInAFileStillGiveNormalisedVectors) {
+  // Found by fuzz_vocabulary: two descriptors on a word of weight 1e308 summed to infinity, and the vector to NaN.
+  std::istringstream in("wicp_vocabulary 1\nbranching 2\ndepth 1\nnodes 2\nnode 0 1 1e308 " + std::string(64, '0') +
+                        "\nnode 0 1 1 " + std::string(64, 'f') + "\n");
+  const BinaryVocabulary vocabulary = BinaryVocabulary::read(in, "huge.txt");
+  cv::Mat descriptors(3, 32, CV_8U, cv::Scalar(0));
+  descriptors.row(2).setTo(cv::Scalar(255));
+  const BowVector bow = vocabulary.transform(descriptors);
+  ASSERT_EQ(bow.size(), 2u);
+  double sum = 0.0;
+  for (const auto& [word, value] : bow) {
+    EXPECT_TRUE(std::isfinite(value)) << "word " << word;
+    sum += value;
+  }
+  EXPECT_NEAR(sum, 1.0, 1e-12);
+  EXPECT_NEAR(BinaryVocabulary::score(bow, bow), 1.0, 1e-12);
 }
 
 TEST(Vocabulary, CorruptFileErrorsNameFileAndLine) {

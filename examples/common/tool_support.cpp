@@ -209,4 +209,16 @@ io::AtomicFolder openOutputFolder(const std::string& out_dir, bool overwrite) {
   }
 }
 
+std::string findToolDataFile(const std::string& name) {
+  namespace fs = std::filesystem;
+  std::error_code error;
+  // The executable's own folder, whatever the working directory: Linux names it in /proc.
+  const fs::path self = fs::read_symlink("/proc/self/exe", error);
+  if (error) return {};
+  const fs::path bin = self.parent_path();
+  for (const fs::path& candidate : {bin / name, bin.parent_path() / "share" / "weighted_icp" / name})
+    if (fs::is_regular_file(candidate, error)) return candidate.string();
+  return {};
+}
+
 }  // namespace weighted_icp::tools

@@ -171,4 +171,10 @@ void writeTextFile(const std::string& path, const std::string& content);
 /// @param overwrite the --overwrite switch
 io::AtomicFolder openOutputFolder(const std::string& out_dir, bool overwrite);
 
+/// @brief A data file that ships with the tools (the default vocabulary): next to the running executable (the
+/// build tree), else in <prefix>/share/weighted_icp/ beside its bin/ (the install tree).
+/// @param name the file's name
+/// @return its path, or empty when neither exists
+std::string findToolDataFile(const std::string& name);
+
 }  // namespace weighted_icp::tools

@@ -16,6 +16,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "text_records.h"
+
 namespace weighted_icp::mapping {
 
 namespace {
@@ -218,12 +220,14 @@ WordId BinaryVocabulary::wordOf(const BinaryDescriptor& descriptor) const {
 
 BowVector BinaryVocabulary::transform(const cv::Mat& descriptors) const {
   BowVector bow;
-  for (const BinaryDescriptor& d : toBinaryDescriptors(descriptors)) {
-    const WordId word = wordOf(d);
-    bow[word] += weights_[word];  // tf * idf, tf's denominator cancels in the normalisation
-  }
+  for (const BinaryDescriptor& d : toBinaryDescriptors(descriptors)) bow[wordOf(d)] += 1.0;  // term counts
+  // tf * idf, tf's denominator cancelling in the normalisation; the weights are scaled by the largest first, which
+  // the normalisation cancels too, so that no sum overflows whatever weights a loaded file holds.
+  double largest = 0.0;
+  for (const auto& [word, count] : bow) largest = std::max(largest, weights_[word]);
   double sum = 0.0;
-  for (const auto& [word, value] : bow) sum += value;
+  if (largest > 0.0)
+    for (auto& [word, value] : bow) sum += (value *= weights_[word] / largest);
   if (sum > 0.0)
     for (auto& [word, value] : bow) value /= sum;
   else
@@ -312,9 +316,9 @@ class VocabularyReader {
       if (text.empty() || text[0] == '-') throw std::invalid_argument(text);
       value = std::stoull(text, &used);
     } catch (const std::exception&) {
-      fail(what + " must be a non-negative integer, got '" + text + "'");
+      fail(what + " must be a non-negative integer, got " + detail::echo(text));
     }
-    if (used != text.size()) fail(what + " must be a non-negative integer, got '" + text + "'");
+    if (used != text.size()) fail(what + " must be a non-negative integer, got " + detail::echo(text));
     return value;
   }
 
@@ -324,10 +328,10 @@ class VocabularyReader {
     try {
       value = std::stod(text, &used);
     } catch (const std::exception&) {
-      fail(what + " must be a number, got '" + text + "'");
+      fail(what + " must be a number, got " + detail::echo(text));
     }
     if (used != text.size() || !std::isfinite(value) || value < 0.0)
-      fail(what + " must be a finite number >= 0, got '" + text + "'");
+      fail(what + " must be a finite number >= 0, got " + detail::echo(text));
     return value;
   }
 
@@ -352,7 +356,7 @@ class VocabularyReader {
                           : c >= 'a' && c <= 'f' ? c - 'a' + 10
                           : c >= 'A' && c <= 'F' ? c - 'A' + 10
                                                  : -1;
-        if (digit < 0) fail(std::string("descriptor has a character that is not a hex digit: '") + c + "'");
+        if (digit < 0) fail("descriptor has a character that is not a hex digit: " + detail::echo(std::string(1, c)));
         value = 16 * value + digit;
       }
       bytes[b] = static_cast<unsigned char>(value);
@@ -374,7 +378,7 @@ BinaryVocabulary BinaryVocabulary::read(std::istream& in, const std::string& nam
   if (!reader.next(words)) reader.fail("empty file: not a vocabulary");
   if (words.size() != 2 || words[0] != kMagic) reader.fail("not a vocabulary: expected 'wicp_vocabulary 1'");
   if (reader.integer(words[1], "format version") != kFormatVersion)
-    reader.fail("unsupported format version " + words[1] + " (this build reads 1)");
+    reader.fail("unsupported format version " + detail::echo(words[1]) + " (this build reads 1)");
   BinaryVocabulary vocabulary;
   const auto branching = reader.header("branching");
   if (branching < 2 || branching > 1000) reader.fail("branching must be in [2, 1000]");
@@ -395,13 +399,15 @@ BinaryVocabulary BinaryVocabulary::read(std::istream& in, const std::string& nam
     if (words.size() != 5 || words[0] != "node")
       reader.fail("expected 'node <parent> <leaf 0|1> <weight> <descriptor>'");
     const auto parent = reader.integer(words[1], "parent");
-    if (parent >= n) reader.fail("parent " + words[1] + " is not an earlier node (nodes are listed parents first)");
-    if (is_leaf[parent]) reader.fail("parent " + words[1] + " is a leaf");
+    if (parent >= n)
+      reader.fail("parent " + detail::echo(words[1]) + " is not an earlier node (nodes are listed parents first)");
+    if (is_leaf[parent]) reader.fail("parent " + detail::echo(words[1]) + " is a leaf");
     if (vocabulary.nodes_[parent].children.size() >= branching)
-      reader.fail("node " + words[1] + " has more than branching = " + std::to_string(branching) + " children");
+      reader.fail("node " + detail::echo(words[1]) + " has more than branching = " + std::to_string(branching) +
+                  " children");
     if (level[parent] + 1 > depth) reader.fail("node is deeper than depth = " + std::to_string(depth));
     const auto leaf = reader.integer(words[2], "leaf flag");
-    if (leaf > 1) reader.fail("leaf flag must be 0 or 1, got " + words[2]);
+    if (leaf > 1) reader.fail("leaf flag must be 0 or 1, got " + detail::echo(words[2]));
     const double weight = reader.real(words[3], "weight");
     Node node{reader.descriptor(words[4]), {}, 0};
     if (leaf) {

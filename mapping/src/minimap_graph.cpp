@@ -38,7 +38,7 @@ std::string toString(MiniMapEdgeKind kind) {
 MiniMapEdgeKind parseMiniMapEdgeKind(const std::string& name) {
   for (const auto kind : {MiniMapEdgeKind::Sequential, MiniMapEdgeKind::Loop, MiniMapEdgeKind::Merge})
     if (toString(kind) == name) return kind;
-  throw std::invalid_argument("edge kind '" + name + "' is not one of sequential, loop, merge");
+  throw std::invalid_argument("edge kind " + detail::echo(name) + " is not one of sequential, loop, merge");
 }
 
 LandmarkMap MiniMapNode::inWorld() const {
@@ -207,6 +207,8 @@ void readLandmark(detail::RecordReader& in, LandmarkMap& landmarks) {
     for (int c = 0; c < 3; ++c)
       landmark.covariance(r, c) = in.number(6 + 3 * r + c, "c" + std::to_string(r) + std::to_string(c));
   const std::size_t n = in.count(15, "n");
+  // Compared by division: 16 + 3 n can wrap round for a corrupt n and match the record's length.
+  if (n != (in.size() - 16) / 3) in.fail("n = " + std::to_string(n) + " does not match the record's fields");
   in.expectFields(16 + 3 * n);
   for (std::size_t o = 0; o < n; ++o) {
     const std::size_t f = 16 + 3 * o;

@@ -149,7 +149,9 @@ frontend::Keyframe readKeyframe(detail::RecordReader& in) {
   const std::size_t features = in.count(12, "features");
   const std::size_t bytes = in.count(13, "descriptor_bytes");
   if (bytes > 4096) in.fail("descriptor_bytes " + std::to_string(bytes) + " is implausible");
-  if (bytes > 0) keyframe.descriptors = cv::Mat(static_cast<int>(features), static_cast<int>(bytes), CV_8U);
+  // Rows are added as FEATURE records are read, never allocated from the declared count: a corrupt count then
+  // ends in "the file ends where a FEATURE record was expected", not in an allocation of its size.
+  cv::Mat row(1, static_cast<int>(bytes), CV_8U);
   for (std::size_t i = 0; i < features; ++i) {
     in.expect("FEATURE");
     in.expectFields(12);
@@ -165,7 +167,8 @@ frontend::Keyframe readKeyframe(detail::RecordReader& in) {
     const double depth = in.number(10, "depth");
     if (depth < 0.0) in.fail("depth must not be negative");
     keyframe.depths.push_back(depth);
-    readDescriptor(in, 11, bytes, keyframe.descriptors, static_cast<int>(i));
+    readDescriptor(in, 11, bytes, row, 0);
+    if (bytes > 0) keyframe.descriptors.push_back(row);
   }
   return keyframe;
 }
@@ -206,6 +209,8 @@ std::vector<frontend::MapPoint> readLandmarks(const fs::path& path, std::map<fro
       readDescriptor(in, 14, hex.size() / 2, point.descriptor, 0);
     }
     const std::size_t n = in.count(15, "n");
+    // Compared by division: 16 + 4 n can wrap round for a corrupt n and match the record's length.
+    if (n != (in.size() - 16) / 4) in.fail("n = " + std::to_string(n) + " does not match the record's fields");
     in.expectFields(16 + 4 * n);
     for (std::size_t o = 0; o < n; ++o) {
       const std::size_t f = 16 + 4 * o;

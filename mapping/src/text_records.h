@@ -82,25 +82,31 @@ class RecordReader {
   /// Fails unless the record has exactly `count` fields (keyword included).
   void expectFields(std::size_t count) const {
     if (fields_.size() != count)
-      fail(std::string(fields_[0]) + " record has " + std::to_string(fields_.size()) + " fields, expected " +
+      fail(echo(fields_[0]) + " record has " + std::to_string(fields_.size()) + " fields, expected " +
            std::to_string(count));
   }
   /// Fails unless the record has at least `count` fields.
   void expectAtLeast(std::size_t count) const {
     if (fields_.size() < count)
-      fail(std::string(fields_[0]) + " record has " + std::to_string(fields_.size()) + " fields, expected at least " +
+      fail(echo(fields_[0]) + " record has " + std::to_string(fields_.size()) + " fields, expected at least " +
            std::to_string(count));
   }
 
   std::size_t size() const { return fields_.size(); }
-  std::string_view field(std::size_t i) const { return fields_.at(i); }
+  /// Field i; a record too short for it fails (naming the file and line) rather than throwing std::out_of_range.
+  std::string_view field(std::size_t i) const {
+    if (i >= fields_.size())
+      fail((fields_.empty() ? std::string("the record") : std::string(echo(fields_[0])) + " record") + " has " +
+           std::to_string(fields_.size()) + " fields, field " + std::to_string(i + 1) + " is missing");
+    return fields_[i];
+  }
   std::size_t line() const { return line_; }
   const std::string& path() const { return path_; }
 
   /// Field i as a finite double.
   double number(std::size_t i, const std::string& name) const {
     double value = 0.0;
-    const std::string_view text = fields_.at(i);
+    const std::string_view text = field(i);
     const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
     if (error != std::errc() || end != text.data() + text.size()) fail(name + " " + echo(text) + " is not a number");
     if (!std::isfinite(value)) fail(name + " must be finite");
@@ -109,7 +115,7 @@ class RecordReader {
   /// Field i as a non-negative integer.
   std::uint64_t count(std::size_t i, const std::string& name) const {
     std::uint64_t value = 0;
-    const std::string_view text = fields_.at(i);
+    const std::string_view text = field(i);
     const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
     if (error != std::errc() || end != text.data() + text.size())
       fail(name + " " + echo(text) + " is not a non-negative integer");
@@ -118,7 +124,7 @@ class RecordReader {
   /// Field i as an int (may be negative).
   int integer(std::size_t i, const std::string& name) const {
     int value = 0;
-    const std::string_view text = fields_.at(i);
+    const std::string_view text = field(i);
     const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
     if (error != std::errc() || end != text.data() + text.size()) fail(name + " " + echo(text) + " is not an integer");
     return value;

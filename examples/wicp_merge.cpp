@@ -1,0 +1,125 @@
+// wicp_merge: merges SLAM sessions (the session/ folders wicp_rgbd_slam writes)
+// into the first one's frame. Writes, in --out DIR (published by one rename):
+//   trajectory.txt  every frame of every merged session, TUM format, original timestamps
+//   trajectory_session_N.txt  the same, session N's frames only (unique timestamps)
+//   map.ply         the merged landmarks with weights
+//   graph.txt       the joint mini-map graph (sequential and merge edges)
+//   report.json     per session: merged or not, loops found and agreeing, its frame in the first one's
+// A session that shares no place with the others is left out and reported as
+// "no overlap" (exit 0); it is never forced in.
+
+#include <iomanip>
+#include <iostream>
+#include <sstream>
+
+#include <boost/program_options.hpp>
+
+#include "tool_support.h"
+#include "weighted_icp/io/atomic_folder.h"
+#include "weighted_icp/io/cloud_io.h"
+#include "weighted_icp/io/trajectory.h"
+#include "weighted_icp/mapping/session_merger.h"
+#include "weighted_icp/registration/landmark_point.h"
+
+namespace po = boost::program_options;
+namespace fs = std::filesystem;
+using namespace weighted_icp;
+
+namespace {
+
+mapping::BinaryVocabulary::ConstPtr loadVocabulary(std::string path) {
+  if (path.empty()) path = tools::findToolDataFile("default_vocabulary.txt");
+  if (path.empty())
+    throw std::runtime_error(
+        "no default vocabulary (default_vocabulary.txt) next to the tool or in share/weighted_icp; give --vocabulary "
+        "FILE (wicp_vocabulary train makes one)");
+  return std::make_shared<const mapping::BinaryVocabulary>(mapping::BinaryVocabulary::load(path));
+}
+
+tools::JsonObject makeReport(const std::vector<std::string>& folders, const mapping::SessionMerge& merge) {
+  tools::JsonObject report;
+  std::size_t merged = 0;
+  std::string not_merged;
+  report.add("sessions", folders.size());
+  for (std::size_t s = 0; s < folders.size(); ++s) {
+    const mapping::SessionLink& link = merge.sessions[s];
+    const std::string key = "session_" + std::to_string(s);
+    report.add(key + "_folder", folders[s]).add(key + "_merged", link.merged);
+    if (s > 0) report.add(key + "_loops_found", link.loops_found).add(key + "_loops_agreeing", link.loops_agreeing);
+    if (link.merged) {
+      ++merged;
+      report.add(key + "_linked_to", link.linked_to)
+          .add(key + "_world_in_first", Eigen::MatrixXd(link.world_in_first.matrix()));
+    } else {
+      not_merged += (not_merged.empty() ? "" : ", ") + folders[s];
+    }
+  }
+  report.add("merged_sessions", merged)
+      .add("overlap",
+           merged == folders.size() ? std::string("all sessions merged") : "no overlap: " + not_merged + " left out")
+      .add("loops_accepted", merge.loops.size())
+      .add("loops_used_by_pose_graph", merge.summary.loops_used)
+      .add("frames", merge.trajectory.size())
+      .add("minimaps", merge.graph.nodes().size());
+  return report;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return tools::runTool("wicp_merge", [&] {
+    std::vector<std::string> folders;
+    std::string out_dir, vocabulary_path;
+    mapping::SessionMergeOptions options;
+    po::options_description description(
+        "wicp_merge --session A --session B [--session C ...] --out DIR [--vocabulary FILE] [--overwrite]\n"
+        "Merges SLAM sessions (the session/ folders of wicp_rgbd_slam) into the first one's frame: place\n"
+        "recognition between their keyframes, verification with no prior (PnP, weighted ICP), at least\n"
+        "--min-loops verified loops agreeing on the transform, one joint pose graph. DIR gets trajectory.txt\n"
+        "(every frame of every merged session, TUM format), map.ply, graph.txt and report.json, published\n"
+        "in one rename. A session without overlap is left out and the report says \"no overlap\" (exit 0).\n"
+        "Exit 1: an error (a missing or corrupt session file, named with its line), nothing written.\n"
+        "Exit 2: bad command line. Options");
+    // clang-format off
+    description.add_options()
+        ("help,h", "print this help")
+        ("session", po::value(&folders)->required(), "a session folder (repeat; at least two)")
+        ("out", po::value(&out_dir)->required(), "output folder (created; published complete or not at all)")
+        ("overwrite", "replace --out if it exists and is not empty")
+        ("vocabulary", po::value(&vocabulary_path), "place-recognition vocabulary; default: the one built with the tools")
+        ("min-loops", tools::rangedValue(&options.min_agreeing_loops, std::size_t{1}, std::size_t{1000})
+                          ->default_value(options.min_agreeing_loops),
+         "verified loops that must agree on a session's transform (1-1000)")
+        ("minimap-keyframes", tools::rangedValue(&options.keyframes_per_minimap, std::size_t{1}, std::size_t{100000})
+                                  ->default_value(options.keyframes_per_minimap),
+         "keyframes per mini-map of graph.txt (1-100000)");
+    // clang-format on
+    po::variables_map vm;
+    if (!tools::parseCommandLine(argc, argv, description, vm)) return 0;
+    if (folders.size() < 2) throw po::error("give at least two --session folders");
+    io::AtomicFolder folder(out_dir, vm.count("overwrite") > 0);
+    const auto vocabulary = loadVocabulary(vocabulary_path);
+    std::vector<mapping::Session> sessions;
+    for (const std::string& path : folders) sessions.push_back(mapping::loadSession(path));
+
+    const mapping::SessionMerge merge = mapping::mergeSessions(sessions, vocabulary, options);
+    io::writeTrajectory(merge.trajectory, (folder.path() / "trajectory.txt").string());
+    // Per session too: runs of one sequence that overlap in time repeat timestamps in trajectory.txt.
+    for (std::size_t s = 0; s < sessions.size(); ++s)
+      if (merge.sessions[s].merged)
+        io::writeTrajectory(merge.session_trajectories[s],
+                            (folder.path() / ("trajectory_session_" + std::to_string(s) + ".txt")).string());
+    io::saveLandmarkCloud(*toLandmarkCloud(merge.graph.mergedMap(), CovarianceWeight{}),
+                          (folder.path() / "map.ply").string());
+    mapping::saveMiniMapGraph(merge.graph, (folder.path() / "graph.txt").string());
+    const tools::JsonObject report = makeReport(folders, merge);
+    tools::writeTextFile((folder.path() / "report.json").string(), report.str() + "\n");
+    folder.publish();
+    for (std::size_t s = 1; s < folders.size(); ++s)
+      std::cout << folders[s] << ": " << (merge.sessions[s].merged ? "merged" : "no overlap, left out") << " ("
+                << merge.sessions[s].loops_agreeing << " agreeing of " << merge.sessions[s].loops_found
+                << " verified loops)\n";
+    std::cout << "wrote " << folder.target().string() << "/{trajectory.txt, map.ply, graph.txt, report.json}\n";
+    return 0;
+  });
+}

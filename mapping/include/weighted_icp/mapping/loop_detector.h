@@ -1,0 +1,77 @@
+#pragma once
+// The loop detector the loop closer calls: place recognition proposes older
+// keyframes that look like the new one, geometric verification (bounded by the
+// odometry's drift) accepts the first whose geometry agrees. The piece that
+// turns PlaceRecognizer and LoopVerifier into a LoopDetector.
+#include <cstddef>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "weighted_icp/core/camera.h"
+#include "weighted_icp/mapping/binary_vocabulary.h"
+#include "weighted_icp/mapping/loop_closer.h"
+#include "weighted_icp/mapping/loop_verifier.h"
+#include "weighted_icp/mapping/place_recognizer.h"
+
+namespace weighted_icp::mapping {
+
+/// @brief Options of BowLoopDetector.
+struct LoopDetectorOptions {
+  /// @brief Candidate search (exclusions, score thresholds, temporal consistency).
+  PlaceRecognitionOptions recognition;
+  /// @brief Geometric verification (PnP, weighted ICP check).
+  LoopVerificationOptions verification;
+  /// @brief How far from the odometry's estimate a verified pose may be (the drift the run can have).
+  DriftBounds drift;
+  /// @brief false: verification without the odometry prior (any pose the geometry supports).
+  bool use_odometry_prior = true;
+};
+
+/// @brief What the detector did so far (for reports and tests).
+struct LoopDetectorStats {
+  /// @brief Keyframes queried.
+  std::size_t queries = 0;
+  /// @brief Candidates place recognition proposed (after temporal consistency).
+  std::size_t candidates = 0;
+  /// @brief Candidates geometric verification accepted (one per query at most is returned).
+  std::size_t verified = 0;
+};
+
+/// @brief Place recognition + geometric verification over one front-end map. Not thread-safe: the loop closer
+/// calls it from one thread, one keyframe at a time, in insertion order.
+class BowLoopDetector {
+ public:
+  using Ptr = std::shared_ptr<BowLoopDetector>;
+
+  /// @brief Throws std::invalid_argument without a vocabulary.
+  /// @param vocabulary The trained vocabulary (shared, read only).
+  /// @param camera The camera of the sequence (verification's PnP).
+  /// @param options See LoopDetectorOptions.
+  BowLoopDetector(BinaryVocabulary::ConstPtr vocabulary, const PinholeCamera& camera, LoopDetectorOptions options = {});
+
+  /// @brief Queries the map's keyframe `query` against the keyframes seen before, then adds it to the database.
+  /// @param map The SLAM map (read through one snapshot under its lock).
+  /// @param query The keyframe just inserted.
+  /// @return The best-scoring verified loop (score = place recognition's normalised score), or nothing.
+  std::optional<LoopConstraint> detect(const frontend::Map& map, frontend::KeyframeId query);
+
+  /// @brief Counters so far.
+  const LoopDetectorStats& stats() const { return stats_; }
+
+  /// @brief "BowLoopDetector".
+  static std::string getClassName() { return "BowLoopDetector"; }
+
+ private:
+  BinaryVocabulary::ConstPtr vocabulary_;
+  PlaceRecognizer recognizer_;
+  LoopVerifier verifier_;
+  LoopDetectorOptions options_;
+  LoopDetectorStats stats_;
+};
+
+/// @brief The detector in the form LoopCloser and LoopClosingSlam take; the returned function shares `detector`.
+/// @param detector The detector (not null: std::invalid_argument).
+LoopDetector asLoopDetector(const BowLoopDetector::Ptr& detector);
+
+}  // namespace weighted_icp::mapping

@@ -1,0 +1,73 @@
+#pragma once
+// Merging saved SLAM sessions: place recognition between their keyframes,
+// verification with no odometry prior (their frames are unrelated), a relative
+// transform only when several verified loops agree on it, then one pose graph
+// over all merged keyframes. Sessions that do not overlap are reported, never
+// forced together.
+#include <cstddef>
+#include <vector>
+
+#include "weighted_icp/core/trajectory.h"
+#include "weighted_icp/mapping/binary_vocabulary.h"
+#include "weighted_icp/mapping/loop_verifier.h"
+#include "weighted_icp/mapping/minimap_graph.h"
+#include "weighted_icp/mapping/pose_graph.h"
+#include "weighted_icp/mapping/session.h"
+
+namespace weighted_icp::mapping {
+
+/// @brief Options of mergeSessions.
+struct SessionMergeOptions {
+  /// @brief Best-scoring keyframes of the other session verified per query keyframe.
+  std::size_t candidates_per_keyframe = 3;
+  /// @brief Verified loops that must agree on the relative transform (one could be an aliased place).
+  std::size_t min_agreeing_loops = 2;
+  /// @brief Two loops agree when their relative transforms differ by less than this (metres, degrees).
+  double agreement_translation_m = 0.10, agreement_rotation_deg = 5.0;
+  /// @brief Geometric verification (PnP from any starting pose, weighted ICP check).
+  LoopVerificationOptions verification;
+  /// @brief Information of the odometry edges within a session.
+  OdometryNoiseModel odometry;
+  /// @brief The joint pose graph's solver and gate.
+  PoseGraphOptions pose_graph;
+  /// @brief Keyframes per mini-map of the merged mini-map graph.
+  std::size_t keyframes_per_minimap = 10;
+};
+
+/// @brief How one session joined the merge.
+struct SessionLink {
+  /// @brief Whether it overlaps (and was merged); false: its frames are in no output.
+  bool merged = false;
+  /// @brief The merged session it was found to overlap (itself for the first session).
+  std::size_t linked_to = 0;
+  /// @brief Verified loops found against the already merged sessions, and those that agree on the transform.
+  std::size_t loops_found = 0, loops_agreeing = 0;
+  /// @brief Its world frame in the first session's world frame, after the joint optimisation.
+  Eigen::Isometry3d world_in_first = Eigen::Isometry3d::Identity();
+};
+
+/// @brief The result of a merge.
+struct SessionMerge {
+  /// @brief One per input session, in order (the first is the reference, always merged).
+  std::vector<SessionLink> sessions;
+  /// @brief The agreeing loops between sessions; keyframe ids are session * MiniMapGraph::kSessionIdStride + id.
+  std::vector<LoopConstraint> loops;
+  /// @brief Every frame of every merged session in the first session's frame (original timestamps, session by
+  /// session: runs of one sequence that overlap in time repeat timestamps).
+  Trajectory trajectory;
+  /// @brief The same frames per session (empty for a session not merged); each has unique timestamps.
+  std::vector<Trajectory> session_trajectories;
+  /// @brief The mini-maps of the merged sessions, sequential edges per session and merge edges between them.
+  MiniMapGraph graph;
+  /// @brief The joint pose graph's outcome.
+  PoseGraphSummary summary;
+};
+
+/// @brief Merges sessions into the first one's frame.
+/// @param sessions At least one (std::invalid_argument otherwise); each as loadSession returns it.
+/// @param vocabulary Place-recognition vocabulary (not null).
+/// @param options See SessionMergeOptions.
+SessionMerge mergeSessions(const std::vector<Session>& sessions, const BinaryVocabulary::ConstPtr& vocabulary,
+                           const SessionMergeOptions& options = {});
+
+}  // namespace weighted_icp::mapping

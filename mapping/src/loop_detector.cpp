@@ -1,0 +1,55 @@
+// Place recognition + geometric verification as the loop closer's detector.
+#include "weighted_icp/mapping/loop_detector.h"
+
+#include <stdexcept>
+#include <utility>
+
+#include "weighted_icp/mapping/keyframe_snapshot.h"
+
+namespace weighted_icp::mapping {
+
+namespace {
+BinaryVocabulary::ConstPtr required(BinaryVocabulary::ConstPtr vocabulary) {
+  if (!vocabulary) throw std::invalid_argument("BowLoopDetector: no vocabulary");
+  return vocabulary;
+}
+}  // namespace
+
+BowLoopDetector::BowLoopDetector(BinaryVocabulary::ConstPtr vocabulary, const PinholeCamera& camera,
+                                 LoopDetectorOptions options)
+    : vocabulary_(required(std::move(vocabulary))),
+      recognizer_(vocabulary_, options.recognition),
+      verifier_(camera, options.verification),
+      options_(std::move(options)) {}
+
+std::optional<LoopConstraint> BowLoopDetector::detect(const frontend::Map& map, frontend::KeyframeId query) {
+  ++stats_.queries;
+  const KeyframeSnapshot snapshot = KeyframeSnapshot::of(map);
+  const auto keyframe = snapshot.keyframes.find(query);
+  // Bundle adjustment may have culled it since insertion: nothing to query, nothing to add.
+  if (keyframe == snapshot.keyframes.end()) return std::nullopt;
+  BowVector bow = vocabulary_->transform(keyframe->second.descriptors);
+  std::optional<LoopConstraint> loop;
+  // Candidates come best first; the first verified one is the loop.
+  for (const PlaceCandidate& candidate : recognizer_.detect(query, bow, snapshot.covisible(query))) {
+    ++stats_.candidates;
+    if (!snapshot.keyframes.count(candidate.keyframe)) continue;
+    std::optional<LoopPrior> prior;
+    if (options_.use_odometry_prior) prior = odometryPrior(snapshot, query, candidate.keyframe, options_.drift);
+    LoopVerification result = verifier_.verify(snapshot, query, snapshot, candidate.keyframe, prior);
+    if (!result.accepted) continue;
+    ++stats_.verified;
+    result.constraint.score = candidate.normalised_score;
+    loop = result.constraint;
+    break;
+  }
+  recognizer_.add(query, std::move(bow));
+  return loop;
+}
+
+LoopDetector asLoopDetector(const BowLoopDetector::Ptr& detector) {
+  if (!detector) throw std::invalid_argument("asLoopDetector: no detector");
+  return [detector](const frontend::Map& map, frontend::KeyframeId query) { return detector->detect(map, query); };
+}
+
+}  // namespace weighted_icp::mapping

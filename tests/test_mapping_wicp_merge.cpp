@@ -1,0 +1,152 @@
+// wicp_rgbd_slam's loop-closing outputs and wicp_merge as a user runs them: the report's loop counts, graph.txt
+// and session/; two runs of one synthetic sequence merged at their known relative pose; a run of another place
+// reported as "no overlap"; missing and corrupt sessions refused with nothing written.
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "test_support.h"
+#include "tool_runner.h"
+#include "weighted_icp/io/trajectory.h"
+#include "weighted_icp/mapping/session.h"
+#include "weighted_icp/simulation/rgbd_sequence.h"
+
+namespace weighted_icp::testing {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string readAll(const fs::path& path) {
+  std::ifstream in(path);
+  return {std::istreambuf_iterator<char>(in), {}};
+}
+
+/// One run of the default synthetic sequence's frames [first, end), saved with its session.
+fs::path slamRun(const fs::path& scratch, const std::string& name, std::size_t first, std::size_t end,
+                 const std::string& extra = "") {
+  const fs::path out = scratch / name;
+  const ToolRun run = runBuiltTool("wicp_rgbd_slam",
+                                   "--synthetic-frames " + std::to_string(end) + " --first-frame " +
+                                       std::to_string(first) + " --deterministic " + extra + " --out " + out.string(),
+                                   scratch);
+  EXPECT_EQ(run.status, 0) << run.err;
+  return out;
+}
+
+TEST(WicpRgbdSlamLoops, ReportsLoopsAndWritesTheGraphAndTheSession) {
+  const fs::path scratch = scratchDir("slam_loop_outputs");
+  const fs::path out = slamRun(scratch, "run", 0, 30);
+  const std::string report = readAll(out / "report.json");
+  // A tenth of a loop revisits nothing: the detector ran, no loop was taken.
+  EXPECT_NE(report.find("\"loops_accepted\":0"), std::string::npos) << report;
+  EXPECT_NE(report.find("\"loops_detected\":"), std::string::npos) << report;
+  EXPECT_NE(report.find("\"pose_graph_optimisations\":"), std::string::npos) << report;
+  EXPECT_TRUE(fs::is_regular_file(out / "graph.txt"));
+  const mapping::Session session = mapping::loadSession((out / "session").string());
+  EXPECT_EQ(session.frames.size(), 30u);
+  EXPECT_EQ(io::readTrajectory((out / "trajectory.txt").string()).size(), 30u);
+}
+
+TEST(WicpRgbdSlamLoops, RefusesABadVocabularyBeforeTrackingAndAVocabularyWithoutLoopClosure) {
+  const fs::path scratch = scratchDir("slam_loop_bad_vocabulary");
+  const fs::path vocabulary = scratch / "vocabulary.txt";
+  std::ofstream(vocabulary) << "wicp_vocabulary 1\nbranching 10\ndepth x\n";
+  ToolRun run = runBuiltTool(
+      "wicp_rgbd_slam",
+      "--synthetic-frames 5 --vocabulary " + vocabulary.string() + " --out " + (scratch / "out").string(), scratch);
+  EXPECT_EQ(run.status, 1);
+  EXPECT_NE(run.err.find("vocabulary.txt:3"), std::string::npos) << run.err;
+  EXPECT_FALSE(fs::exists(scratch / "out"));
+  run = runBuiltTool("wicp_rgbd_slam",
+                     "--synthetic-frames 5 --no-loop-closure --vocabulary " + vocabulary.string() + " --out " +
+                         (scratch / "out").string(),
+                     scratch);
+  EXPECT_EQ(run.status, 2) << run.err;
+  run = runBuiltTool("wicp_rgbd_slam", "--synthetic-frames 5 --first-frame 5 --out " + (scratch / "out").string(),
+                     scratch);
+  EXPECT_EQ(run.status, 2) << run.err;
+}
+
+TEST(WicpRgbdSlamLoops, AcceptsNoLoopOnTheTumHead) {
+  const fs::path dataset = dataDir() / "tum_fr1_xyz_head";
+  WEIGHTED_ICP_REQUIRE_FILE(dataset);
+  const fs::path scratch = scratchDir("slam_loop_tum");
+  const ToolRun run =
+      runBuiltTool("wicp_rgbd_slam",
+                   "--dataset " + dataset.string() + " --deterministic --out " + (scratch / "out").string(), scratch);
+  ASSERT_EQ(run.status, 0) << run.err;
+  const std::string report = readAll(scratch / "out" / "report.json");
+  EXPECT_NE(report.find("\"loops_accepted\":0"), std::string::npos) << report;
+}
+
+TEST(WicpMerge, TwoRunsOfOneSequenceMergeAtTheirKnownRelativePose) {
+  const fs::path scratch = scratchDir("merge_two_runs");
+  const fs::path a = slamRun(scratch, "a", 0, 35, "--no-loop-closure");
+  const fs::path b = slamRun(scratch, "b", 20, 55, "--no-loop-closure");
+  const fs::path out = scratch / "merged";
+  const ToolRun run = runBuiltTool(
+      "wicp_merge",
+      "--session " + (a / "session").string() + " --session " + (b / "session").string() + " --out " + out.string(),
+      scratch);
+  ASSERT_EQ(run.status, 0) << run.err;
+  const std::string report = readAll(out / "report.json");
+  EXPECT_NE(report.find("\"session_1_merged\":true"), std::string::npos) << report;
+  EXPECT_NE(report.find("all sessions merged"), std::string::npos) << report;
+  EXPECT_TRUE(fs::is_regular_file(out / "map.ply"));
+  EXPECT_TRUE(fs::is_regular_file(out / "graph.txt"));
+  // Each run's world is its first camera: b's frame 20 must land where the truth puts it relative to frame 0.
+  const simulation::SyntheticRgbdSequence truth(simulation::SyntheticRgbdOptions{});
+  const Eigen::Isometry3d expected = truth.cameraToWorld(0).inverse() * truth.cameraToWorld(20);
+  // trajectory.txt repeats the timestamps the runs share (20-34); each session's own file does not.
+  const std::string all = readAll(out / "trajectory.txt");
+  EXPECT_EQ(std::count(all.begin(), all.end(), '\n'), 1 + 35 + 35) << all.substr(0, 200);
+  const Trajectory merged = io::readTrajectory((out / "trajectory_session_1.txt").string());
+  ASSERT_EQ(merged.size(), 35u);
+  const Eigen::Isometry3d b_first = merged[0].pose;
+  EXPECT_NEAR(merged[0].timestamp, truth.timestamp(20), 1e-9);
+  EXPECT_LT((b_first.translation() - expected.translation()).norm(), 0.02);
+  EXPECT_LT(Eigen::AngleAxisd(b_first.rotation().transpose() * expected.rotation()).angle() * 180 / M_PI, 1.0);
+}
+
+TEST(WicpMerge, ARunOfAnotherPlaceIsReportedAsNoOverlapAndBadSessionsAreRefused) {
+  const fs::path scratch = scratchDir("merge_no_overlap");
+  const fs::path a = slamRun(scratch, "a", 0, 20, "--no-loop-closure");
+  const fs::path far = slamRun(scratch, "far", 400, 420, "--no-loop-closure");  // the other side of the room
+  ToolRun run = runBuiltTool("wicp_merge",
+                             "--session " + (a / "session").string() + " --session " + (far / "session").string() +
+                                 " --out " + (scratch / "m").string(),
+                             scratch);
+  ASSERT_EQ(run.status, 0) << run.err;
+  const std::string report = readAll(scratch / "m" / "report.json");
+  EXPECT_NE(report.find("\"session_1_merged\":false"), std::string::npos) << report;
+  EXPECT_NE(report.find("no overlap"), std::string::npos) << report;
+  EXPECT_EQ(io::readTrajectory((scratch / "m" / "trajectory.txt").string()).size(), 20u);
+  EXPECT_FALSE(fs::exists(scratch / "m" / "trajectory_session_1.txt"));
+
+  run = runBuiltTool("wicp_merge",
+                     "--session " + (a / "session").string() + " --session " + (scratch / "missing").string() +
+                         " --out " + (scratch / "m2").string(),
+                     scratch);
+  EXPECT_EQ(run.status, 1);
+  EXPECT_NE(run.err.find("missing"), std::string::npos) << run.err;
+  EXPECT_FALSE(fs::exists(scratch / "m2"));
+
+  std::ofstream(far / "session" / "keyframes.txt", std::ios::app) << "keyframe what\n";
+  run = runBuiltTool("wicp_merge",
+                     "--session " + (a / "session").string() + " --session " + (far / "session").string() + " --out " +
+                         (scratch / "m3").string(),
+                     scratch);
+  EXPECT_EQ(run.status, 1);
+  EXPECT_NE(run.err.find("keyframes.txt:"), std::string::npos) << run.err;
+  EXPECT_FALSE(fs::exists(scratch / "m3"));
+
+  run = runBuiltTool("wicp_merge", "--session " + (a / "session").string() + " --out " + (scratch / "m4").string(),
+                     scratch);
+  EXPECT_EQ(run.status, 2);
+}
+
+}  // namespace
+}  // namespace weighted_icp::testing
