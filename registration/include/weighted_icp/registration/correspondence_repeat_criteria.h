@@ -47,6 +47,7 @@ class CorrespondenceRepeatCriteria : public pcl::registration::DefaultConvergenc
   /// @brief Turns the repeat test on or off (on by default); off, this is DefaultConvergenceCriteria.
   /// @param enabled  true to stop on repeated pairs
   void setStopOnRepeat(bool enabled) { enabled_ = enabled; }
+  /// @brief Whether the repeat test is on.
   bool getStopOnRepeat() const { return enabled_; }
 
   /// @brief Keeps the pairs of the last iteration across the next align() call, so that its first
