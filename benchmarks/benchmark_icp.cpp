@@ -12,6 +12,10 @@
 // default) aligns the displaced map onto itself. --repeat N runs each
 // benchmark exactly N times instead of for a minimum time, so that two
 // processes do fixed work and can be timed against each other from outside.
+//
+// BM_Strategy is the total time of one whole alignment per weight strategy (LandmarkAligner, 1 thread,
+// k = 5, base k = 1), with and without refinement and the "correspondences repeat" stop rule, with the
+// iterations of both stages and the error against the true displacement as counters.
 
 #include <cstdlib>
 #include <functional>
@@ -30,6 +34,7 @@
 #include "weighted_icp/io/map_format.h"
 #include "weighted_icp/registration/landmark_alignment.h"
 #include "weighted_icp/registration/rigid_motion.h"
+#include "weighted_icp/registration/weight_strategies.h"
 #include "weighted_icp/registration/weighted_correspondence_estimation.h"
 
 namespace {
@@ -42,6 +47,18 @@ std::string case_name = "full";
 const Displacement kDisplacement{0.1, 0.05, 0.02, 2, 1, 10};
 constexpr int kMaxIterations = 150;
 
+/// The two maps of the chosen case, the source displaced.
+const std::pair<LandmarkMap, LandmarkMap>& maps() {
+  static const std::pair<LandmarkMap, LandmarkMap> m = [] {
+    const LandmarkMap map = io::readLandmarkMap(map_path).withMinObservations(2);
+    LandmarkMap target = map, source = map;
+    if (case_name == "halves") std::tie(target, source) = map.alternateHalves();
+    source.transform(kDisplacement.toIsometry());
+    return std::make_pair(target, source);
+  }();
+  return m;
+}
+
 struct Clouds {
   LandmarkCloud::Ptr target, source;  // weighted with the covariance strategy
   Cloud::Ptr target_xyz, source_xyz;
@@ -50,10 +67,7 @@ struct Clouds {
 
 const Clouds& clouds() {
   static const Clouds c = [] {
-    const LandmarkMap map = io::readLandmarkMap(map_path).withMinObservations(2);
-    LandmarkMap target = map, source = map;
-    if (case_name == "halves") std::tie(target, source) = map.alternateHalves();
-    source.transform(kDisplacement.toIsometry());
+    const auto& [target, source] = maps();
     Clouds out;
     out.target = toLandmarkCloud(target, CovarianceWeight{});
     out.source = toLandmarkCloud(source, CovarianceWeight{});
@@ -128,6 +142,33 @@ void BM_LandmarkAligner(benchmark::State& state) {
   reportIterations(state, iterations, c.source->size());
 }
 
+/// One whole alignment per strategy: range(0) the strategy (WeightStrategy order), range(1) refinement,
+/// range(2) the stop rule.
+void BM_Strategy(benchmark::State& state) {
+  const auto strategy = allWeightStrategies().at(static_cast<std::size_t>(state.range(0)));
+  const auto& [target, source] = maps();
+  const WeightFunction weight = weightFunction(strategy);
+  const LandmarkCloud::Ptr target_cloud = toLandmarkCloud(target, weight);
+  const LandmarkCloud::Ptr source_cloud = toLandmarkCloud(source, weight);
+  AlignmentSettings settings;
+  settings.k = neighboursFor(strategy, 5);
+  settings.threads = 1;
+  settings.max_iterations = kMaxIterations;
+  settings.refine = state.range(1) != 0;
+  settings.stop_on_repeated_correspondences = state.range(2) != 0;
+  LandmarkAligner aligner(settings);
+  aligner.setTarget(target_cloud);
+  AlignmentResult result;
+  for (auto _ : state) result = aligner.align(source_cloud);
+  const Eigen::Isometry3d estimate(result.transformation), truth = kDisplacement.toIsometry().inverse();
+  state.SetLabel(toString(strategy));
+  state.counters["icp_iterations"] = result.iterations;
+  state.counters["refine_iterations"] = result.refine_iterations;
+  state.counters["rotation_error_deg"] = rotationErrorDeg(estimate, truth);
+  state.counters["translation_error_cm"] = 100.0 * translationError(estimate, truth);
+  state.counters["fitness"] = result.fitness_score;
+}
+
 /// The correspondence step alone, on the displaced clouds.
 void BM_StockPclCorrespondences(benchmark::State& state) {
   const Clouds& c = clouds();
@@ -181,6 +222,12 @@ void registerAll(int repeat) {
           ->Args({1, 1})
           ->Args({1, 2})
           ->Unit(benchmark::kMillisecond));
+  auto strategies = benchmark::RegisterBenchmark("BM_Strategy", BM_Strategy);
+  strategies->ArgNames({"strategy", "refine", "stop_rule"})->Unit(benchmark::kMillisecond);
+  for (int strategy = 0; strategy < 4; ++strategy)
+    for (int refine = 0; refine < 2; ++refine)
+      for (int stop_rule = 0; stop_rule < 2; ++stop_rule) strategies->Args({strategy, refine, stop_rule});
+  fix(strategies);
   fix(benchmark::RegisterBenchmark("BM_StockPclCorrespondences", BM_StockPclCorrespondences)
           ->Unit(benchmark::kMicrosecond));
   fix(benchmark::RegisterBenchmark("BM_WeightedCorrespondences", BM_WeightedCorrespondences)

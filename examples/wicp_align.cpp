@@ -28,6 +28,7 @@ int main(int argc, char** argv) {
     AlignmentSettings settings;
     std::size_t min_observations = 2;
     bool global = false;
+    bool pcl_stopping_only = false;
     po::options_description options(
         "wicp_align --source A.txt --target B.txt [options]\n"
         "Aligns landmark map A onto B (paper map format).\n"
@@ -54,6 +55,9 @@ int main(int argc, char** argv) {
                                  ->default_value(min_observations),
          "drop landmarks observed fewer times (the paper uses 2)")
         ("refine", po::bool_switch(&settings.refine), "finish with nearest-neighbour ICP after the weighted stage")
+        ("no-stop-rule", po::bool_switch(&pcl_stopping_only),
+         "stop on PCL's convergence criteria only (by default a stage also stops when its correspondences repeat "
+         "the previous iteration's: same pose to float rounding, fewer iterations; docs/performance.md)")
         ("global", po::bool_switch(&global), "find the start from geometry alone, any yaw and translation, partial "
                                               "overlap allowed (docs/global_alignment.md); implies --refine")
         ("threads", tools::rangedValue(&settings.threads, 0u, 1024u)->default_value(settings.threads),
@@ -65,6 +69,7 @@ int main(int argc, char** argv) {
     po::variables_map vm;
     if (!tools::parseCommandLine(argc, argv, options, vm)) return 0;
 
+    settings.stop_on_repeated_correspondences = !pcl_stopping_only;
     const WeightStrategy strategy = parseWeightStrategy(strategy_name);
     settings.k = neighboursFor(strategy, settings.k);
     const Displacement displacement =

@@ -11,6 +11,7 @@
 #include <pcl/registration/icp.h>
 #include <pcl/search/kdtree.h>
 
+#include "weighted_icp/registration/correspondence_repeat_criteria.h"
 #include "weighted_icp/registration/weighted_correspondence_estimation.h"
 
 namespace weighted_icp {
@@ -23,8 +24,17 @@ using Correspondence = WeightedCorrespondenceEstimation<LandmarkPoint, LandmarkP
 /// PCL keeps the iteration count and the last correspondences protected.
 class InspectableIcp : public Icp {
  public:
+  InspectableIcp() {
+    criteria_ =
+        std::make_shared<CorrespondenceRepeatCriteria<double>>(nr_iterations_, transformation_, *correspondences_);
+    convergence_criteria_ = criteria_;
+  }
+  CorrespondenceRepeatCriteria<double>& criteria() { return *criteria_; }
   int iterations() const { return nr_iterations_; }
   std::size_t lastCorrespondenceCount() const { return correspondences_ ? correspondences_->size() : 0; }
+
+ private:
+  CorrespondenceRepeatCriteria<double>::Ptr criteria_;
 };
 
 /// Checks what every cloud given to the aligner needs; returns its finite point count.
@@ -85,10 +95,11 @@ LandmarkAligner::LandmarkAligner(AlignmentSettings settings)
     throw std::invalid_argument("AlignmentSettings::max_correspondence_distance must be > 0");
   pipeline_->weighted = std::make_shared<Correspondence>(settings_.k);
   pipeline_->weighted->setNumberOfThreads(settings_.threads);
-  Icp& icp = pipeline_->icp;
+  InspectableIcp& icp = pipeline_->icp;
   icp.setMaxCorrespondenceDistance(settings_.max_correspondence_distance);
   icp.setTransformationEpsilon(settings_.transformation_epsilon);
   icp.setEuclideanFitnessEpsilon(settings_.euclidean_fitness_epsilon);
+  icp.criteria().setStopOnRepeat(settings_.stop_on_repeated_correspondences);
 }
 
 LandmarkAligner::~LandmarkAligner() = default;
@@ -145,6 +156,8 @@ AlignmentResult LandmarkAligner::align(const LandmarkCloud::ConstPtr& source, co
     // k + 1 neighbours hold the 2 nearest too, so refinement starts from them instead of searching again.
     Correspondence& ce = *pipeline_->weighted;
     ce.setNumberOfNeighbors(1);
+    // The pose is the optimum of the weighted stage's last pairs: if k = 1 finds the same, stop at once.
+    icp.criteria().carryOverToNextRun();
     icp.setMaximumIterations(settings_.refine_max_iterations);
     try {
       icp.align(aligned, icp.getFinalTransformation());

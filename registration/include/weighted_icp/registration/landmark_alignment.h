@@ -29,6 +29,10 @@ struct AlignmentSettings {
   /// PCL's convergence defaults (DefaultConvergenceCriteria) otherwise.
   double transformation_epsilon = 0.0;
   double euclidean_fitness_epsilon = -std::numeric_limits<double>::max();
+  /// Stop a stage when its correspondences are the same pairs as in the previous iteration (the pose can
+  /// only repeat then; see correspondence_repeat_criteria.h), and let refinement stop at its first
+  /// iteration when k = 1 finds the weighted stage's last pairs. Off: PCL's criteria alone.
+  bool stop_on_repeated_correspondences = true;
   bool refine = false;
   int refine_max_iterations = 150;
   unsigned int threads = 0;  // 0: every hardware thread, at most 1024
