@@ -172,7 +172,10 @@ ExtractedFeatures FeatureExtractor::extract(const cv::Mat& gray) const {
   assignOrientation(image, features.keypoints);
   // Feature2D::compute removes the keypoints it cannot describe, so the rows
   // stay aligned with the keypoints that remain.
-  orb_->compute(image, features.keypoints, features.descriptors);
+  if (options_.descriptor == DescriptorKind::ModifiedBrief)
+    computeModifiedBrief(image, features.keypoints, features.descriptors);
+  else
+    orb_->compute(image, features.keypoints, features.descriptors);
   if (features.descriptors.empty()) features.descriptors.create(0, orb_->descriptorSize(), CV_8U);
   return features;
 }
