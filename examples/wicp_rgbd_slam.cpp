@@ -110,6 +110,7 @@ double percentile(const std::vector<double>& values, double q) { return values.e
 struct RunCounts {
   std::size_t processed = 0, unreadable = 0, tracked = 0, skipped = 0, lost = 0, clahe = 0, dynamic = 0;
   std::vector<double> tracking_ms;
+  std::vector<double> tracking_cpu_ms;  // issue #11: the tracking thread's CPU time
 };
 
 /// Feeds frames [first, frames) to `slam`, stopping early when SIGINT or SIGTERM
@@ -139,6 +140,7 @@ RunCounts trackFrames(const FrameSource& source, std::size_t first, std::size_t 
 void countResults(const frontend::RgbdSlam& slam, RunCounts& counts) {
   for (const auto& record : slam.frames()) {
     counts.tracking_ms.push_back(record.tracking_ms);
+    counts.tracking_cpu_ms.push_back(record.tracking_cpu_ms);
     counts.tracked += record.result.hasPose();
     counts.skipped += record.result.refused_by_quality_gate;
     counts.lost += record.result.status == frontend::TrackingStatus::Lost;
@@ -218,6 +220,8 @@ tools::JsonObject makeReport(const FrameSource& source, std::size_t frames, cons
       .add("minimaps", minimaps)
       .add("median_ms_per_frame", percentile(counts.tracking_ms, 0.5))
       .add("p90_ms_per_frame", percentile(counts.tracking_ms, 0.9))
+      .add("median_cpu_ms_per_frame", percentile(counts.tracking_cpu_ms, 0.5))
+      .add("p90_cpu_ms_per_frame", percentile(counts.tracking_cpu_ms, 0.9))
       .add("skipped_frames", counts.skipped)
       .add("unreadable_frames", counts.unreadable)
       .add("lost_frames", counts.lost)
@@ -353,8 +357,30 @@ int main(int argc, char** argv) {
                             ->default_value(synthetic.depth_noise_coefficient),
          "synthetic: depth noise sigma_z = COEFF * z^2 (0-1)");
     // clang-format on
+    // Issue #11 ablation options: descriptor, dynamic points, matching.
+    std::string descriptor_name = "orb", match_region_name = "everywhere", dynamic_distance_name = "displacement";
+    // clang-format off
+    description.add_options()
+        ("descriptor", po::value(&descriptor_name)->default_value(descriptor_name),
+         "orb (ORB's rotated BRIEF) or modified-brief (front-end paper, Eq. 7)")
+        ("kd-backtracks", tools::rangedValue(&options.frontend.matcher.kd_tree.max_backtracks, 0, 100000)
+                              ->default_value(options.frontend.matcher.kd_tree.max_backtracks),
+         "--matcher kd-tree: leaves visited after the first (0-100000)")
+        ("match-region", po::value(&match_region_name)->default_value(match_region_name),
+         "everywhere, projection (regions of interest around projected points) or homography (KD-tree paper, Eq. 8)")
+        ("dynamic-distance", po::value(&dynamic_distance_name)->default_value(dynamic_distance_name),
+         "displacement (3D), epipolar-history (front-end paper, Eq. 6, against the point's earlier values) or both");
+    // clang-format on
     po::variables_map vm;
     if (!tools::parseCommandLine(argc, argv, description, vm)) return 0;
+    try {
+      options.frontend.features.descriptor = frontend::parseDescriptorKind(descriptor_name);
+      options.frontend.match_region = frontend::parseMatchRegion(match_region_name);
+      options.frontend.dynamic_distance = frontend::parseDynamicDistanceKind(dynamic_distance_name);
+      options.frontend.matcher.kind = frontend::parseMatcherKind(matcher_name);
+    } catch (const std::invalid_argument& e) {
+      throw po::error(e.what());
+    }
     options.frontend.matcher.kind = frontend::parseMatcherKind(matcher_name);
     options.frontend.quality_gate = !vm.count("no-quality-gate");
     try {

@@ -51,26 +51,45 @@ DescriptorMatcher::DescriptorMatcher(DescriptorMatcherOptions options) : options
   requireOption(options_.lsh_tables >= 1, "lsh_tables must be >= 1");
   requireOption(options_.lsh_key_bits >= 1 && options_.lsh_key_bits <= 32, "lsh_key_bits must be in [1, 32]");
   requireOption(options_.lsh_multi_probe_level >= 0, "lsh_multi_probe_level must be >= 0");
+  requireOption(options_.kd_tree.leaf_size >= 1, "kd_tree.leaf_size must be >= 1");
+  requireOption(options_.kd_tree.max_backtracks >= 0, "kd_tree.max_backtracks must be >= 0");
 }
 
 void DescriptorMatcher::setReference(const cv::Mat& descriptors) {
   requireBinary(descriptors, "reference");
   matcher_.release();
+  kd_tree_.reset();
   reference_rows_ = descriptors.empty() ? 0 : descriptors.rows;
   reference_cols_ = descriptors.empty() ? 0 : descriptors.cols;
-  if (reference_rows_ > 0) matcher_ = buildMatcher(options_, descriptors);
+  if (reference_rows_ == 0) return;
+  if (options_.kind == MatcherKind::KdTree) {
+    kd_tree_ = std::make_shared<BinaryKdTree>(options_.kd_tree);
+    kd_tree_->build(descriptors);
+  } else {
+    matcher_ = buildMatcher(options_, descriptors);
+  }
 }
 
 std::vector<cv::DMatch> DescriptorMatcher::match(const cv::Mat& query) const {
   requireBinary(query, "query");
-  if (query.empty() || !matcher_) return {};
+  if (query.empty() || (!matcher_ && !kd_tree_)) return {};
   if (query.cols != reference_cols_)
     throw std::invalid_argument("DescriptorMatcher: query rows have " + std::to_string(query.cols) +
                                 " bytes, reference rows " + std::to_string(reference_cols_));
   if (reference_rows_ < 2) return {};  // no second nearest for the ratio test
 
   std::vector<std::vector<cv::DMatch>> nearest;
-  matcher_->knnMatch(query, nearest, 2);
+  if (kd_tree_) {
+    nearest.resize(static_cast<std::size_t>(query.rows));
+    for (int q = 0; q < query.rows; ++q) {
+      const TwoNearest two = kd_tree_->nearestTwo(query.ptr<std::uint8_t>(q));
+      if (two.second < 0) continue;
+      nearest[static_cast<std::size_t>(q)] = {cv::DMatch(q, two.best, static_cast<float>(two.best_distance)),
+                                              cv::DMatch(q, two.second, static_cast<float>(two.second_distance))};
+    }
+  } else {
+    matcher_->knnMatch(query, nearest, 2);
+  }
 
   std::vector<cv::DMatch> matches;
   for (const std::vector<cv::DMatch>& candidates : nearest) {
@@ -99,9 +118,17 @@ std::vector<cv::DMatch> DescriptorMatcher::match(const cv::Mat& query) const {
 MatcherKind parseMatcherKind(const std::string& name) {
   if (name == "flann") return MatcherKind::FlannLsh;
   if (name == "brute-force") return MatcherKind::BruteForce;
-  throw std::invalid_argument("unknown matcher \"" + name + "\": expected \"flann\" or \"brute-force\"");
+  if (name == "kd-tree") return MatcherKind::KdTree;
+  throw std::invalid_argument("unknown matcher \"" + name + "\": expected \"flann\", \"brute-force\" or \"kd-tree\"");
 }
 
-std::string matcherKindName(MatcherKind kind) { return kind == MatcherKind::FlannLsh ? "flann" : "brute-force"; }
+std::string matcherKindName(MatcherKind kind) {
+  switch (kind) {
+    case MatcherKind::FlannLsh: return "flann";
+    case MatcherKind::BruteForce: return "brute-force";
+    case MatcherKind::KdTree: return "kd-tree";
+  }
+  return "unknown";
+}
 
 }  // namespace weighted_icp::frontend

@@ -51,7 +51,8 @@ Frontend::Frontend(Map& map, Backend& backend, PinholeCamera camera, FrontendOpt
       camera_(camera),
       options_(options),
       extractor_(options.features),
-      matcher_(options.matcher) {
+      matcher_(options.matcher),
+      dynamic_history_(options.dynamic_history) {
   if (options_.quality_gate) quality_gate_.emplace(options_.quality);
 }
 
@@ -194,7 +195,9 @@ bool Frontend::refreshLocalMap() {
   // Taken and indexed again only when the map changed (a keyframe, a BA).
   if (map_.revision() != local_map_.revision || local_map_.ids.empty()) {
     local_map_ = map_.localMap(options_.local_map_keyframes);
-    if (!local_map_.ids.empty()) matcher_.setReference(local_map_.descriptors);
+    // Regions of interest search the descriptors directly: no index to build.
+    if (!local_map_.ids.empty() && options_.match_region == MatchRegion::Everywhere)
+      matcher_.setReference(local_map_.descriptors);
   }
   return !local_map_.ids.empty();
 }
@@ -204,7 +207,7 @@ Frontend::LocalMatches Frontend::matchLocalMap(const Frame& frame, const Eigen::
   const LocalMap& local = local_map_;
   const Eigen::Isometry3d guess_cw = guess_wc.inverse();
   LocalMatches matched;
-  for (const cv::DMatch& match : matcher_.match(frame.descriptors)) {
+  for (const cv::DMatch& match : localDescriptorMatches(frame, guess_wc, gate_px)) {
     const MapPointId id = local.ids[match.trainIdx];
     const auto votes = dynamic_votes_.find(id);
     if (votes != dynamic_votes_.end() && votes->second >= options_.dynamic_votes_to_exclude) continue;
@@ -234,11 +237,18 @@ Frontend::MovingPoints Frontend::rejectMovingPoints(const Frame& frame, const Lo
   }
   const std::vector<bool> moving = flagDynamicByDisplacement(with_depth_world, with_depth_measured, pose_wc,
                                                              options_.depth_noise, options_.dynamic_filter);
+  std::vector<bool> is_dynamic(matched.size(), false);
+  if (options_.dynamic_distance != DynamicDistanceKind::EpipolarHistory)
+    for (std::size_t k = 0; k < moving.size(); ++k)
+      if (moving[k]) is_dynamic[with_depth_match[k]] = true;
+  if (options_.dynamic_distance != DynamicDistanceKind::Displacement) {
+    const std::vector<bool> by_history = flagByEpipolarHistory(frame, matched, pose_wc);
+    for (std::size_t m = 0; m < matched.size(); ++m) is_dynamic[m] = is_dynamic[m] || by_history[m];
+  }
   MovingPoints flagged;
   flagged.is_dynamic.assign(matched.size(), false);
-  for (std::size_t k = 0; k < moving.size(); ++k) {
-    if (!moving[k]) continue;
-    const std::size_t m = with_depth_match[k];
+  for (std::size_t m = 0; m < matched.size(); ++m) {
+    if (!is_dynamic[m]) continue;
     flagged.is_dynamic[m] = true;
     ++dynamic_votes_[matched.ids[m].second];
     flagged.pixels.push_back(matched.pixels[m]);
@@ -393,6 +403,7 @@ void Frontend::insertKeyframe(const Frame& frame, const std::vector<std::pair<st
   keyframe.depths = frame.depths;
   const KeyframeId keyframe_id = map_.addKeyframe(keyframe);
   last_keyframe_id_ = keyframe_id;
+  recordKeyframePlanes(frame);
   const std::vector<bool> used = observeTrackedPoints(keyframe_id, frame, tracked);
   createMapPoints(keyframe_id, frame, used, dynamic_pixels);
   last_keyframe_ = frame;
@@ -405,6 +416,7 @@ std::vector<bool> Frontend::observeTrackedPoints(KeyframeId keyframe, const Fram
   std::vector<bool> used(frame.size(), false);
   for (const auto& [feature, point_id] : tracked) {
     used[feature] = true;
+    recordKeyframePixel(point_id, frame, feature);
     const auto point = map_.mapPoint(point_id);
     if (!point) continue;  // removed by the backend meanwhile
     const MapPointObservation observation{keyframe, frame.pixels[feature], frame.depths[feature]};
@@ -440,7 +452,7 @@ void Frontend::createMapPoint(KeyframeId keyframe, const Frame& frame, std::size
   point.covariance = measured.covariance;
   point.descriptor = frame.descriptors.row(feature).clone();
   point.observations.push_back({keyframe, frame.pixels[feature], frame.depths[feature]});
-  map_.addMapPoint(std::move(point));
+  recordKeyframePixel(map_.addMapPoint(std::move(point)), frame, feature);
 }
 
 }  // namespace weighted_icp::frontend

@@ -1,12 +1,20 @@
 #include "weighted_icp/frontend/slam/rgbd_slam.h"
 
 #include <chrono>
+#include <ctime>
 
 #include "weighted_icp/frontend/slam/landmark_conversion.h"
 
 namespace weighted_icp::frontend {
 
 namespace {
+/// CPU time consumed by the calling thread, in milliseconds.
+double threadCpuMs() {
+  timespec now{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &now);
+  return static_cast<double>(now.tv_sec) * 1e3 + static_cast<double>(now.tv_nsec) * 1e-6;
+}
+
 /// The backend weighs depth with the front end's noise model: one sensor, one model.
 BackendOptions withFrontendNoise(BackendOptions backend, const FrontendOptions& frontend) {
   backend.bundle_adjustment.noise = frontend.depth_noise;
@@ -23,8 +31,10 @@ const FrameRecord& RgbdSlam::process(const RgbdFrame& image) {
   FrameRecord record;
   record.timestamp = image.timestamp;
   const auto start = std::chrono::steady_clock::now();
+  const double cpu_start = threadCpuMs();
   record.result = frontend_.track(image);
   record.tracking_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  record.tracking_cpu_ms = threadCpuMs() - cpu_start;
   frames_.push_back(record);
   return frames_.back();
 }

@@ -2,6 +2,7 @@
 // Binary descriptor matching: FLANN's locality-sensitive hashing index (fast,
 // approximate) or brute-force Hamming search (exact), each followed by Lowe's
 // ratio test, a distance cap and, optionally, one match per reference row.
+// Issue #11: or the KD-tree paper's KD-tree with bounded backtracking.
 
 #include <cstdint>
 #include <string>
@@ -10,9 +11,12 @@
 #include <opencv2/core.hpp>
 #include <opencv2/features2d.hpp>
 
+#include "weighted_icp/frontend/perception/binary_kd_tree.h"
+
 namespace weighted_icp::frontend {
 
-enum class MatcherKind { FlannLsh, BruteForce };
+/// KdTree: BinaryKdTree (issue #11, the KD-tree paper), exact Hamming metric, bounded backtracking.
+enum class MatcherKind { FlannLsh, BruteForce, KdTree };
 
 struct DescriptorMatcherOptions {
   MatcherKind kind = MatcherKind::FlannLsh;
@@ -30,6 +34,8 @@ struct DescriptorMatcherOptions {
   int lsh_key_bits = 14;
   int lsh_multi_probe_level = 1;
   std::uint64_t lsh_seed = 0x5eed;
+  // Issue #11 ablation options: the KD-tree matcher (MatcherKind::KdTree).
+  BinaryKdTreeOptions kd_tree;
 };
 
 class DescriptorMatcher {
@@ -56,11 +62,12 @@ class DescriptorMatcher {
  private:
   DescriptorMatcherOptions options_;
   cv::Ptr<cv::DescriptorMatcher> matcher_;  // null until a non-empty reference is set
+  BinaryKdTree::Ptr kd_tree_;               // instead of matcher_ for MatcherKind::KdTree
   int reference_rows_ = 0;
   int reference_cols_ = 0;
 };
 
-/// "flann" -> FlannLsh, "brute-force" -> BruteForce; throws std::invalid_argument otherwise.
+/// "flann" -> FlannLsh, "brute-force" -> BruteForce, "kd-tree" -> KdTree; throws std::invalid_argument otherwise.
 MatcherKind parseMatcherKind(const std::string& name);
 /// The name parseMatcherKind reads.
 std::string matcherKindName(MatcherKind kind);

@@ -9,6 +9,7 @@
 #include <opencv2/features2d.hpp>
 
 #include "weighted_icp/frontend/perception/image_preprocessor.h"
+#include "weighted_icp/frontend/perception/modified_brief.h"
 
 namespace weighted_icp::frontend {
 
@@ -31,6 +32,10 @@ struct FeatureExtractorOptions {
   /// 0.5 px): GFTT returns whole pixels, whose rounding alone is 0.3 px of
   /// noise on every pose. min_distance_px then holds to within 1 px.
   bool subpixel = true;
+  // Issue #11 ablation options: descriptor.
+  /// ORB's rotated BRIEF, or the front-end paper's modified BRIEF (Eq. 7);
+  /// both 32 bytes per row, steered by the same intensity-centroid angle.
+  DescriptorKind descriptor = DescriptorKind::Orb;
 };
 
 struct ExtractedFeatures {

@@ -14,11 +14,14 @@
 #include "weighted_icp/core/camera.h"
 #include "weighted_icp/frontend/geometry/depth_noise_model.h"
 #include "weighted_icp/frontend/geometry/dynamic_point_filter.h"
+#include "weighted_icp/frontend/geometry/dynamic_point_history.h"
+#include "weighted_icp/frontend/geometry/keyframe_homography.h"
 #include "weighted_icp/frontend/geometry/motion_model.h"
 #include "weighted_icp/frontend/geometry/pose_estimation.h"
 #include "weighted_icp/frontend/perception/descriptor_matcher.h"
 #include "weighted_icp/frontend/perception/feature_extractor.h"
 #include "weighted_icp/frontend/perception/image_quality_gate.h"
+#include "weighted_icp/frontend/perception/roi_matcher.h"
 #include "weighted_icp/frontend/slam/backend.h"
 #include "weighted_icp/frontend/slam/frame.h"
 #include "weighted_icp/frontend/slam/map.h"
@@ -68,6 +71,17 @@ struct FrontendOptions {
   /// A map point flagged as moving this many times is no longer matched
   /// (once may be depth noise; it is left out of that frame's pose either way).
   int dynamic_votes_to_exclude = 2;
+
+  // Issue #11 ablation options: dynamic points, matching (the descriptor is features.descriptor,
+  // the KD-tree matcher matcher.kind).
+  /// Where local-map descriptors are searched: everywhere (today), or only in
+  /// regions of interest around where each point is predicted to appear.
+  MatchRegion match_region = MatchRegion::Everywhere;
+  /// Planes of each keyframe for MatchRegion::Homography (the KD-tree paper's Eq. 8).
+  PlaneFitOptions keyframe_planes;
+  /// The distance that flags moving points in 3D-2D tracking.
+  DynamicDistanceKind dynamic_distance = DynamicDistanceKind::Displacement;
+  DynamicPointHistoryOptions dynamic_history;
 };
 
 enum class TrackingStatus {
@@ -185,6 +199,20 @@ class Frontend {
   bool refusedByQualityGate(TrackingResult& result, bool must_keep = false);
   /// True when the camera moved or turned enough since the last keyframe, or too few of its points are tracked.
   bool needsKeyframe(const Eigen::Isometry3d& pose_wc, std::size_t tracked) const;
+  // Issue #11: ROI matching and the keyframe homography (frontend_roi_matching.cpp).
+  /// Descriptor matches of the frame against the local map: everywhere, or in regions of interest.
+  std::vector<cv::DMatch> localDescriptorMatches(const Frame& frame, const Eigen::Isometry3d& guess_wc,
+                                                 double gate_px) const;
+  /// Where each local map point is expected in a frame at `guess_wc`: Eq. 8 for points on a plane of the last keyframe, else projection.
+  std::vector<Eigen::Vector2d> predictLocalMapPixels(const Eigen::Isometry3d& guess_wc) const;
+  /// Starts the record of the new keyframe's planes (MatchRegion::Homography).
+  void recordKeyframePlanes(const Frame& frame);
+  /// Records a point's pixel in the new keyframe, with the plane it lies on.
+  void recordKeyframePixel(MapPointId id, const Frame& frame, std::size_t feature);
+  /// Flags matches by the Eq. 6 distance history (DynamicDistanceKind other than Displacement).
+  std::vector<bool> flagByEpipolarHistory(const Frame& frame, const LocalMatches& matched,
+                                          const Eigen::Isometry3d& pose_wc);
+
   /// Adds the frame as a keyframe: it observes the tracked points; its other features with depth become points.
   void insertKeyframe(const Frame& frame, const std::vector<std::pair<std::size_t, MapPointId>>& tracked,
                       const std::vector<Eigen::Vector2d>& dynamic_pixels);
@@ -220,6 +248,17 @@ class Frontend {
   cv::Mat current_color_;  // the image being tracked, for the quality gate
   /// Its assessment, when the gate sees every frame.
   std::optional<QualityJudgement> frame_quality_;
+
+  // Issue #11: state of the ablation options.
+  /// The last keyframe's planes (world) and, per point it observes, its pixel and plane (-1: none).
+  struct KeyframePlanes {
+    Eigen::Isometry3d pose_wc = Eigen::Isometry3d::Identity();
+    std::vector<Plane> planes_world;
+    std::vector<int> plane_of_feature;
+    std::map<MapPointId, std::pair<Eigen::Vector2d, int>> points;
+  };
+  KeyframePlanes keyframe_planes_;
+  DynamicPointHistory dynamic_history_;
 };
 
 }  // namespace weighted_icp::frontend

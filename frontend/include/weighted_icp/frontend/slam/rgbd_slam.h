@@ -26,6 +26,9 @@ struct FrameRecord {
   double timestamp = 0.0;
   TrackingResult result;
   double tracking_ms = 0.0;  // time spent in Frontend::track
+  /// CPU time of the tracking thread in Frontend::track (issue #11): unlike the wall time it does not grow
+  /// when other processes load the machine, so speed changes can be compared on a busy machine.
+  double tracking_cpu_ms = 0.0;
 };
 
 class RgbdSlam {

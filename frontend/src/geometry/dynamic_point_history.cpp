@@ -1,0 +1,109 @@
+// DynamicPointHistory: Eq. 6 epipolar distances per point, compared with their own earlier values.
+
+#include "weighted_icp/frontend/geometry/dynamic_point_history.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+namespace weighted_icp::frontend {
+namespace {
+
+/// Distance of pixel2 to the epipolar line F pixel1, F of the motion from camera 1 to camera 2; NaN without
+/// translation.
+double epipolarDistance(const Eigen::Matrix3d& fundamental, const Eigen::Vector2d& pixel1,
+                        const Eigen::Vector2d& pixel2) {
+  const Eigen::Vector3d line = fundamental * pixel1.homogeneous();
+  const double norm = line.head<2>().norm();
+  if (!(norm > 0.0)) return std::numeric_limits<double>::quiet_NaN();
+  return std::abs(line.dot(pixel2.homogeneous())) / norm;
+}
+
+Eigen::Matrix3d fundamentalBetween(const Eigen::Isometry3d& pose1_wc, const Eigen::Isometry3d& pose2_wc,
+                                   const PinholeCamera& camera) {
+  const Eigen::Isometry3d motion = pose2_wc.inverse() * pose1_wc;  // x2 = R x1 + t
+  const Eigen::Vector3d t = motion.translation();
+  if (!(t.norm() > 1e-9)) return Eigen::Matrix3d::Zero();
+  Eigen::Matrix3d cross;
+  cross << 0, -t.z(), t.y(), t.z(), 0, -t.x(), -t.y(), t.x(), 0;
+  Eigen::Matrix3d k;
+  k << camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1;
+  const Eigen::Matrix3d k_inverse = k.inverse();
+  return k_inverse.transpose() * cross * motion.linear() * k_inverse;
+}
+
+double medianOf(std::deque<double> values) {
+  std::sort(values.begin(), values.end());
+  const std::size_t n = values.size();
+  return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+}
+
+}  // namespace
+
+DynamicDistanceKind parseDynamicDistanceKind(const std::string& name) {
+  if (name == "displacement") return DynamicDistanceKind::Displacement;
+  if (name == "epipolar-history") return DynamicDistanceKind::EpipolarHistory;
+  if (name == "both") return DynamicDistanceKind::Both;
+  throw std::invalid_argument("unknown dynamic distance \"" + name +
+                              "\": expected \"displacement\", \"epipolar-history\" or \"both\"");
+}
+
+std::string dynamicDistanceKindName(DynamicDistanceKind kind) {
+  switch (kind) {
+    case DynamicDistanceKind::Displacement: return "displacement";
+    case DynamicDistanceKind::EpipolarHistory: return "epipolar-history";
+    case DynamicDistanceKind::Both: return "both";
+  }
+  return "unknown";
+}
+
+DynamicPointHistory::DynamicPointHistory(DynamicPointHistoryOptions options) : options_(options) {
+  if (options_.history < 1) throw std::invalid_argument("DynamicPointHistory: history must be >= 1");
+  if (!(options_.max_increase_px > 0.0) || !(options_.max_first_px > 0.0))
+    throw std::invalid_argument("DynamicPointHistory: max_increase_px and max_first_px must be > 0");
+  if (options_.forget_after_frames < 1)
+    throw std::invalid_argument("DynamicPointHistory: forget_after_frames must be >= 1");
+}
+
+std::vector<bool> DynamicPointHistory::update(std::size_t frame, const std::vector<std::uint64_t>& ids,
+                                              const std::vector<Eigen::Vector2d>& pixels,
+                                              const Eigen::Isometry3d& pose_wc, const PinholeCamera& camera) {
+  if (ids.size() != pixels.size())
+    throw std::invalid_argument("DynamicPointHistory::update: " + std::to_string(ids.size()) + " ids but " +
+                                std::to_string(pixels.size()) + " pixels");
+  std::vector<bool> flags(ids.size(), false);
+  for (std::size_t i = 0; i < ids.size(); ++i) {
+    Seen& seen = points_[ids[i]];
+    const bool known = seen.observed && seen.frame < frame && frame - seen.frame <= options_.forget_after_frames;
+    if (known) {
+      const double d = epipolarDistance(fundamentalBetween(seen.pose_wc, pose_wc, camera), seen.pixel, pixels[i]);
+      if (std::isfinite(d)) {
+        flags[i] = seen.distances.empty() ? d > options_.max_first_px
+                                          : d - medianOf(seen.distances) > options_.max_increase_px;
+        // Only the values of a point judged static become its reference: one
+        // that keeps moving stays flagged instead of making its motion the norm.
+        if (!flags[i]) seen.distances.push_back(d);
+        if (seen.distances.size() > options_.history) seen.distances.pop_front();
+      }
+    } else {
+      seen.distances.clear();
+    }
+    seen.observed = true;
+    seen.frame = frame;
+    seen.pixel = pixels[i];
+    seen.pose_wc = pose_wc;
+  }
+  // Points unseen for long are forgotten: the map stays the size of what is tracked.
+  for (auto it = points_.begin(); it != points_.end();)
+    it = frame - it->second.frame > options_.forget_after_frames ? points_.erase(it) : std::next(it);
+  return flags;
+}
+
+double DynamicPointHistory::lastDistance(std::uint64_t id) const {
+  const auto it = points_.find(id);
+  if (it == points_.end() || it->second.distances.empty()) return std::numeric_limits<double>::quiet_NaN();
+  return it->second.distances.back();
+}
+
+}  // namespace weighted_icp::frontend
