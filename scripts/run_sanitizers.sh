@@ -31,8 +31,11 @@ if [ "$sanitizers" = address,undefined ]; then
   build="$(bash "$root/scripts/configure_fuzz_build.sh")"
 else
   build="$root/build-$(echo "$sanitizers" | tr ',' '-')"
+  # ccache when present: a sanitizer build is a second full build of everything the areas need.
+  launcher=()
+  command -v ccache > /dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
   cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DWEIGHTED_ICP_SANITIZE="$sanitizers" \
-    -DWEIGHTED_ICP_BUILD_BENCHMARKS=OFF > "$build.configure.log" 2>&1 || { cat "$build.configure.log"; exit 1; }
+    -DWEIGHTED_ICP_BUILD_BENCHMARKS=OFF "${launcher[@]}" > "$build.configure.log" 2>&1 || { cat "$build.configure.log"; exit 1; }
 fi
 targets=() regex=""
 for area in "${areas[@]}"; do
@@ -43,10 +46,11 @@ for area in "${areas[@]}"; do
   fi
   regex="${regex:+$regex|}$area"
 done
-cmake --build "$build" -j "$(nproc)" --target "${targets[@]}"
+# Set before the build too: gtest_discover_tests runs each test program as it is built.
 export ASAN_OPTIONS="detect_leaks=1:abort_on_error=1:strict_string_checks=1"
 export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
 # Only Debian's libraries are suppressed, each with its reason in the file.
 export TSAN_OPTIONS="suppressions=$root/scripts/tsan.supp:halt_on_error=1:second_deadlock_stack=1"
+cmake --build "$build" -j "$(nproc)" --target "${targets[@]}"
 ctest --test-dir "$build" -j "$(nproc)" --output-on-failure --timeout 900 -R "^($regex)\\." \
   -E 'AnalyticJacobiansMatchNumericDifferentiation'
