@@ -301,6 +301,26 @@ int main(int argc, char** argv) {
         ("moving-object", po::bool_switch(&synthetic.moving_object), "synthetic: a box moves through the view")
         ("dim", po::bool_switch(&synthetic.dim_lighting), "synthetic: dim, low-contrast, noisy images");
     // clang-format on
+    // Issue #11 ablation options: dense odometry, equalisation, PnP, the gate's measure
+    // (docs/frontend_ablation.md).
+    std::string quality_measure = "sharpness", dense_use = "off", dense_kind = "rgbd", equalization = "clahe",
+                pnp_method = "ap3p";
+    po::options_description ablation("Front-end options for the ablation (docs/frontend_ablation.md)");
+    // clang-format off
+    ablation.add_options()
+        ("quality-measure", tools::choiceValue(&quality_measure, {"sharpness", "brisque"})->default_value(quality_measure),
+         "relative gate's measure: sharpness (log10 Laplacian variance, every frame) or brisque (keyframe candidates)")
+        ("dense-odometry", tools::choiceValue(&dense_use, {"off", "prior", "fallback", "prior+fallback"})
+                               ->default_value(dense_use),
+         "OpenCV's dense RGB-D odometry as the PnP motion prior, as the pose when 3D-2D tracking fails, both, or off")
+        ("dense-odometry-kind", tools::choiceValue(&dense_kind, {"rgbd", "icp", "rgbd-icp"})->default_value(dense_kind),
+         "which: cv::rgbd::RgbdOdometry, ICPOdometry or RgbdICPOdometry")
+        ("equalization", tools::choiceValue(&equalization, {"clahe", "global", "none"})->default_value(equalization),
+         "a frame with too few corners: CLAHE, global histogram equalisation (the front-end paper) or none")
+        ("pnp", tools::choiceValue(&pnp_method, {"ap3p", "iterative"})->default_value(pnp_method),
+         "RANSAC PnP solver: ap3p (AP3P sets, EPnP) or iterative (the paper's iterative 5-point solution)");
+    // clang-format on
+    description.add(ablation);
     po::variables_map vm;
     if (!tools::parseCommandLine(argc, argv, description, vm)) return 0;
     options.frontend.matcher.kind = frontend::parseMatcherKind(matcher_name);
@@ -311,6 +331,12 @@ int main(int argc, char** argv) {
       throw po::error(std::string("--quality-gate: ") + e.what());
     }
     options.backend.background_thread = !vm.count("deterministic");
+    // Issue #11 ablation options: names already checked by choiceValue.
+    options.frontend.quality.measure = frontend::parseQualityMeasure(quality_measure);
+    options.frontend.dense_odometry.use = frontend::parseDenseOdometryUse(dense_use);
+    options.frontend.dense_odometry.kind = frontend::parseDenseOdometryKind(dense_kind);
+    options.frontend.features.equalization = frontend::parseEqualizationMethod(equalization);
+    options.frontend.pnp.method = frontend::parsePnpMethod(pnp_method);
 
     std::unique_ptr<FrameSource> source;
     if (dataset.empty()) {

@@ -8,6 +8,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/features2d.hpp>
 
+#include "weighted_icp/frontend/perception/histogram_equalization.h"
 #include "weighted_icp/frontend/perception/image_preprocessor.h"
 
 namespace weighted_icp::frontend {
@@ -31,6 +32,9 @@ struct FeatureExtractorOptions {
   /// 0.5 px): GFTT returns whole pixels, whose rounding alone is 0.3 px of
   /// noise on every pose. min_distance_px then holds to within 1 px.
   bool subpixel = true;
+  // Issue #11 ablation options: dense odometry, equalisation, PnP (docs/frontend_ablation.md).
+  /// How a frame with fewer than min_features_before_clahe corners is equalised before detecting again.
+  EqualizationMethod equalization = EqualizationMethod::Clahe;
 };
 
 struct ExtractedFeatures {
