@@ -102,6 +102,7 @@ double percentile(const std::vector<double>& values, double q) { return values.e
 struct RunCounts {
   std::size_t processed = 0, unreadable = 0, tracked = 0, skipped = 0, lost = 0, clahe = 0, dynamic = 0;
   std::vector<double> tracking_ms;
+  std::size_t dense = 0;  // Issue #11: frames posed by the dense odometry fallback
 };
 
 /// Feeds frames [0, frames) to `slam`, stopping early when SIGINT or SIGTERM
@@ -135,6 +136,7 @@ void countResults(const frontend::RgbdSlam& slam, RunCounts& counts) {
     counts.lost += record.result.status == frontend::TrackingStatus::Lost;
     counts.clahe += record.result.used_clahe;
     counts.dynamic += record.result.dynamic;
+    counts.dense += record.result.status == frontend::TrackingStatus::TrackedDense;
   }
 }
 
@@ -207,7 +209,8 @@ tools::JsonObject makeReport(const FrameSource& source, std::size_t frames, cons
       .add("lost_frames", counts.lost)
       .add("clahe_frames", counts.clahe)
       .add("dynamic_matches", counts.dynamic)
-      .add("bundle_adjustments", slam.optimizationsRun());
+      .add("bundle_adjustments", slam.optimizationsRun())
+      .add("dense_fallback_frames", counts.dense);  // Issue #11: --dense-odometry fallback
   return report;
 }
 

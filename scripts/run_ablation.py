@@ -131,7 +131,10 @@ def cell(report):
     ate = report.get("ate_rmse_m")
     ate_text = f"{ate * 100:.2f}" if ate is not None else "–"
     missing = report["frames"] - report["tracked_frames"]
-    return f"{ate_text} ({missing}) · {report['median_ms_per_frame']:.0f} / {report['p90_ms_per_frame']:.0f}"
+    text = f"{ate_text} ({missing}) · {report['median_ms_per_frame']:.0f} / {report['p90_ms_per_frame']:.0f}"
+    if report.get("dense_fallback_frames", 0) > 0:
+        text += f" [{report['dense_fallback_frames']} dense]"
+    return text
 
 
 def write_atomically(path, text):
