@@ -1,7 +1,7 @@
 #include "tool_support.h"
 
-#include <boost/program_options/errors.hpp>
 #include <algorithm>
+#include <boost/program_options/errors.hpp>
 #include <cctype>
 #include <cerrno>
 #include <charconv>
