@@ -111,6 +111,7 @@ struct RunCounts {
   std::size_t processed = 0, unreadable = 0, tracked = 0, skipped = 0, lost = 0, clahe = 0, dynamic = 0;
   std::vector<double> tracking_ms;
   std::vector<double> tracking_cpu_ms;  // issue #11: the tracking thread's CPU time
+  std::size_t dense = 0;  // Issue #11: frames posed by the dense odometry fallback
 };
 
 /// Feeds frames [first, frames) to `slam`, stopping early when SIGINT or SIGTERM
@@ -146,6 +147,7 @@ void countResults(const frontend::RgbdSlam& slam, RunCounts& counts) {
     counts.lost += record.result.status == frontend::TrackingStatus::Lost;
     counts.clahe += record.result.used_clahe;
     counts.dynamic += record.result.dynamic;
+    counts.dense += record.result.status == frontend::TrackingStatus::TrackedDense;
   }
 }
 
@@ -230,7 +232,8 @@ tools::JsonObject makeReport(const FrameSource& source, std::size_t frames, cons
       .add("bundle_adjustments", slam.optimizationsRun())
       .add("loops_detected", loops.loops_detected)
       .add("loops_accepted", loops.loops_accepted)
-      .add("pose_graph_optimisations", loops.pose_graph_optimisations);
+      .add("pose_graph_optimisations", loops.pose_graph_optimisations)
+      .add("dense_fallback_frames", counts.dense);  // Issue #11: --dense-odometry fallback
   return report;
 }
 
@@ -371,6 +374,26 @@ int main(int argc, char** argv) {
         ("dynamic-distance", po::value(&dynamic_distance_name)->default_value(dynamic_distance_name),
          "displacement (3D), epipolar-history (front-end paper, Eq. 6, against the point's earlier values) or both");
     // clang-format on
+    // Issue #11 ablation options: dense odometry, equalisation, PnP, the gate's measure
+    // (docs/frontend_ablation.md).
+    std::string quality_measure = "sharpness", dense_use = "off", dense_kind = "rgbd", equalization = "clahe",
+                pnp_method = "ap3p";
+    po::options_description ablation("Front-end options for the ablation (docs/frontend_ablation.md)");
+    // clang-format off
+    ablation.add_options()
+        ("quality-measure", tools::choiceValue(&quality_measure, {"sharpness", "brisque"})->default_value(quality_measure),
+         "relative gate's measure: sharpness (log10 Laplacian variance, every frame) or brisque (keyframe candidates)")
+        ("dense-odometry", tools::choiceValue(&dense_use, {"off", "prior", "fallback", "prior+fallback"})
+                               ->default_value(dense_use),
+         "OpenCV's dense RGB-D odometry as the PnP motion prior, as the pose when 3D-2D tracking fails, both, or off")
+        ("dense-odometry-kind", tools::choiceValue(&dense_kind, {"rgbd", "icp", "rgbd-icp"})->default_value(dense_kind),
+         "which: cv::rgbd::RgbdOdometry, ICPOdometry or RgbdICPOdometry")
+        ("equalization", tools::choiceValue(&equalization, {"clahe", "global", "none"})->default_value(equalization),
+         "a frame with too few corners: CLAHE, global histogram equalisation (the front-end paper) or none")
+        ("pnp", tools::choiceValue(&pnp_method, {"ap3p", "iterative"})->default_value(pnp_method),
+         "RANSAC PnP solver: ap3p (AP3P sets, EPnP) or iterative (the paper's iterative 5-point solution)");
+    // clang-format on
+    description.add(ablation);
     po::variables_map vm;
     if (!tools::parseCommandLine(argc, argv, description, vm)) return 0;
     try {
@@ -393,6 +416,12 @@ int main(int argc, char** argv) {
     closing_options.loop_closure = !vm.count("no-loop-closure");
     if (!closing_options.loop_closure && !vocabulary_path.empty())
       throw po::error("--vocabulary has no use with --no-loop-closure");
+    // Issue #11 ablation options: names already checked by choiceValue.
+    options.frontend.quality.measure = frontend::parseQualityMeasure(quality_measure);
+    options.frontend.dense_odometry.use = frontend::parseDenseOdometryUse(dense_use);
+    options.frontend.dense_odometry.kind = frontend::parseDenseOdometryKind(dense_kind);
+    options.frontend.features.equalization = frontend::parseEqualizationMethod(equalization);
+    options.frontend.pnp.method = frontend::parsePnpMethod(pnp_method);
 
     std::unique_ptr<FrameSource> source;
     if (dataset.empty()) {

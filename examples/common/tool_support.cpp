@@ -1,5 +1,6 @@
 #include "tool_support.h"
 
+#include <algorithm>
 #include <boost/program_options/errors.hpp>
 #include <cctype>
 #include <cerrno>
@@ -82,6 +83,18 @@ std::string describeRange(bool integer, double minimum, double maximum, bool min
 }
 
 }  // namespace detail
+
+// Issue #11 ablation options: named choices.
+void ChoiceValue::xparse(boost::any& value_store, const std::vector<std::string>& tokens) const {
+  namespace po = boost::program_options;
+  const std::string& text = po::validators::get_single_string(tokens);
+  if (std::find(choices_.begin(), choices_.end(), text) == choices_.end()) {
+    std::string list;
+    for (const std::string& choice : choices_) list += (list.empty() ? "" : ", ") + choice;
+    throw po::error_with_option_name("%canonical_option% must be one of " + list + " (got " + text + ")");
+  }
+  value_store = text;
+}
 
 void throwOutOfRange(const std::string& option, const std::string& value, long long minimum, long long maximum) {
   throw boost::program_options::error(

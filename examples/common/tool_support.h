@@ -125,6 +125,33 @@ inline RangedValue<double>* positiveValue(double* store, double maximum = std::n
   return new RangedValue<double>(store, 0.0, maximum, true);
 }
 
+// Issue #11 ablation options: named choices (--quality-measure, --dense-odometry, ...).
+/// A string option restricted to a list of names, checked while it is parsed: anything else is
+/// the command-line error (exit 2 through runTool) "--<option> must be one of a, b (got c)".
+class ChoiceValue : public boost::program_options::typed_value<std::string> {
+ public:
+  /// @brief Use choiceValue() rather than this.
+  /// @param store   where the accepted name goes (may be null)
+  /// @param choices the accepted names
+  ChoiceValue(std::string* store, std::vector<std::string> choices)
+      : boost::program_options::typed_value<std::string>(store), choices_(std::move(choices)) {}
+
+  /// @brief boost's parsing hook: accepts the token only if it is one of the choices.
+  /// @param value_store  receives the value
+  /// @param tokens       the option's one token
+  void xparse(boost::any& value_store, const std::vector<std::string>& tokens) const override;
+
+ private:
+  std::vector<std::string> choices_;
+};
+
+/// @brief A string option accepting only one of `choices` (see ChoiceValue).
+/// @param store   where the value goes, as po::value(&variable) does
+/// @param choices the accepted names, listed in the error message in this order
+inline ChoiceValue* choiceValue(std::string* store, std::vector<std::string> choices) {
+  return new ChoiceValue(store, std::move(choices));
+}
+
 /// One line on stderr, rewritten in place: "label  12/40  (30%)  eta 5 s".
 /// Prints plain lines instead when stderr is not a terminal (CI logs).
 class Progress {

@@ -76,7 +76,8 @@ std::pair<Eigen::Isometry3d, std::vector<int>> ransacPnp(const std::vector<Eigen
     // rate); OpenCV then fits EPnP to the consensus.
     found = cv::solvePnPRansac(object_points, image_points, cv::Mat(camera.cameraMatrix()), cv::noArray(), rvec, tvec,
                                false, options.ransac_iterations, static_cast<float>(options.ransac_reprojection_px),
-                               options.confidence, consensus, cv::SOLVEPNP_AP3P);
+                               options.confidence, consensus,
+                               options.method == PnpMethod::Iterative ? cv::SOLVEPNP_ITERATIVE : cv::SOLVEPNP_AP3P);
   } catch (const cv::Exception&) {
     found = false;  // degenerate samples (e.g. all points collinear) raise in the minimal solvers
   }

@@ -183,8 +183,9 @@ ExtractedFeatures FeatureExtractor::extract(const cv::Mat& gray) const {
   ExtractedFeatures features;
   cv::Mat image = gray;
   features.keypoints = detectBucketed(image);
-  if (static_cast<int>(features.keypoints.size()) < options_.min_features_before_clahe) {
-    image = equalizeClahe(gray, options_.clahe);
+  if (options_.equalization != EqualizationMethod::None &&
+      static_cast<int>(features.keypoints.size()) < options_.min_features_before_clahe) {
+    image = equalizeHistogram(gray, options_.equalization, options_.clahe);
     features.keypoints = detectBucketed(image);
     features.used_clahe = true;
   }

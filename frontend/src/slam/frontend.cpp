@@ -16,6 +16,7 @@ std::string toString(TrackingStatus status) {
     case TrackingStatus::TrackedRelative: return "tracked-2d2d";
     case TrackingStatus::SkippedLowQuality: return "skipped-low-quality";
     case TrackingStatus::Lost: return "lost";
+    case TrackingStatus::TrackedDense: return "tracked-dense";
   }
   return "unknown";
 }
@@ -54,6 +55,7 @@ Frontend::Frontend(Map& map, Backend& backend, PinholeCamera camera, FrontendOpt
       matcher_(options.matcher),
       dynamic_history_(options.dynamic_history) {
   if (options_.quality_gate) quality_gate_.emplace(options_.quality);
+  if (options_.dense_odometry.use != DenseOdometryUse::Off) dense_.emplace(camera_, options_.dense_odometry.kind);
 }
 
 double Frontend::depthAt(const cv::Mat& depth, const cv::Point2f& pixel) const {
@@ -110,6 +112,7 @@ TrackingResult Frontend::track(const RgbdFrame& image) {
   Frame frame = makeFrame(image, result.used_clahe);
   result.features = frame.size();
   current_color_ = image.color;
+  if (dense_) dense_->setCurrent(image);
   followMapCorrection();
   frame_quality_.reset();
   if (quality_gate_ && quality_gate_->assessesEveryFrame()) {
@@ -163,7 +166,7 @@ bool Frontend::refusedByQualityGate(TrackingResult& result, bool must_keep) {
 }
 
 TrackingResult Frontend::trackFrame(Frame& frame, TrackingResult result) {
-  const auto predicted = motion_.predict();
+  const auto predicted = predictPose();
   const Eigen::Isometry3d guess_wc = predicted ? *predicted : *last_pose_wc_;
   const double gate_px = predicted ? options_.match_gate_px : options_.match_gate_without_motion_px;
   if (!refreshLocalMap()) return lose(result, "the local map is empty");
@@ -171,9 +174,9 @@ TrackingResult Frontend::trackFrame(Frame& frame, TrackingResult result) {
   const LocalMatches matched = matchLocalMap(frame, guess_wc, gate_px);
   result.matches = matched.size();
   if (matched.size() < static_cast<std::size_t>(options_.pnp.min_inliers))
-    return trackRelative(frame, result, std::to_string(matched.size()) + " 3D-2D matches");
+    return trackWithoutFeatures(frame, result, std::to_string(matched.size()) + " 3D-2D matches");
   const PoseEstimate estimate = estimatePosePnp(matched.points_world, matched.pixels, camera_, guess_wc, options_.pnp);
-  if (!estimate.ok) return trackRelative(frame, result, "PnP failed: " + estimate.failure);
+  if (!estimate.ok) return trackWithoutFeatures(frame, result, "PnP failed: " + estimate.failure);
 
   const MovingPoints moving = rejectMovingPoints(frame, matched, estimate.pose_wc);
   std::vector<int> static_inliers;
@@ -181,7 +184,7 @@ TrackingResult Frontend::trackFrame(Frame& frame, TrackingResult result) {
     if (!moving.is_dynamic[m]) static_inliers.push_back(m);
   result.dynamic = moving.pixels.size();
   if (static_inliers.size() < static_cast<std::size_t>(options_.pnp.min_inliers))
-    return trackRelative(frame, result, std::to_string(static_inliers.size()) + " static inliers");
+    return trackWithoutFeatures(frame, result, std::to_string(static_inliers.size()) + " static inliers");
 
   const Eigen::Isometry3d pose_wc = refinePose(frame, matched, static_inliers, estimate.pose_wc);
   metric_velocity_ = last_pose_wc_->inverse() * pose_wc;
@@ -271,6 +274,7 @@ void Frontend::acceptPose(Frame& frame, TrackingResult& result, TrackingStatus s
   setPose(result, frame.pose_wc);
   motion_.update(frame.pose_wc);
   last_pose_wc_ = frame.pose_wc;
+  if (dense_) dense_->acceptCurrent();
 }
 
 void Frontend::insertKeyframeIfNeeded(const Frame& frame, TrackingResult& result, const LocalMatches& matched,
@@ -300,11 +304,33 @@ TrackingResult Frontend::initialize(Frame& frame, TrackingResult result) {
   transitionTo(FrontendState::Tracking);
   motion_.update(frame.pose_wc);
   last_pose_wc_ = frame.pose_wc;
+  if (dense_) dense_->acceptCurrent();
   insertKeyframe(frame, {}, {});
   result.status = TrackingStatus::Initialized;
   setPose(result, frame.pose_wc);
   result.keyframe = true;
   result.inliers = tracked_at_last_keyframe_;
+  return result;
+}
+
+std::optional<Eigen::Isometry3d> Frontend::predictPose() {
+  const DenseOdometryUse use = options_.dense_odometry.use;
+  if (dense_ && (use == DenseOdometryUse::Prior || use == DenseOdometryUse::PriorAndFallback))
+    if (const auto motion = dense_->motionFromReference()) return *last_pose_wc_ * *motion;
+  return motion_.predict();
+}
+
+TrackingResult Frontend::trackWithoutFeatures(Frame& frame, TrackingResult result, const std::string& why_not_3d) {
+  const DenseOdometryUse use = options_.dense_odometry.use;
+  if (!dense_ || !(use == DenseOdometryUse::Fallback || use == DenseOdometryUse::PriorAndFallback))
+    return trackRelative(frame, result, why_not_3d);
+  const auto motion = dense_->motionFromReference();
+  if (!motion) return trackRelative(frame, result, why_not_3d + "; dense odometry failed");
+  // Measured with depth, so it may scale a later 2D-2D estimate. No keyframe: its points would
+  // rest on a pose no map point confirms; the map grows again once 3D-2D tracking is back.
+  metric_velocity_ = *motion;
+  acceptPose(frame, result, TrackingStatus::TrackedDense, *last_pose_wc_ * *motion);
+  result.reason = why_not_3d;
   return result;
 }
 

@@ -11,6 +11,7 @@
 
 #include "weighted_icp/core/camera.h"
 #include "weighted_icp/frontend/geometry/depth_noise_model.h"
+#include "weighted_icp/frontend/geometry/pnp_method.h"
 
 namespace weighted_icp::frontend {
 
@@ -21,6 +22,9 @@ struct PnpOptions {
   int min_inliers = 12;
   double huber_px = 2.0;
   int refine_max_iterations = 20;
+  // Issue #11 ablation options: dense odometry, equalisation, PnP (docs/frontend_ablation.md).
+  /// The solver inside RANSAC; the Huber refinement follows either.
+  PnpMethod method = PnpMethod::Ap3p;
 };
 
 struct PoseEstimate {

@@ -8,6 +8,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/features2d.hpp>
 
+#include "weighted_icp/frontend/perception/histogram_equalization.h"
 #include "weighted_icp/frontend/perception/image_preprocessor.h"
 #include "weighted_icp/frontend/perception/modified_brief.h"
 
@@ -36,6 +37,9 @@ struct FeatureExtractorOptions {
   /// ORB's rotated BRIEF, or the front-end paper's modified BRIEF (Eq. 7);
   /// both 32 bytes per row, steered by the same intensity-centroid angle.
   DescriptorKind descriptor = DescriptorKind::Orb;
+  // Issue #11 ablation options: dense odometry, equalisation, PnP (docs/frontend_ablation.md).
+  /// How a frame with fewer than min_features_before_clahe corners is equalised before detecting again.
+  EqualizationMethod equalization = EqualizationMethod::Clahe;
 };
 
 struct ExtractedFeatures {

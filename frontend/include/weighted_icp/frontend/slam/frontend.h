@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "weighted_icp/core/camera.h"
+#include "weighted_icp/frontend/geometry/dense_odometry.h"
 #include "weighted_icp/frontend/geometry/depth_noise_model.h"
 #include "weighted_icp/frontend/geometry/dynamic_point_filter.h"
 #include "weighted_icp/frontend/geometry/dynamic_point_history.h"
@@ -82,6 +83,10 @@ struct FrontendOptions {
   /// The distance that flags moving points in 3D-2D tracking.
   DynamicDistanceKind dynamic_distance = DynamicDistanceKind::Displacement;
   DynamicPointHistoryOptions dynamic_history;
+  // Issue #11 ablation options: dense odometry, equalisation, PnP (docs/frontend_ablation.md;
+  // equalisation is features.equalization, the PnP solver pnp.method).
+  /// OpenCV's dense odometry as a motion prior and/or a fallback pose; off by default.
+  DenseOdometryOptions dense_odometry;
 };
 
 enum class TrackingStatus {
@@ -89,7 +94,9 @@ enum class TrackingStatus {
   Tracked,            // 3D-2D pose
   TrackedRelative,    // 2D-2D pose, scale from the motion model
   SkippedLowQuality,  // failed to track and refused by the image quality gate
-  Lost                // no pose; the next frame starts a new segment
+  Lost,               // no pose; the next frame starts a new segment
+  // Issue #11: dense odometry.
+  TrackedDense  // 3D-2D failed; pose from OpenCV's dense odometry against the last posed frame
 };
 std::string toString(TrackingStatus status);
 
@@ -113,7 +120,7 @@ struct TrackingResult {
 
   bool hasPose() const {
     return status == TrackingStatus::Initialized || status == TrackingStatus::Tracked ||
-           status == TrackingStatus::TrackedRelative;
+           status == TrackingStatus::TrackedRelative || status == TrackingStatus::TrackedDense;
   }
 };
 
@@ -188,6 +195,11 @@ class Frontend {
   TrackingResult initialize(Frame& frame, TrackingResult result);
   /// 2D-2D pose against the last keyframe, scaled by the last metric motion; loses tracking if impossible.
   TrackingResult trackRelative(Frame& frame, TrackingResult result, const std::string& why_not_3d);
+  // Issue #11: dense odometry.
+  /// The pose guess: the dense motion from the last posed frame when it is the prior, else constant velocity.
+  std::optional<Eigen::Isometry3d> predictPose();
+  /// 3D-2D failed: the dense odometry's pose when it is the fallback and registers the frame, else 2D-2D.
+  TrackingResult trackWithoutFeatures(Frame& frame, TrackingResult result, const std::string& why_not_3d);
   /// Pixel pairs (last keyframe, frame) of the descriptor matches between the two.
   void matchLastKeyframe(const Frame& frame, std::vector<Eigen::Vector2d>& keyframe_pixels,
                          std::vector<Eigen::Vector2d>& frame_pixels) const;
@@ -233,6 +245,7 @@ class Frontend {
   DescriptorMatcher matcher_;
   std::optional<ImageQualityGate> quality_gate_;
   ConstantVelocityModel motion_;
+  std::optional<DenseOdometry> dense_;  // Issue #11: when options_.dense_odometry.use is not Off
 
   std::size_t next_frame_id_ = 0;
   FrontendState state_ = FrontendState::Initializing;
