@@ -6,9 +6,9 @@
 # sweeps, perception, geometry, frontend, mapping) or fuzz (the replay of the
 # fuzz targets' committed seeds and crashers, ctest fuzz.*); only those test
 # programs (and the tools they run) are built. Default: address,undefined over
-# core, registration, io and fuzz (the parsers and the registration core; the
-# whole suite under ASan takes about 12 minutes on 2 cores after a long build,
-# more than CI's budget). CI runs the default (.ci/run).
+# core, io and fuzz (the parsers; the whole suite under ASan takes about 12
+# minutes on 2 cores after a long build, more than CI's budget, and the
+# registration area alone about 3). CI runs the default (.ci/run).
 #
 # address,undefined builds with clang-14 in ./build-fuzz, the tree the
 # fuzzers use (scripts/configure_fuzz_build.sh); other sanitizer sets build
@@ -24,7 +24,7 @@ root="$(cd "$(dirname "$0")/.." && pwd)"
 sanitizers="${1:-address,undefined}"
 shift || true
 areas=("$@")
-[ ${#areas[@]} -gt 0 ] || areas=(core registration io fuzz)
+[ ${#areas[@]} -gt 0 ] || areas=(core io fuzz)
 "$root/scripts/install_deps.sh"
 if [ "$sanitizers" = address,undefined ]; then
   # The fuzzers' clang build is ASan+UBSan already: one build serves both, so CI compiles the libraries once.
