@@ -100,19 +100,20 @@ std::vector<cv::DMatch> DescriptorMatcher::match(const cv::Mat& query) const {
       matches.push_back(best);
   }
 
-  if (options_.cross_check_unique) {
-    // Best per reference row: smallest distance, then smallest query index.
-    std::vector<int> winner(static_cast<std::size_t>(reference_rows_), -1);
-    for (int i = 0; i < static_cast<int>(matches.size()); ++i) {
-      int& current = winner[static_cast<std::size_t>(matches[i].trainIdx)];
-      if (current < 0 || matches[i].distance < matches[current].distance) current = i;
-    }
-    std::vector<cv::DMatch> unique;
-    for (int i = 0; i < static_cast<int>(matches.size()); ++i)
-      if (winner[static_cast<std::size_t>(matches[i].trainIdx)] == i) unique.push_back(matches[i]);
-    matches.swap(unique);
-  }
+  if (options_.cross_check_unique) matches = keepBestMatchPerReference(matches, reference_rows_);
   return matches;  // knnMatch returns one list per query row, in order
+}
+
+std::vector<cv::DMatch> keepBestMatchPerReference(const std::vector<cv::DMatch>& matches, int reference_rows) {
+  std::vector<int> winner(static_cast<std::size_t>(reference_rows), -1);
+  for (int i = 0; i < static_cast<int>(matches.size()); ++i) {
+    int& current = winner[static_cast<std::size_t>(matches[i].trainIdx)];
+    if (current < 0 || matches[i].distance < matches[current].distance) current = i;
+  }
+  std::vector<cv::DMatch> unique;
+  for (int i = 0; i < static_cast<int>(matches.size()); ++i)
+    if (winner[static_cast<std::size_t>(matches[i].trainIdx)] == i) unique.push_back(matches[i]);
+  return unique;
 }
 
 MatcherKind parseMatcherKind(const std::string& name) {

@@ -8,6 +8,8 @@
 
 #include <opencv2/core/hal/hal.hpp>
 
+#include "weighted_icp/frontend/perception/descriptor_matcher.h"
+
 namespace weighted_icp::frontend {
 namespace {
 
@@ -115,15 +117,7 @@ std::vector<cv::DMatch> matchInRegionsOfInterest(const cv::Mat& query, const std
     matches.emplace_back(q, best, static_cast<float>(best_d));
   }
   if (!options.cross_check_unique) return matches;
-  std::vector<int> winner(static_cast<std::size_t>(reference.rows), -1);
-  for (int i = 0; i < static_cast<int>(matches.size()); ++i) {
-    int& current = winner[static_cast<std::size_t>(matches[i].trainIdx)];
-    if (current < 0 || matches[i].distance < matches[current].distance) current = i;
-  }
-  std::vector<cv::DMatch> unique;
-  for (int i = 0; i < static_cast<int>(matches.size()); ++i)
-    if (winner[static_cast<std::size_t>(matches[i].trainIdx)] == i) unique.push_back(matches[i]);
-  return unique;
+  return keepBestMatchPerReference(matches, reference.rows);
 }
 
 }  // namespace weighted_icp::frontend

@@ -123,7 +123,8 @@ void Map::applyOptimization(const MapWindow& optimised,
     it->second.position = point.position;
     it->second.covariance = point.covariance;
   }
-  for (const auto& [point_id, keyframe_id] : rejected_observations) {
+  for (const auto& [point_id, rejected_keyframe] : rejected_observations) {
+    const KeyframeId keyframe_id = rejected_keyframe;  // a lambda cannot capture a structured binding in C++17
     const auto point = points_.find(point_id);
     if (point == points_.end()) continue;
     auto& observations = point->second.observations;

@@ -67,6 +67,12 @@ class DescriptorMatcher {
   int reference_cols_ = 0;
 };
 
+/// @brief Keeps at most one match per reference row: the one with the smallest
+/// distance, then the smallest query index (the cross check every matcher applies).
+/// @param matches query-to-reference matches, in query order
+/// @param reference_rows rows of the reference descriptors (every trainIdx is below it)
+std::vector<cv::DMatch> keepBestMatchPerReference(const std::vector<cv::DMatch>& matches, int reference_rows);
+
 /// "flann" -> FlannLsh, "brute-force" -> BruteForce, "kd-tree" -> KdTree; throws std::invalid_argument otherwise.
 MatcherKind parseMatcherKind(const std::string& name);
 /// The name parseMatcherKind reads.
