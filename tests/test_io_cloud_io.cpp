@@ -223,6 +223,16 @@ TEST(CloudIo, AHeaderDeclaringMorePointsThanTheFileHoldsIsRefusedBeforeReading) 
     writeFile(path, text.replace(at, 12, "DATA " + data + "\n"));
     expectError([&] { io::loadLandmarkCloud(path.string()); }, path, "more points than the file holds (100000000 points");
   }
+  // Found by the same fuzzer next: without SIZE and COUNT PCL takes 4 bytes a field, not nothing.
+  const fs::path bare = pcdDeclaring(scratch / "no_size_or_count.pcd", "100000000");
+  std::string text = readFile(bare);
+  for (const std::string key : {"SIZE ", "COUNT "}) {
+    const std::size_t at = text.find(key);
+    ASSERT_NE(at, std::string::npos) << key;
+    text.erase(at, text.find('\n', at) + 1 - at);
+  }
+  writeFile(bare, text);
+  expectError([&] { io::loadLandmarkCloud(bare.string()); }, bare, "more points than the file holds (100000000 points");
   const fs::path ply = scratch / "huge.ply";
   writeFile(ply, "ply\nformat binary_little_endian 1.0\nelement vertex 100000000\nproperty float x\nend_header\n");
   expectError([&] { io::loadLandmarkCloud(ply.string()); }, ply, "more points than the file holds (100000000 vertices");

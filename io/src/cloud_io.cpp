@@ -153,19 +153,21 @@ std::optional<std::uintmax_t> plyExpectedSize(std::istream& in) {
   return static_cast<std::uintmax_t>(in.tellg()) + data;
 }
 
-/// a x b, or the largest value when the product does not fit.
+constexpr std::uintmax_t kLargest = std::numeric_limits<std::uintmax_t>::max() / 2;
+
+/// a x b, or kLargest when the product does not fit below it.
 std::uintmax_t saturatingProduct(std::uintmax_t a, std::uintmax_t b) {
-  const std::uintmax_t largest = std::numeric_limits<std::uintmax_t>::max();
-  return b != 0 && a > largest / b ? largest : a * b;
+  return b != 0 && a > kLargest / b ? kLargest : std::min(a * b, kLargest);
 }
 
 /// What a PCD header declares about the data that follows it.
 struct PcdLayout {
-  std::uintmax_t points = 0;       ///< the larger of POINTS and WIDTH x HEIGHT
-  bool negative = false;           ///< POINTS, WIDTH or HEIGHT is negative
-  std::uintmax_t point_bytes = 0;  ///< sum of SIZE x COUNT over the fields
-  std::string data;                ///< the DATA line: "DATA ascii", "DATA binary", ...
-  std::uintmax_t data_offset = 0;  ///< the first byte after the DATA line
+  std::uintmax_t points = 0;        ///< the larger of POINTS and WIDTH x HEIGHT
+  bool negative = false;            ///< POINTS, WIDTH or HEIGHT is negative
+  std::uintmax_t point_bytes = 0;   ///< sum of SIZE x COUNT over the fields, PCL's defaults (4, 1) where absent
+  std::uintmax_t point_values = 0;  ///< sum of COUNT over the fields
+  std::string data;                 ///< the DATA line: "DATA ascii", "DATA binary", ...
+  std::uintmax_t data_offset = 0;   ///< the first byte after the DATA line
 };
 
 /// Reads a PCD header up to its DATA line; nullopt when there is none or SIZE
@@ -175,23 +177,32 @@ std::optional<PcdLayout> readPcdLayout(std::istream& in) {
   std::string line;
   long long points = 0, width = 0, height = 1;
   std::vector<std::uintmax_t> sizes, counts;
+  std::size_t names = 0;
   while (std::getline(in, line) && line.rfind("DATA", 0) != 0) {
     std::istringstream fields(line);
     std::string keyword;
     fields >> keyword;
     std::vector<std::uintmax_t>* target = keyword == "SIZE" ? &sizes : keyword == "COUNT" ? &counts : nullptr;
     for (std::uintmax_t value = 0; target && fields >> value;) target->push_back(value);
+    if (keyword == "FIELDS" || keyword == "COLUMNS")
+      for (std::string name; fields >> name;) ++names;
     if (keyword == "POINTS") fields >> points;
     if (keyword == "WIDTH") fields >> width;
     if (keyword == "HEIGHT") fields >> height;
   }
-  if (!in || sizes.size() != counts.size()) return std::nullopt;
+  if (!in) return std::nullopt;
   layout.negative = points < 0 || width < 0 || height < 0;
   if (!layout.negative)
     layout.points = std::max<std::uintmax_t>(
         points, saturatingProduct(static_cast<std::uintmax_t>(width), static_cast<std::uintmax_t>(height)));
-  for (std::size_t i = 0; i < sizes.size(); ++i)
-    layout.point_bytes += saturatingProduct(sizes[i], counts[i]);  // few fields: the sum cannot wrap in practice
+  // A field without SIZE or COUNT is taken as PCL takes it (4 bytes, one value; a fuzzed header without
+  // them made PCL allocate 56 bytes a point): the point is never assumed smaller than PCL will make it.
+  const std::size_t declared_fields = std::max({names, sizes.size(), counts.size()});
+  for (std::size_t i = 0; i < declared_fields; ++i) {
+    const std::uintmax_t size = i < sizes.size() ? sizes[i] : 4, count = i < counts.size() ? counts[i] : 1;
+    layout.point_bytes = std::min(layout.point_bytes + saturatingProduct(size, count), kLargest);
+    layout.point_values = std::min(layout.point_values + count, kLargest);
+  }
   layout.data = line;
   while (!layout.data.empty() && std::isspace(static_cast<unsigned char>(layout.data.back()))) layout.data.pop_back();
   layout.data_offset = static_cast<std::uintmax_t>(in.tellg());
@@ -221,9 +232,12 @@ void requirePcdDataFitsFile(const std::string& path) {
   const std::uintmax_t size = std::filesystem::file_size(path, error);
   const std::uintmax_t available = error || size < layout->data_offset ? 0 : size - layout->data_offset;
   const std::uintmax_t declared = saturatingProduct(layout->points, layout->point_bytes);
-  const bool fits = layout->data == "DATA binary"              ? declared <= available
-                    : layout->data == "DATA binary_compressed" ? declared <= saturatingProduct(available, 100)
-                                                               : layout->points <= available;
+  // Every point takes at least a byte, whatever PCL makes of the fields; ASCII at least a byte a value.
+  const bool fits =
+      layout->data == "DATA binary" ? declared <= available && layout->points <= available
+      : layout->data == "DATA binary_compressed"
+          ? declared <= saturatingProduct(available, 100) && layout->points <= saturatingProduct(available, 100)
+          : saturatingProduct(layout->points, std::max<std::uintmax_t>(layout->point_values, 1)) <= available;
   if (!fits)
     throw std::runtime_error(path + ": the header declares more points than the file holds (" +
                              std::to_string(layout->points) + " points of " + std::to_string(layout->point_bytes) +
