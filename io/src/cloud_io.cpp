@@ -182,13 +182,15 @@ std::optional<PcdLayout> readPcdLayout(std::istream& in) {
     std::istringstream fields(line);
     std::string keyword;
     fields >> keyword;
-    std::vector<std::uintmax_t>* target = keyword == "SIZE" ? &sizes : keyword == "COUNT" ? &counts : nullptr;
+    // PCL matches keywords by prefix ("POINTSX 5" is POINTS to it), so they are matched the same way here.
+    const auto is = [&keyword](const char* name) { return keyword.rfind(name, 0) == 0; };
+    std::vector<std::uintmax_t>* target = is("SIZE") ? &sizes : is("COUNT") ? &counts : nullptr;
     for (std::uintmax_t value = 0; target && fields >> value;) target->push_back(value);
-    if (keyword == "FIELDS" || keyword == "COLUMNS")
+    if (is("FIELDS") || is("COLUMNS"))
       for (std::string name; fields >> name;) ++names;
-    if (keyword == "POINTS") fields >> points;
-    if (keyword == "WIDTH") fields >> width;
-    if (keyword == "HEIGHT") fields >> height;
+    if (is("POINTS")) fields >> points;
+    if (is("WIDTH")) fields >> width;
+    if (is("HEIGHT")) fields >> height;
   }
   // PCL allocates at the POINTS line, before it looks for DATA: a header without a DATA line is checked too,
   // as one with no data at all (found by fuzz/fuzz_cloud_pcd in CI).
