@@ -170,6 +170,18 @@ struct PcdLayout {
   std::uintmax_t data_offset = 0;   ///< the first byte after the DATA line
 };
 
+/// "DATA ascii", "DATA binary" or "DATA binary_compressed" when `line` is a DATA line PCL would stop at
+/// (PCL matches both words by prefix, and reads on past a DATA line of another kind), "" otherwise.
+std::string pcdDataKind(const std::string& line) {
+  std::istringstream words(line);
+  std::string keyword, kind;
+  if (!(words >> keyword >> kind) || keyword.rfind("DATA", 0) != 0) return "";
+  if (kind.rfind("binary_compressed", 0) == 0) return "DATA binary_compressed";
+  if (kind.rfind("binary", 0) == 0) return "DATA binary";
+  if (kind.rfind("ascii", 0) == 0) return "DATA ascii";
+  return "";
+}
+
 /// Reads a PCD header up to its DATA line; nullopt when there is none or SIZE
 /// and COUNT disagree.
 std::optional<PcdLayout> readPcdLayout(std::istream& in) {
@@ -178,7 +190,7 @@ std::optional<PcdLayout> readPcdLayout(std::istream& in) {
   long long points = 0, width = 0, height = 1;
   std::vector<std::uintmax_t> sizes, counts;
   std::size_t names = 0;
-  while (std::getline(in, line) && line.rfind("DATA", 0) != 0) {
+  while (std::getline(in, line) && pcdDataKind(line).empty()) {
     std::istringstream fields(line);
     std::string keyword;
     fields >> keyword;
@@ -207,8 +219,7 @@ std::optional<PcdLayout> readPcdLayout(std::istream& in) {
     layout.point_bytes = std::min(layout.point_bytes + saturatingProduct(size, count), kLargest);
     layout.point_values = std::min(layout.point_values + count, kLargest);
   }
-  layout.data = found_data ? line : std::string();
-  while (!layout.data.empty() && std::isspace(static_cast<unsigned char>(layout.data.back()))) layout.data.pop_back();
+  layout.data = found_data ? pcdDataKind(line) : std::string();
   layout.data_offset = found_data ? static_cast<std::uintmax_t>(in.tellg()) : kLargest;
   return layout;
 }
