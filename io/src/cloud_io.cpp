@@ -188,6 +188,14 @@ std::optional<PcdLayout> readPcdLayout(std::istream& in) {
   PcdLayout layout;
   std::string line;
   long long points = 0, width = 0, height = 1;
+  bool negative = false;
+  // PCL allocates at every POINTS line it reads, so the largest value of each keyword counts.
+  const auto largest = [&negative](std::istream& words, long long& value) {
+    long long read = 0;
+    if (!(words >> read)) return;
+    negative = negative || read < 0;
+    value = std::max(value, read);
+  };
   std::vector<std::uintmax_t> sizes, counts;
   std::size_t names = 0;
   while (std::getline(in, line) && pcdDataKind(line).empty()) {
@@ -200,14 +208,14 @@ std::optional<PcdLayout> readPcdLayout(std::istream& in) {
     for (std::uintmax_t value = 0; target && fields >> value;) target->push_back(value);
     if (is("FIELDS") || is("COLUMNS"))
       for (std::string name; fields >> name;) ++names;
-    if (is("POINTS")) fields >> points;
-    if (is("WIDTH")) fields >> width;
-    if (is("HEIGHT")) fields >> height;
+    if (is("POINTS")) largest(fields, points);
+    if (is("WIDTH")) largest(fields, width);
+    if (is("HEIGHT")) largest(fields, height);
   }
   // PCL allocates at the POINTS line, before it looks for DATA: a header without a DATA line is checked too,
   // as one with no data at all (found by fuzz/fuzz_cloud_pcd in CI).
   const bool found_data = static_cast<bool>(in);
-  layout.negative = points < 0 || width < 0 || height < 0;
+  layout.negative = negative;
   if (!layout.negative)
     layout.points = std::max<std::uintmax_t>(
         points, saturatingProduct(static_cast<std::uintmax_t>(width), static_cast<std::uintmax_t>(height)));
