@@ -5,6 +5,8 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "weighted_icp/core/named_values.h"
+
 namespace weighted_icp::frontend {
 
 std::string toString(DenseOdometryKind kind) {
@@ -17,9 +19,9 @@ std::string toString(DenseOdometryKind kind) {
 }
 
 DenseOdometryKind parseDenseOdometryKind(const std::string& name) {
-  for (const auto kind : {DenseOdometryKind::Rgbd, DenseOdometryKind::Icp, DenseOdometryKind::RgbdIcp})
-    if (toString(kind) == name) return kind;
-  throw std::invalid_argument("unknown dense odometry '" + name + "' (expected rgbd, icp or rgbd-icp)");
+  return parseNamedValue(
+      name, {DenseOdometryKind::Rgbd, DenseOdometryKind::Icp, DenseOdometryKind::RgbdIcp},
+      [](auto value) { return toString(value); }, "dense odometry");
 }
 
 std::string toString(DenseOdometryUse use) {
@@ -33,11 +35,10 @@ std::string toString(DenseOdometryUse use) {
 }
 
 DenseOdometryUse parseDenseOdometryUse(const std::string& name) {
-  for (const auto use :
-       {DenseOdometryUse::Off, DenseOdometryUse::Prior, DenseOdometryUse::Fallback, DenseOdometryUse::PriorAndFallback})
-    if (toString(use) == name) return use;
-  throw std::invalid_argument("unknown dense odometry use '" + name +
-                              "' (expected off, prior, fallback or prior+fallback)");
+  return parseNamedValue(
+      name,
+      {DenseOdometryUse::Off, DenseOdometryUse::Prior, DenseOdometryUse::Fallback, DenseOdometryUse::PriorAndFallback},
+      [](auto value) { return toString(value); }, "dense odometry use");
 }
 
 DenseOdometry::DenseOdometry(const PinholeCamera& camera, DenseOdometryKind kind) {

@@ -7,6 +7,8 @@
 #include <limits>
 #include <stdexcept>
 
+#include "weighted_icp/core/named_values.h"
+
 namespace weighted_icp::frontend {
 namespace {
 
@@ -42,11 +44,9 @@ double medianOf(std::deque<double> values) {
 }  // namespace
 
 DynamicDistanceKind parseDynamicDistanceKind(const std::string& name) {
-  if (name == "displacement") return DynamicDistanceKind::Displacement;
-  if (name == "epipolar-history") return DynamicDistanceKind::EpipolarHistory;
-  if (name == "both") return DynamicDistanceKind::Both;
-  throw std::invalid_argument("unknown dynamic distance \"" + name +
-                              "\": expected \"displacement\", \"epipolar-history\" or \"both\"");
+  return parseNamedValue(
+      name, {DynamicDistanceKind::Displacement, DynamicDistanceKind::EpipolarHistory, DynamicDistanceKind::Both},
+      dynamicDistanceKindName, "dynamic distance");
 }
 
 std::string dynamicDistanceKindName(DynamicDistanceKind kind) {

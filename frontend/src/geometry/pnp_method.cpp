@@ -3,6 +3,8 @@
 
 #include <stdexcept>
 
+#include "weighted_icp/core/named_values.h"
+
 namespace weighted_icp::frontend {
 
 std::string toString(PnpMethod method) {
@@ -14,9 +16,8 @@ std::string toString(PnpMethod method) {
 }
 
 PnpMethod parsePnpMethod(const std::string& name) {
-  for (const auto method : {PnpMethod::Ap3p, PnpMethod::Iterative})
-    if (toString(method) == name) return method;
-  throw std::invalid_argument("unknown PnP method '" + name + "' (expected ap3p or iterative)");
+  return parseNamedValue(
+      name, {PnpMethod::Ap3p, PnpMethod::Iterative}, [](auto value) { return toString(value); }, "PnP method");
 }
 
 }  // namespace weighted_icp::frontend

@@ -5,6 +5,8 @@
 
 #include <opencv2/flann.hpp>
 
+#include "weighted_icp/core/named_values.h"
+
 namespace weighted_icp::frontend {
 namespace {
 
@@ -117,10 +119,8 @@ std::vector<cv::DMatch> keepBestMatchPerReference(const std::vector<cv::DMatch>&
 }
 
 MatcherKind parseMatcherKind(const std::string& name) {
-  if (name == "flann") return MatcherKind::FlannLsh;
-  if (name == "brute-force") return MatcherKind::BruteForce;
-  if (name == "kd-tree") return MatcherKind::KdTree;
-  throw std::invalid_argument("unknown matcher \"" + name + "\": expected \"flann\", \"brute-force\" or \"kd-tree\"");
+  return parseNamedValue(name, {MatcherKind::FlannLsh, MatcherKind::BruteForce, MatcherKind::KdTree}, matcherKindName,
+                         "matcher");
 }
 
 std::string matcherKindName(MatcherKind kind) {

@@ -5,6 +5,8 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "weighted_icp/core/named_values.h"
+
 namespace weighted_icp::frontend {
 
 std::string toString(EqualizationMethod method) {
@@ -17,9 +19,9 @@ std::string toString(EqualizationMethod method) {
 }
 
 EqualizationMethod parseEqualizationMethod(const std::string& name) {
-  for (const auto method : {EqualizationMethod::Clahe, EqualizationMethod::Global, EqualizationMethod::None})
-    if (toString(method) == name) return method;
-  throw std::invalid_argument("unknown equalisation '" + name + "' (expected clahe, global or none)");
+  return parseNamedValue(
+      name, {EqualizationMethod::Clahe, EqualizationMethod::Global, EqualizationMethod::None},
+      [](auto value) { return toString(value); }, "equalisation");
 }
 
 cv::Mat equalizeHistogram(const cv::Mat& gray, EqualizationMethod method, const ClaheOptions& clahe) {

@@ -11,6 +11,8 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/quality/qualitybrisque.hpp>
 
+#include "weighted_icp/core/named_values.h"
+
 namespace weighted_icp::frontend {
 namespace {
 
@@ -33,9 +35,9 @@ void requireScorable(const cv::Mat& image, const std::string& function) {
 std::string toString(QualityMeasure measure) { return measure == QualityMeasure::Sharpness ? "sharpness" : "brisque"; }
 
 QualityMeasure parseQualityMeasure(const std::string& name) {
-  if (name == "sharpness") return QualityMeasure::Sharpness;
-  if (name == "brisque") return QualityMeasure::Brisque;
-  throw std::invalid_argument("unknown quality measure '" + name + "' (expected sharpness|brisque)");
+  return parseNamedValue(
+      name, {QualityMeasure::Sharpness, QualityMeasure::Brisque}, [](auto value) { return toString(value); },
+      "quality measure");
 }
 
 std::string toString(QualityGateMode mode) {
@@ -48,10 +50,9 @@ std::string toString(QualityGateMode mode) {
 }
 
 QualityGateMode parseQualityGateMode(const std::string& name) {
-  for (const QualityGateMode mode :
-       {QualityGateMode::Relative, QualityGateMode::Absolute, QualityGateMode::PaperEveryFrame})
-    if (name == toString(mode)) return mode;
-  throw std::invalid_argument("unknown quality gate mode '" + name + "' (expected relative|absolute|paper)");
+  return parseNamedValue(
+      name, {QualityGateMode::Relative, QualityGateMode::Absolute, QualityGateMode::PaperEveryFrame},
+      [](auto value) { return toString(value); }, "quality gate mode");
 }
 
 ImageQualityGate::ImageQualityGate(ImageQualityGateOptions options)

@@ -10,6 +10,8 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "weighted_icp/core/named_values.h"
+
 namespace weighted_icp::frontend {
 namespace {
 
@@ -51,9 +53,7 @@ const std::array<TestPair, kTests>& pattern() {
 }  // namespace
 
 DescriptorKind parseDescriptorKind(const std::string& name) {
-  if (name == "orb") return DescriptorKind::Orb;
-  if (name == "modified-brief") return DescriptorKind::ModifiedBrief;
-  throw std::invalid_argument("unknown descriptor \"" + name + "\": expected \"orb\" or \"modified-brief\"");
+  return parseNamedValue(name, {DescriptorKind::Orb, DescriptorKind::ModifiedBrief}, descriptorKindName, "descriptor");
 }
 
 std::string descriptorKindName(DescriptorKind kind) { return kind == DescriptorKind::Orb ? "orb" : "modified-brief"; }

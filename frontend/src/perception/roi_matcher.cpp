@@ -8,6 +8,7 @@
 
 #include <opencv2/core/hal/hal.hpp>
 
+#include "weighted_icp/core/named_values.h"
 #include "weighted_icp/frontend/perception/descriptor_matcher.h"
 
 namespace weighted_icp::frontend {
@@ -67,11 +68,8 @@ struct PredictionGrid {
 }  // namespace
 
 MatchRegion parseMatchRegion(const std::string& name) {
-  if (name == "everywhere") return MatchRegion::Everywhere;
-  if (name == "projection") return MatchRegion::Projection;
-  if (name == "homography") return MatchRegion::Homography;
-  throw std::invalid_argument("unknown match region \"" + name +
-                              "\": expected \"everywhere\", \"projection\" or \"homography\"");
+  return parseNamedValue(name, {MatchRegion::Everywhere, MatchRegion::Projection, MatchRegion::Homography},
+                         matchRegionName, "match region");
 }
 
 std::string matchRegionName(MatchRegion region) {
