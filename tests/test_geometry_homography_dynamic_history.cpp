@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include "test_geometry_scene.h"
 #include "weighted_icp/frontend/geometry/dynamic_point_history.h"
 #include "weighted_icp/frontend/geometry/keyframe_homography.h"
 
@@ -14,15 +15,6 @@ namespace {
 
 using namespace weighted_icp;
 using namespace weighted_icp::frontend;
-
-PinholeCamera camera() {
-  PinholeCamera c;
-  c.fx = 525;
-  c.fy = 525;
-  c.cx = 319.5;
-  c.cy = 239.5;
-  return c;
-}
 
 Eigen::Isometry3d pose(double yaw, const Eigen::Vector3d& t) {
   Eigen::Isometry3d p = Eigen::Isometry3d::Identity();
@@ -32,7 +24,7 @@ Eigen::Isometry3d pose(double yaw, const Eigen::Vector3d& t) {
 }
 
 TEST(KeyframeHomography, MapsPointsOfThePlaneLikeTheirProjection) {
-  const PinholeCamera cam = camera();
+  const PinholeCamera cam = weighted_icp::testing::syntheticCamera();
   const Eigen::Isometry3d keyframe = pose(0.1, {0.2, -0.1, 0.0}), frame = pose(0.15, {0.28, -0.05, 0.06});
   Plane wall;  // x + 0.2 y + z - 2 = 0 in the world
   wall.normal = Eigen::Vector3d(1, 0.2, 1).normalized();
@@ -69,7 +61,7 @@ TEST(KeyframeHomography, FitPlanesFindsTwoPlanesAndLeavesClutter) {
 }
 
 TEST(DynamicPointHistory, FlagsAPointThatStartsMovingButNoStaticOne) {
-  const PinholeCamera cam = camera();
+  const PinholeCamera cam = weighted_icp::testing::syntheticCamera();
   std::vector<Eigen::Vector3d> world;
   for (int i = 0; i < 20; ++i) world.emplace_back(-1.0 + 0.1 * i, 0.3 * std::sin(i), 3.0 + 0.05 * i);
   DynamicPointHistory history;
