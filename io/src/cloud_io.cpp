@@ -22,6 +22,7 @@
 #include <pcl/io/pcd_io.h>
 #include <pcl/io/ply_io.h>
 
+#include "pcd_header.h"
 #include "weighted_icp/io/atomic_file.h"
 
 namespace weighted_icp::io {
@@ -153,118 +154,16 @@ std::optional<std::uintmax_t> plyExpectedSize(std::istream& in) {
   return static_cast<std::uintmax_t>(in.tellg()) + data;
 }
 
-constexpr std::uintmax_t kLargest = std::numeric_limits<std::uintmax_t>::max() / 2;
-
-/// a x b, or kLargest when the product does not fit below it.
-std::uintmax_t saturatingProduct(std::uintmax_t a, std::uintmax_t b) {
-  return b != 0 && a > kLargest / b ? kLargest : std::min(a * b, kLargest);
-}
-
-/// What a PCD header declares about the data that follows it.
-struct PcdLayout {
-  std::uintmax_t points = 0;        ///< the larger of POINTS and WIDTH x HEIGHT
-  bool negative = false;            ///< POINTS, WIDTH or HEIGHT is negative
-  std::uintmax_t point_bytes = 0;   ///< sum of SIZE x COUNT over the fields, PCL's defaults (4, 1) where absent
-  std::uintmax_t point_values = 0;  ///< sum of COUNT over the fields
-  std::string data;                 ///< the DATA line: "DATA ascii", "DATA binary", ...
-  std::uintmax_t data_offset = 0;   ///< the first byte after the DATA line
-};
-
-/// "DATA ascii", "DATA binary" or "DATA binary_compressed" when `line` is a DATA line PCL would stop at
-/// (PCL matches both words by prefix, and reads on past a DATA line of another kind), "" otherwise.
-std::string pcdDataKind(const std::string& line) {
-  std::istringstream words(line);
-  std::string keyword, kind;
-  if (!(words >> keyword >> kind) || keyword.rfind("DATA", 0) != 0) return "";
-  if (kind.rfind("binary_compressed", 0) == 0) return "DATA binary_compressed";
-  if (kind.rfind("binary", 0) == 0) return "DATA binary";
-  if (kind.rfind("ascii", 0) == 0) return "DATA ascii";
-  return "";
-}
-
-/// Reads a PCD header up to its DATA line; nullopt when there is none or SIZE
-/// and COUNT disagree.
-std::optional<PcdLayout> readPcdLayout(std::istream& in) {
-  PcdLayout layout;
-  std::string line;
-  long long points = 0, width = 0, height = 1;
-  bool negative = false;
-  // PCL allocates at every POINTS line it reads, so the largest value of each keyword counts.
-  const auto largest = [&negative](std::istream& words, long long& value) {
-    long long read = 0;
-    if (!(words >> read)) return;
-    negative = negative || read < 0;
-    value = std::max(value, read);
-  };
-  std::vector<std::uintmax_t> sizes, counts;
-  std::size_t names = 0;
-  while (std::getline(in, line) && pcdDataKind(line).empty()) {
-    std::istringstream fields(line);
-    std::string keyword;
-    fields >> keyword;
-    // PCL matches keywords by prefix ("POINTSX 5" is POINTS to it), so they are matched the same way here.
-    const auto is = [&keyword](const char* name) { return keyword.rfind(name, 0) == 0; };
-    std::vector<std::uintmax_t>* target = is("SIZE") ? &sizes : is("COUNT") ? &counts : nullptr;
-    for (std::uintmax_t value = 0; target && fields >> value;) target->push_back(value);
-    if (is("FIELDS") || is("COLUMNS"))
-      for (std::string name; fields >> name;) ++names;
-    if (is("POINTS")) largest(fields, points);
-    if (is("WIDTH")) largest(fields, width);
-    if (is("HEIGHT")) largest(fields, height);
+/// The size a complete binary PCD file has, from its own header; nullopt when
+/// the header is not a well-formed one of binary data.
+std::optional<std::uintmax_t> pcdExpectedSize(std::istream& in, const std::string& path) {
+  try {
+    const auto header = detail::readPcdHeader(in, path);
+    if (header.data != detail::PcdHeader::Data::binary) return std::nullopt;
+    return header.data_offset + header.points * header.pointBytes();
+  } catch (const std::runtime_error&) {
+    return std::nullopt;
   }
-  // PCL allocates at the POINTS line, before it looks for DATA: a header without a DATA line is checked too,
-  // as one with no data at all (found by fuzz/fuzz_cloud_pcd in CI).
-  const bool found_data = static_cast<bool>(in);
-  layout.negative = negative;
-  if (!layout.negative)
-    layout.points = std::max<std::uintmax_t>(
-        points, saturatingProduct(static_cast<std::uintmax_t>(width), static_cast<std::uintmax_t>(height)));
-  // A field without SIZE or COUNT is taken as PCL takes it (4 bytes, one value; a fuzzed header without
-  // them made PCL allocate 56 bytes a point): the point is never assumed smaller than PCL will make it.
-  const std::size_t declared_fields = std::max({names, sizes.size(), counts.size()});
-  for (std::size_t i = 0; i < declared_fields; ++i) {
-    const std::uintmax_t size = i < sizes.size() ? sizes[i] : 4, count = i < counts.size() ? counts[i] : 1;
-    layout.point_bytes = std::min(layout.point_bytes + saturatingProduct(size, count), kLargest);
-    layout.point_values = std::min(layout.point_values + count, kLargest);
-  }
-  layout.data = found_data ? pcdDataKind(line) : std::string();
-  layout.data_offset = found_data ? static_cast<std::uintmax_t>(in.tellg()) : kLargest;
-  return layout;
-}
-
-/// The same for a binary PCD file: header, then POINTS times the bytes of a point.
-std::optional<std::uintmax_t> pcdExpectedSize(std::istream& in) {
-  const auto layout = readPcdLayout(in);
-  if (!layout || layout->data != "DATA binary" || layout->negative) return std::nullopt;
-  return layout->data_offset + saturatingProduct(layout->points, layout->point_bytes);
-}
-
-/// PCL's header reader allocates what POINTS declares before it reads one byte
-/// of data: a fuzzed PCD of a few hundred bytes asked for gigabytes
-/// (fuzz/fuzz_cloud_pcd). The declared points are checked against what the
-/// file can hold first: binary data holds exactly the points' bytes, ASCII at
-/// least one byte per point, and LZF-compressed data expands at most about 90
-/// times (a 3-byte back-reference copies at most 264 bytes), taken as 100.
-void requirePcdDataFitsFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  const auto layout = readPcdLayout(in);
-  if (!layout) return;
-  if (layout->negative)
-    throw std::runtime_error(path + ": the header declares an impossible number of points (negative)");
-  std::error_code error;
-  const std::uintmax_t size = std::filesystem::file_size(path, error);
-  const std::uintmax_t available = error || size < layout->data_offset ? 0 : size - layout->data_offset;
-  const std::uintmax_t declared = saturatingProduct(layout->points, layout->point_bytes);
-  // Every point takes at least a byte, whatever PCL makes of the fields; ASCII at least a byte a value.
-  const bool fits =
-      layout->data == "DATA binary" ? declared <= available && layout->points <= available
-      : layout->data == "DATA binary_compressed"
-          ? declared <= saturatingProduct(available, 100) && layout->points <= saturatingProduct(available, 100)
-          : saturatingProduct(layout->points, std::max<std::uintmax_t>(layout->point_values, 1)) <= available;
-  if (!fits)
-    throw std::runtime_error(path + ": the header declares more points than the file holds (" +
-                             std::to_string(layout->points) + " points of " + std::to_string(layout->point_bytes) +
-                             " bytes, " + std::to_string(available) + " bytes of data)");
 }
 
 pcl::PCLPointCloud2 readPcd(const std::string& path) {
@@ -274,9 +173,13 @@ pcl::PCLPointCloud2 readPcd(const std::string& path) {
   Eigen::Quaternionf orientation;
   int version = 0, data_type = 0;
   unsigned int data_index = 0;
-  requirePcdDataFitsFile(path);
-  // PCL's reader crashes on a file whose header has no FIELDS (any non-PCD
-  // file), so the header is checked before the data is read.
+  // PCL allocates what a header declares before reading any data, and reads
+  // leniently what it does not understand: only a header that passes our
+  // strict reader, with data the file really holds, reaches it.
+  {
+    std::ifstream in(path, std::ios::binary);
+    detail::requirePcdDataFitsFile(in, detail::readPcdHeader(in, path), path);
+  }
   if (reader.readHeader(path, blob, origin, orientation, version, data_type, data_index) != 0 || blob.fields.empty() ||
       data_index == 0)
     throw std::runtime_error(path + ": not a PCD file (no valid header)");
@@ -289,7 +192,7 @@ pcl::PCLPointCloud2 readPcd(const std::string& path) {
 /// promises, so a truncated file is never renamed into place.
 void requireCompleteFile(const std::string& temporary, const std::string& ext, const std::string& path) {
   std::ifstream in(temporary, std::ios::binary);
-  const auto expected = ext == ".ply" ? plyExpectedSize(in) : pcdExpectedSize(in);
+  const auto expected = ext == ".ply" ? plyExpectedSize(in) : pcdExpectedSize(in, temporary);
   std::error_code error;
   const std::uintmax_t actual = std::filesystem::file_size(temporary, error);
   if (!expected || error)
