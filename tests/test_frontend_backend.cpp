@@ -172,3 +172,22 @@ TEST(Backend, ASingleKeyframeIsCountedButLeftAlone) {
 }
 
 }  // namespace
+
+// Options with which nothing could ever be optimised are refused when the backend is made, not skipped silently at
+// every keyframe (the bundle adjustment used to report them only in a summary the backend did not read).
+TEST(Backend, OptionsThatCouldNeverOptimiseAreRefused) {
+  const Scene scene = makeScene();
+  Map map;
+  BackendOptions window_of_one = inlineOptions();
+  window_of_one.window_keyframes = 1;
+  EXPECT_THROW(Backend(map, scene.camera, window_of_one), std::invalid_argument);
+  BackendOptions no_threads;
+  no_threads.bundle_adjustment.threads = 0;
+  try {
+    Backend backend(map, scene.camera, no_threads);
+    ADD_FAILURE() << "no error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("bundle_adjustment.threads must be at least 1"), std::string::npos)
+        << e.what();
+  }
+}

@@ -48,16 +48,7 @@ std::optional<std::string> problemDescription(const BundleAdjustmentProblem& pro
              std::to_string(observation.point) + ", out of range";
     if (!observation.pixel.allFinite()) return "observation " + std::to_string(i) + " has a non-finite pixel";
   }
-  if (!(options.huber_px > 0)) return "huber_px must be positive";
-  if (options.max_iterations < 0) return "max_iterations must not be negative";
-  if (options.threads < 1) return "threads must be at least 1";
-  if (!(options.function_tolerance >= 0)) return "function_tolerance must not be negative";
-  if (!(options.noise.pixel_sigma > 0 && std::isfinite(options.noise.pixel_sigma)))
-    return "noise.pixel_sigma must be positive";
-  if (options.use_depth &&
-      !(options.noise.depth_sigma_coefficient > 0 && std::isfinite(options.noise.depth_sigma_coefficient)))
-    return "noise.depth_sigma_coefficient must be positive";
-  return std::nullopt;
+  return bundleAdjustmentOptionsProblem(options);
 }
 
 bool usesDepth(const BundleAdjustmentProblem::Observation& observation, const BundleAdjustmentOptions& options) {
@@ -257,6 +248,19 @@ void writeBack(const Unknowns& unknowns, const SolverProblem& solver, BundleAdju
 }
 
 }  // namespace
+
+std::optional<std::string> bundleAdjustmentOptionsProblem(const BundleAdjustmentOptions& options) {
+  if (!(options.huber_px > 0)) return "huber_px must be positive";
+  if (options.max_iterations < 0) return "max_iterations must not be negative";
+  if (options.threads < 1) return "threads must be at least 1";
+  if (!(options.function_tolerance >= 0)) return "function_tolerance must not be negative";
+  if (!(options.noise.pixel_sigma > 0 && std::isfinite(options.noise.pixel_sigma)))
+    return "noise.pixel_sigma must be positive";
+  if (options.use_depth &&
+      !(options.noise.depth_sigma_coefficient > 0 && std::isfinite(options.noise.depth_sigma_coefficient)))
+    return "noise.depth_sigma_coefficient must be positive";
+  return std::nullopt;
+}
 
 BundleAdjustmentSummary solveLocalBundleAdjustment(BundleAdjustmentProblem& problem, const PinholeCamera& camera,
                                                    const BundleAdjustmentOptions& options) {

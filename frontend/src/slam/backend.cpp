@@ -1,11 +1,18 @@
+// The backend: local bundle adjustment of the latest keyframes in its own thread, errors handed back to tracking.
 #include "weighted_icp/frontend/slam/backend.h"
 
+#include <stdexcept>
 #include <unordered_map>
 
 namespace weighted_icp::frontend {
 
 Backend::Backend(Map& map, PinholeCamera camera, BackendOptions options)
     : map_(map), camera_(camera), options_(options) {
+  // Refused here, not skipped at every keyframe: with these the backend would never optimise anything.
+  if (options_.window_keyframes < 2)
+    throw std::invalid_argument("Backend: window_keyframes must be at least 2 (one pose is held fixed)");
+  if (const auto problem = bundleAdjustmentOptionsProblem(options_.bundle_adjustment))
+    throw std::invalid_argument("Backend: bundle_adjustment." + *problem);
   if (options_.background_thread) thread_ = std::thread([this] { run(); });
 }
 
@@ -18,15 +25,30 @@ Backend::~Backend() {
   if (thread_.joinable()) thread_.join();
 }
 
+void Backend::rethrowError() const {
+  if (error_) std::rethrow_exception(error_);
+}
+
 void Backend::keyframeInserted() {
   if (!options_.background_thread) {
-    optimizeWindow();
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      rethrowError();
+    }
+    try {
+      optimizeWindow();
+    } catch (...) {
+      std::lock_guard<std::mutex> lock(mutex_);
+      error_ = std::current_exception();
+      throw;
+    }
     std::lock_guard<std::mutex> lock(mutex_);
     ++optimizations_;
     return;
   }
   {
     std::lock_guard<std::mutex> lock(mutex_);
+    rethrowError();
     pending_ = true;
   }
   wake_.notify_one();
@@ -34,7 +56,8 @@ void Backend::keyframeInserted() {
 
 void Backend::flush() {
   std::unique_lock<std::mutex> lock(mutex_);
-  idle_.wait(lock, [this] { return !pending_ && !running_; });
+  idle_.wait(lock, [this] { return (!pending_ && !running_) || error_; });
+  rethrowError();
 }
 
 std::size_t Backend::optimizationsRun() const {
@@ -46,15 +69,28 @@ void Backend::run() {
   std::unique_lock<std::mutex> lock(mutex_);
   while (true) {
     wake_.wait(lock, [this] { return pending_ || stopping_; });
-    // Pending work is finished before stopping: no keyframe is left unoptimised.
-    if (!pending_ && stopping_) break;
+    // Pending work is finished before stopping: no keyframe is left unoptimised. After an error nothing more is
+    // optimised (the map may be half-updated); the thread waits to be stopped.
+    if ((!pending_ || error_) && stopping_) break;
+    if (error_) {
+      pending_ = false;
+      continue;
+    }
     pending_ = false;
     running_ = true;
     lock.unlock();
-    optimizeWindow();
+    std::exception_ptr error;
+    try {
+      optimizeWindow();
+    } catch (...) {
+      error = std::current_exception();
+    }
     lock.lock();
     running_ = false;
-    ++optimizations_;
+    if (error)
+      error_ = error;
+    else
+      ++optimizations_;
     idle_.notify_all();
   }
   idle_.notify_all();

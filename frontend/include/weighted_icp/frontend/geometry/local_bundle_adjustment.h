@@ -4,6 +4,7 @@
 // depth as a third residual of an observation's block. Runs in the back end's
 // thread; everything it needs is in its arguments.
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -64,6 +65,10 @@ struct BundleAdjustmentSummary {
 
 /// Variance (m^2) reported along a direction no observation constrains.
 inline constexpr double kUnconstrainedVariance = 1e6;
+
+/// @brief What is wrong with `options` (a threshold not positive, no thread...), nullopt when they are usable.
+/// @param options the options to check
+std::optional<std::string> bundleAdjustmentOptionsProblem(const BundleAdjustmentOptions& options);
 
 /// Updates the poses that are not fixed and the observed points in place, only
 /// when the solve succeeds. Observations of a point behind its camera at the

@@ -6,9 +6,13 @@
 // keyframeInserted(); the backend copies the window out of the Map, optimises
 // without holding the lock, and writes poses, positions, covariances back.
 // Requests that arrive while an optimisation runs are merged into one.
+// An optimisation that throws stops the backend: the exception is kept and
+// rethrown to the tracking thread by the next keyframeInserted() or flush(),
+// so a failure is reported where it can be handled, never std::terminate.
 
 #include <condition_variable>
 #include <cstddef>
+#include <exception>
 #include <mutex>
 #include <thread>
 
@@ -18,28 +22,42 @@
 
 namespace weighted_icp::frontend {
 
+/// @brief How the backend optimises: the window and bundle adjustment's options, in a thread or inline.
 struct BackendOptions {
-  std::size_t window_keyframes = 7;
+  std::size_t window_keyframes = 7;  ///< the latest keyframes optimised together
   BundleAdjustmentOptions bundle_adjustment;
   /// false: optimise inside keyframeInserted(), so runs are reproducible.
   bool background_thread = true;
 };
 
+/// @brief Local bundle adjustment of the map's latest keyframes, in a background thread or inline.
 class Backend {
  public:
+  /// @brief Starts the thread when options.background_thread.
+  /// @throws std::invalid_argument for a window under 2 keyframes or invalid bundle-adjustment
+  /// options (with which nothing would ever be optimised)
+  /// @param map     the map whose window is optimised; must outlive the backend
+  /// @param camera  the camera the observations were made with
+  /// @param options window and bundle-adjustment options
   Backend(Map& map, PinholeCamera camera, BackendOptions options = {});
+  /// @brief Finishes the pending optimisation, then joins the thread (errors are dropped here).
   ~Backend();
   Backend(const Backend&) = delete;
   Backend& operator=(const Backend&) = delete;
 
+  /// @brief Asks for an optimisation of the latest window (inline: runs it now).
+  /// @throws whatever an earlier optimisation threw (the backend then stops optimising)
   void keyframeInserted();
-  /// Returns once nothing is pending or running.
+  /// @brief Returns once nothing is pending or running.
+  /// @throws whatever an optimisation threw
   void flush();
+  /// @brief Optimisations finished so far.
   std::size_t optimizationsRun() const;
 
  private:
   void optimizeWindow();
   void run();
+  void rethrowError() const;  // with mutex_ held
 
   Map& map_;
   PinholeCamera camera_;
@@ -52,6 +70,7 @@ class Backend {
   bool running_ = false;
   bool stopping_ = false;
   std::size_t optimizations_ = 0;
+  std::exception_ptr error_;  // the first exception an optimisation threw
   std::thread thread_;
 };
 
