@@ -111,7 +111,7 @@ struct RunCounts {
   std::size_t processed = 0, unreadable = 0, tracked = 0, skipped = 0, lost = 0, clahe = 0, dynamic = 0;
   std::vector<double> tracking_ms;
   std::vector<double> tracking_cpu_ms;  // issue #11: the tracking thread's CPU time
-  std::size_t dense = 0;  // Issue #11: frames posed by the dense odometry fallback
+  std::size_t dense = 0;                // Issue #11: frames posed by the dense odometry fallback
 };
 
 /// Feeds frames [first, frames) to `slam`, stopping early when SIGINT or SIGTERM
@@ -303,7 +303,7 @@ int main(int argc, char** argv) {
   // it between writing a file and publishing the folder.
   tools::installInterruptHandlers();
   return tools::runTool("wicp_rgbd_slam", [&] {
-    std::string dataset, camera_spec, out_dir, matcher_name = "flann", gate_mode = "relative";
+    std::string dataset, camera_spec, out_dir;
     std::string vocabulary_path;
     std::size_t max_frames = 0, first_frame = 0;
     mapping::LoopClosingSlamOptions closing_options;
@@ -338,9 +338,11 @@ int main(int argc, char** argv) {
          "keyframes per mini-map (1-100000)")
         ("out", po::value(&out_dir)->required(), "output folder (created; published complete or not at all)")
         ("overwrite", "replace --out if it exists and is not empty")
-        ("matcher", po::value(&matcher_name)->default_value(matcher_name), "flann (LSH) or brute-force")
+        ("matcher", tools::namedValue(&options.frontend.matcher.kind, frontend::parseMatcherKind, frontend::matcherKindName),
+         "flann (LSH), brute-force or kd-tree (our binary KD-tree, the KD-tree paper)")
         ("no-quality-gate", "do not judge frame quality (no frame is refused as a keyframe)")
-        ("quality-gate", po::value(&gate_mode)->default_value(gate_mode),
+        ("quality-gate", tools::namedValue(&options.frontend.quality.mode, frontend::parseQualityGateMode,
+                                           [](frontend::QualityGateMode m) { return frontend::toString(m); }),
          "relative (sharpness against the sequence's recent frames, robust z-score), absolute (BRISQUE above 47) or paper "
          "(BRISQUE on every frame, above 47)")
         ("deterministic", "run bundle adjustment and loop closing inline instead of in their threads (reproducible)")
@@ -360,68 +362,46 @@ int main(int argc, char** argv) {
                             ->default_value(synthetic.depth_noise_coefficient),
          "synthetic: depth noise sigma_z = COEFF * z^2 (0-1)");
     // clang-format on
-    // Issue #11 ablation options: descriptor, dynamic points, matching.
-    std::string descriptor_name = "orb", match_region_name = "everywhere", dynamic_distance_name = "displacement";
+    // The papers' techniques, each an option off by default (issue #11; docs/frontend_ablation.md). Each name is
+    // read by the library's parser, so the names and the error listing them exist once.
+    const auto name = [](auto value) { return frontend::toString(value); };
+    po::options_description ablation("The papers' techniques, for the ablation (docs/frontend_ablation.md)");
     // clang-format off
-    description.add_options()
-        ("descriptor", po::value(&descriptor_name)->default_value(descriptor_name),
+    ablation.add_options()
+        ("descriptor", tools::namedValue(&options.frontend.features.descriptor, frontend::parseDescriptorKind,
+                                         frontend::descriptorKindName),
          "orb (ORB's rotated BRIEF) or modified-brief (front-end paper, Eq. 7)")
         ("kd-backtracks", tools::rangedValue(&options.frontend.matcher.kd_tree.max_backtracks, 0, 100000)
                               ->default_value(options.frontend.matcher.kd_tree.max_backtracks),
          "--matcher kd-tree: leaves visited after the first (0-100000)")
-        ("match-region", po::value(&match_region_name)->default_value(match_region_name),
+        ("match-region", tools::namedValue(&options.frontend.match_region, frontend::parseMatchRegion,
+                                           frontend::matchRegionName),
          "everywhere, projection (regions of interest around projected points) or homography (KD-tree paper, Eq. 8)")
-        ("dynamic-distance", po::value(&dynamic_distance_name)->default_value(dynamic_distance_name),
-         "displacement (3D), epipolar-history (front-end paper, Eq. 6, against the point's earlier values) or both");
-    // clang-format on
-    // Issue #11 ablation options: dense odometry, equalisation, PnP, the gate's measure
-    // (docs/frontend_ablation.md).
-    std::string quality_measure = "sharpness", dense_use = "off", dense_kind = "rgbd", equalization = "clahe",
-                pnp_method = "ap3p";
-    po::options_description ablation("Front-end options for the ablation (docs/frontend_ablation.md)");
-    // clang-format off
-    ablation.add_options()
-        ("quality-measure", tools::choiceValue(&quality_measure, {"sharpness", "brisque"})->default_value(quality_measure),
+        ("dynamic-distance", tools::namedValue(&options.frontend.dynamic_distance, frontend::parseDynamicDistanceKind,
+                                               frontend::dynamicDistanceKindName),
+         "displacement (3D), epipolar-history (front-end paper, Eq. 6, against the point's earlier values) or both")
+        ("quality-measure", tools::namedValue(&options.frontend.quality.measure, frontend::parseQualityMeasure, name),
          "relative gate's measure: sharpness (log10 Laplacian variance, every frame) or brisque (keyframe candidates)")
-        ("dense-odometry", tools::choiceValue(&dense_use, {"off", "prior", "fallback", "prior+fallback"})
-                               ->default_value(dense_use),
+        ("dense-odometry", tools::namedValue(&options.frontend.dense_odometry.use, frontend::parseDenseOdometryUse, name),
          "OpenCV's dense RGB-D odometry as the PnP motion prior, as the pose when 3D-2D tracking fails, both, or off")
-        ("dense-odometry-kind", tools::choiceValue(&dense_kind, {"rgbd", "icp", "rgbd-icp"})->default_value(dense_kind),
+        ("dense-odometry-kind", tools::namedValue(&options.frontend.dense_odometry.kind, frontend::parseDenseOdometryKind,
+                                                  name),
          "which: cv::rgbd::RgbdOdometry, ICPOdometry or RgbdICPOdometry")
-        ("equalization", tools::choiceValue(&equalization, {"clahe", "global", "none"})->default_value(equalization),
+        ("equalization", tools::namedValue(&options.frontend.features.equalization, frontend::parseEqualizationMethod,
+                                           name),
          "a frame with too few corners: CLAHE, global histogram equalisation (the front-end paper) or none")
-        ("pnp", tools::choiceValue(&pnp_method, {"ap3p", "iterative"})->default_value(pnp_method),
+        ("pnp", tools::namedValue(&options.frontend.pnp.method, frontend::parsePnpMethod, name),
          "RANSAC PnP solver: ap3p (AP3P sets, EPnP) or iterative (the paper's iterative 5-point solution)");
     // clang-format on
     description.add(ablation);
     po::variables_map vm;
     if (!tools::parseCommandLine(argc, argv, description, vm)) return 0;
-    try {
-      options.frontend.features.descriptor = frontend::parseDescriptorKind(descriptor_name);
-      options.frontend.match_region = frontend::parseMatchRegion(match_region_name);
-      options.frontend.dynamic_distance = frontend::parseDynamicDistanceKind(dynamic_distance_name);
-      options.frontend.matcher.kind = frontend::parseMatcherKind(matcher_name);
-    } catch (const std::invalid_argument& e) {
-      throw po::error(e.what());
-    }
-    options.frontend.matcher.kind = frontend::parseMatcherKind(matcher_name);
     options.frontend.quality_gate = !vm.count("no-quality-gate");
-    try {
-      options.frontend.quality.mode = frontend::parseQualityGateMode(gate_mode);
-    } catch (const std::invalid_argument& e) {
-      throw po::error(std::string("--quality-gate: ") + e.what());
-    }
     options.backend.background_thread = !vm.count("deterministic");
     closing_options.loop_closing.background_thread = !vm.count("deterministic");
     closing_options.loop_closure = !vm.count("no-loop-closure");
     if (!closing_options.loop_closure && !vocabulary_path.empty())
       throw po::error("--vocabulary has no use with --no-loop-closure");
-    // Issue #11 ablation options: names already checked by choiceValue.
-    options.frontend.quality.measure = frontend::parseQualityMeasure(quality_measure);
-    options.frontend.dense_odometry.use = frontend::parseDenseOdometryUse(dense_use);
-    options.frontend.dense_odometry.kind = frontend::parseDenseOdometryKind(dense_kind);
-    options.frontend.features.equalization = frontend::parseEqualizationMethod(equalization);
-    options.frontend.pnp.method = frontend::parsePnpMethod(pnp_method);
 
     std::unique_ptr<FrameSource> source;
     if (dataset.empty()) {

@@ -1,6 +1,7 @@
 // wicp_rgbd_slam's issue #11 ablation options (--quality-measure, --dense-odometry,
-// --dense-odometry-kind, --equalization, --pnp): a name outside the list is a
-// command-line error naming the option and the accepted names; accepted names run.
+// --dense-odometry-kind, --equalization, --pnp) and --quality-gate: a name outside the list is a
+// command-line error naming the option and the accepted names (read by the library's own parser);
+// accepted names run.
 
 #include <fstream>
 #include <sstream>
@@ -24,11 +25,16 @@ ToolRun run(const std::string& args, const fs::path& scratch) {
 TEST(AblationOptions, UnknownNamesAreCommandLineErrorsListingTheChoices) {
   const fs::path scratch = scratchDir("ablation_bad_names");
   const std::pair<const char*, const char*> cases[] = {
-      {"--quality-measure niqe", "--quality-measure must be one of sharpness, brisque (got niqe)"},
-      {"--dense-odometry always", "--dense-odometry must be one of off, prior, fallback, prior+fallback (got always)"},
-      {"--dense-odometry-kind fast", "--dense-odometry-kind must be one of rgbd, icp, rgbd-icp (got fast)"},
-      {"--equalization CLAHE", "--equalization must be one of clahe, global, none (got CLAHE)"},
-      {"--pnp epnp", "--pnp must be one of ap3p, iterative (got epnp)"},
+      {"--quality-measure niqe", "--quality-measure: unknown quality measure 'niqe' (expected sharpness or brisque)"},
+      {"--dense-odometry always",
+       "--dense-odometry: unknown dense odometry use 'always' (expected off, prior, "
+       "fallback or prior+fallback)"},
+      {"--dense-odometry-kind fast",
+       "--dense-odometry-kind: unknown dense odometry kind 'fast' (expected rgbd, icp or "
+       "rgbd-icp)"},
+      {"--equalization CLAHE", "--equalization: unknown equalisation 'CLAHE' (expected clahe, global or none)"},
+      {"--pnp epnp", "--pnp: unknown PnP method 'epnp' (expected ap3p or iterative)"},
+      {"--quality-gate strict", "--quality-gate: unknown quality gate mode 'strict' (expected relative,"},
   };
   for (const auto& [args, message] : cases) {
     SCOPED_TRACE(args);

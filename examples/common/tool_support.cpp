@@ -85,15 +85,15 @@ std::string describeRange(bool integer, double minimum, double maximum, bool min
 }  // namespace detail
 
 // Issue #11 ablation options: named choices.
-void ChoiceValue::xparse(boost::any& value_store, const std::vector<std::string>& tokens) const {
+void NamedValue::xparse(boost::any& value_store, const std::vector<std::string>& tokens) const {
   namespace po = boost::program_options;
-  const std::string& text = po::validators::get_single_string(tokens);
-  if (std::find(choices_.begin(), choices_.end(), text) == choices_.end()) {
-    std::string list;
-    for (const std::string& choice : choices_) list += (list.empty() ? "" : ", ") + choice;
-    throw po::error_with_option_name("%canonical_option% must be one of " + list + " (got " + text + ")");
+  const std::string& name = po::validators::get_single_string(tokens);
+  try {
+    check_(name);
+  } catch (const std::invalid_argument& e) {
+    throw po::error_with_option_name(std::string("%canonical_option%: ") + e.what());
   }
-  value_store = text;
+  value_store = name;
 }
 
 void throwOutOfRange(const std::string& option, const std::string& value, long long minimum, long long maximum) {

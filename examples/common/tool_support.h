@@ -8,6 +8,7 @@
 #include <functional>
 #include <limits>
 #include <ostream>
+#include <stdexcept>
 #include <string>
 #include <type_traits>
 #include <utility>
@@ -125,31 +126,36 @@ inline RangedValue<double>* positiveValue(double* store, double maximum = std::n
   return new RangedValue<double>(store, 0.0, maximum, true);
 }
 
-// Issue #11 ablation options: named choices (--quality-measure, --dense-odometry, ...).
-/// A string option restricted to a list of names, checked while it is parsed: anything else is
-/// the command-line error (exit 2 through runTool) "--<option> must be one of a, b (got c)".
-class ChoiceValue : public boost::program_options::typed_value<std::string> {
+/// An option naming one value of an enum, read by the library's own parser (parseNamedValue underneath), so the
+/// names and the message listing them exist once: anything else is the command-line error (exit 2 through
+/// runTool) "--<option>: unknown <what> '<name>' (expected a, b or c)". The name is checked while it is parsed
+/// and stored as the enum when the options are notified (boost's typed_value<Enum> would need operator>>).
+class NamedValue : public boost::program_options::typed_value<std::string> {
  public:
-  /// @brief Use choiceValue() rather than this.
-  /// @param store   where the accepted name goes (may be null)
-  /// @param choices the accepted names
-  ChoiceValue(std::string* store, std::vector<std::string> choices)
-      : boost::program_options::typed_value<std::string>(store), choices_(std::move(choices)) {}
+  /// @brief Use namedValue() rather than this.
+  /// @param check calls the library's parser on a name, which throws std::invalid_argument for a wrong one
+  explicit NamedValue(std::function<void(const std::string&)> check)
+      : boost::program_options::typed_value<std::string>(nullptr), check_(std::move(check)) {}
 
-  /// @brief boost's parsing hook: accepts the token only if it is one of the choices.
-  /// @param value_store  receives the value
-  /// @param tokens       the option's one token
+  /// @brief boost's parsing hook: accepts the token only if the library's parser does.
+  /// @param value_store receives the name
+  /// @param tokens      the option's one token
   void xparse(boost::any& value_store, const std::vector<std::string>& tokens) const override;
 
  private:
-  std::vector<std::string> choices_;
+  std::function<void(const std::string&)> check_;
 };
 
-/// @brief A string option accepting only one of `choices` (see ChoiceValue).
-/// @param store   where the value goes, as po::value(&variable) does
-/// @param choices the accepted names, listed in the error message in this order
-inline ChoiceValue* choiceValue(std::string* store, std::vector<std::string> choices) {
-  return new ChoiceValue(store, std::move(choices));
+/// @brief An option storing an enum value read by name; its default, shown in --help, is `*store`'s name.
+/// @param store   the variable holding the value, and its default
+/// @param parse   the library's parser of the names (e.g. frontend::parsePnpMethod)
+/// @param name_of the name of a value (e.g. frontend::toString)
+template <typename T, typename Parse, typename NameOf>
+NamedValue* namedValue(T* store, Parse parse, NameOf name_of) {
+  auto* value = new NamedValue([parse](const std::string& name) { parse(name); });
+  value->default_value(name_of(*store));
+  value->notifier([store, parse](const std::string& name) { *store = parse(name); });
+  return value;
 }
 
 /// One line on stderr, rewritten in place: "label  12/40  (30%)  eta 5 s".

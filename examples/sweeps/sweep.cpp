@@ -70,13 +70,17 @@ std::vector<Displacement> kSweepDisplacements() {
 }
 
 SweepDefinition kSweep() {
-  SweepDefinition sweep{"k", "Sweeps the neighbourhood size k over {1,3,5,7,10,15,20} at five displacements.", true,
+  SweepDefinition sweep{"k",
+                        "Sweeps the neighbourhood size k over {1,3,5,7,10,15,20} at five displacements.",
+                        true,
                         [](unsigned int) {
                           std::vector<SweepCase> cases;
                           for (const unsigned int k : kSweepValues)
                             for (const SweepCase& c : withK(k, kSweepDisplacements())) cases.push_back(c);
                           return cases;
-                        }};
+                        },
+                        {},
+                        {}};
   // Table 1: "the transformation between the two point clouds is fixed while varying k": config.yaml's.
   sweep.paper_cases = [](unsigned int) {
     std::vector<SweepCase> cases;
@@ -87,7 +91,9 @@ SweepDefinition kSweep() {
 }
 
 SweepDefinition yawSweep() {
-  SweepDefinition sweep{"yaw", "Sweeps the yaw (about z) from 0 to 70 deg in steps of 10, in both directions.", false,
+  SweepDefinition sweep{"yaw",
+                        "Sweeps the yaw (about z) from 0 to 70 deg in steps of 10, in both directions.",
+                        false,
                         [](unsigned int k) {
                           std::vector<Displacement> displacements;
                           for (const double yaw : yawSweepYaws) {
@@ -95,7 +101,9 @@ SweepDefinition yawSweep() {
                             if (yaw != 0.0) displacements.push_back(yawOnly(-yaw));
                           }
                           return withK(k, displacements);
-                        }};
+                        },
+                        {},
+                        {}};
   // Section 4.2: "starts at 0 degrees, and is incremented by 10 until 70": one direction.
   sweep.paper_cases = [](unsigned int k) {
     std::vector<Displacement> displacements;
@@ -106,13 +114,17 @@ SweepDefinition yawSweep() {
 }
 
 SweepDefinition xySweep() {
-  SweepDefinition sweep{"xy", "Sweeps XY offsets: the four quadrants (+-a, +-a) for a in {0.25,0.5,1,1.5,2} m.", false,
+  SweepDefinition sweep{"xy",
+                        "Sweeps XY offsets: the four quadrants (+-a, +-a) for a in {0.25,0.5,1,1.5,2} m.",
+                        false,
                         [](unsigned int k) {
                           std::vector<SweepCase> cases;
                           for (const double a : xySweepMagnitudes)
                             for (const SweepCase& c : withK(k, quadrants(a, a, 0.0))) cases.push_back(c);
                           return cases;
-                        }};
+                        },
+                        {},
+                        {}};
   // Section 4.3: "by the values 0.25m and 0.5m, and then increased until at least one ICP strategy
   // stopped aligning successfully"; the paper does not give the step: ours is kPaperXyStep.
   sweep.paper_cases = [](unsigned int k) {
@@ -129,14 +141,18 @@ SweepDefinition xySweep() {
 }
 
 SweepDefinition xyYawSweep() {
-  SweepDefinition sweep{"xy_yaw", "Sweeps XY plus yaw: the quadrants (+-0.5 m, +-0.5 m) at yaw -30, -10, 10, 30 deg.",
-                        false, [](unsigned int k) {
+  SweepDefinition sweep{"xy_yaw",
+                        "Sweeps XY plus yaw: the quadrants (+-0.5 m, +-0.5 m) at yaw -30, -10, 10, 30 deg.",
+                        false,
+                        [](unsigned int k) {
                           std::vector<SweepCase> cases;
                           for (const double yaw : xyYawSweepYaws)
                             for (const SweepCase& c : withK(k, quadrants(xyYawSweepOffset, xyYawSweepOffset, yaw)))
                               cases.push_back(c);
                           return cases;
-                        }};
+                        },
+                        {},
+                        {}};
   // Section 4.4: 0.5 m in each quadrant, rotated by 10, -10, 30 and -30 degrees: the same grid as ours.
   sweep.paper_cases = sweep.cases;
   return sweep;

@@ -21,7 +21,7 @@ std::string toString(DenseOdometryKind kind) {
 DenseOdometryKind parseDenseOdometryKind(const std::string& name) {
   return parseNamedValue(
       name, {DenseOdometryKind::Rgbd, DenseOdometryKind::Icp, DenseOdometryKind::RgbdIcp},
-      [](auto value) { return toString(value); }, "dense odometry");
+      [](auto value) { return toString(value); }, "dense odometry kind");
 }
 
 std::string toString(DenseOdometryUse use) {
