@@ -1,8 +1,13 @@
 // The RGB-D front end for Python: RgbdSlam on a TUM folder or frame by frame, the GIL released while it works.
 #include <filesystem>
+#include <functional>
+#include <map>
 #include <mutex>
 #include <optional>
+#include <stdexcept>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include <pybind11/functional.h>
 #include <pybind11/stl.h>
@@ -180,13 +185,46 @@ class PythonSlam {
   Trajectory groundtruth_;
 };
 
+/// Sets one of the front end's named choices as wicp_rgbd_slam's option of the same name does, by the library's
+/// own parser; a wrong key or name raises ValueError naming it.
+void setFrontendChoice(frontend::FrontendOptions& options, const std::string& key, const std::string& name) {
+  using Setter = std::function<void(frontend::FrontendOptions&, const std::string&)>;
+  static const std::vector<std::pair<std::string, Setter>> setters = {
+      {"quality-gate", [](auto& o, const auto& n) { o.quality.mode = frontend::parseQualityGateMode(n); }},
+      {"quality-measure", [](auto& o, const auto& n) { o.quality.measure = frontend::parseQualityMeasure(n); }},
+      {"descriptor", [](auto& o, const auto& n) { o.features.descriptor = frontend::parseDescriptorKind(n); }},
+      {"match-region", [](auto& o, const auto& n) { o.match_region = frontend::parseMatchRegion(n); }},
+      {"dynamic-distance", [](auto& o, const auto& n) { o.dynamic_distance = frontend::parseDynamicDistanceKind(n); }},
+      {"equalization", [](auto& o, const auto& n) { o.features.equalization = frontend::parseEqualizationMethod(n); }},
+      {"pnp", [](auto& o, const auto& n) { o.pnp.method = frontend::parsePnpMethod(n); }},
+      {"dense-odometry", [](auto& o, const auto& n) { o.dense_odometry.use = frontend::parseDenseOdometryUse(n); }},
+      {"dense-odometry-kind",
+       [](auto& o, const auto& n) { o.dense_odometry.kind = frontend::parseDenseOdometryKind(n); }},
+  };
+  std::string keys;
+  for (const auto& [known, set] : setters) {
+    if (known == key) {
+      try {
+        set(options, name);
+      } catch (const std::invalid_argument& e) {
+        throw py::value_error("options['" + key + "']: " + e.what());
+      }
+      return;
+    }
+    keys += (keys.empty() ? "" : ", ") + known;
+  }
+  throw py::value_error("options: unknown key '" + key + "' (expected " + keys + ")");
+}
+
 std::unique_ptr<PythonSlam> makeSlam(const py::object& camera, std::size_t minimap_keyframes,
-                                     const std::string& matcher, bool quality_gate, bool deterministic) {
+                                     const std::string& matcher, bool quality_gate, bool deterministic,
+                                     const std::map<std::string, std::string>& choices) {
   if (minimap_keyframes < 1) throw py::value_error("minimap_keyframes must be >= 1");
   frontend::RgbdSlamOptions options;
   options.minimap_keyframes = minimap_keyframes;
   options.frontend.matcher.kind = frontend::parseMatcherKind(matcher);
   options.frontend.quality_gate = quality_gate;
+  for (const auto& [key, name] : choices) setFrontendChoice(options.frontend, key, name);
   options.backend.background_thread = !deterministic;
   return std::make_unique<PythonSlam>(toCamera(camera), options);
 }
@@ -257,8 +295,12 @@ void bindFrontend(py::module_& m) {
                          "with run(); read the trajectory, keyframes and landmarks.")
       .def(py::init(&makeSlam), py::arg("camera") = "fr1", py::arg("minimap_keyframes") = 10,
            py::arg("matcher") = "flann", py::arg("quality_gate") = true, py::arg("deterministic") = false,
+           py::arg("options") = std::map<std::string, std::string>{},
            "camera: a Camera, 'fr1'|'fr2'|'fr3' or a YAML path. deterministic runs bundle adjustment inline "
-           "(reproducible) instead of in its own thread.")
+           "(reproducible) instead of in its own thread. options: the papers' techniques by wicp_rgbd_slam's "
+           "option names and values, e.g. {'quality-measure': 'brisque', 'pnp': 'iterative'} (keys: "
+           "quality-gate, quality-measure, descriptor, match-region, dynamic-distance, equalization, pnp, "
+           "dense-odometry, dense-odometry-kind); a wrong key or value raises ValueError.")
       .def("track", &PythonSlam::track, py::arg("rgb"), py::arg("depth"), py::arg("timestamp"), py::arg("bgr") = false,
            "Tracks one frame: rgb (H, W, 3) uint8 in RGB order (bgr=True: OpenCV's order, not copied) or (H, W) "
            "grey; depth (H, W) uint16 raw (divided by the camera's depth_factor) or float32 metres. The GIL is "
@@ -331,15 +373,17 @@ void bindFrontend(py::module_& m) {
   m.def(
       "run_tum",
       [](const std::string& folder, const py::object& camera, std::size_t max_frames, const py::object& progress,
-         std::size_t minimap_keyframes, bool deterministic) {
+         std::size_t minimap_keyframes, bool deterministic, const std::map<std::string, std::string>& options) {
         const PinholeCamera cam = camera.is_none() ? cameraOfFolder(folder) : toCamera(camera);
-        auto slam = makeSlam(py::cast(cam), minimap_keyframes, "flann", true, deterministic);
+        auto slam = makeSlam(py::cast(cam), minimap_keyframes, "flann", true, deterministic, options);
         slam->run(folder, max_frames, progress);
         return slam;
       },
       py::arg("folder"), py::arg("camera") = py::none(), py::arg("max_frames") = 0, py::arg("progress") = py::none(),
       py::arg("minimap_keyframes") = 10, py::arg("deterministic") = false,
-      "A new RgbdSlam run over a TUM folder; the camera, when not given, from the folder's name (fr1 ...).");
+      py::arg("options") = std::map<std::string, std::string>{},
+      "A new RgbdSlam run over a TUM folder; the camera, when not given, from the folder's name (fr1 ...); "
+      "options as RgbdSlam's.");
 }
 
 }  // namespace weighted_icp::python

@@ -68,3 +68,18 @@ def test_track_refuses_wrong_images() -> None:
         wi.RgbdSlam(camera=5)  # type: ignore[arg-type]
     # A black frame without depth is not an error: the tracker reports it.
     assert not slam.track(rgb, depth, 0.0).has_pose
+
+
+def test_options_choose_the_papers_techniques_by_the_tools_names(tum_folder: Path) -> None:
+    default = wi.run_tum(str(tum_folder), max_frames=4, deterministic=True)
+    spelled_out = wi.run_tum(
+        str(tum_folder), max_frames=4, deterministic=True, options={"descriptor": "orb", "pnp": "ap3p"}
+    )
+    assert np.array_equal(default.trajectory, spelled_out.trajectory)
+    other = wi.run_tum(str(tum_folder), max_frames=4, deterministic=True, options={"descriptor": "modified-brief"})
+    assert other.trajectory.shape == default.trajectory.shape
+    assert not np.array_equal(default.trajectory, other.trajectory)
+    with pytest.raises(ValueError, match=r"options\['pnp'\]: unknown PnP method 'epnp' \(expected ap3p or iterative\)"):
+        wi.RgbdSlam("fr1", options={"pnp": "epnp"})
+    with pytest.raises(ValueError, match="options: unknown key 'pnp_method'"):
+        wi.RgbdSlam("fr1", options={"pnp_method": "ap3p"})

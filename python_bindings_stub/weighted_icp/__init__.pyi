@@ -212,6 +212,7 @@ class RgbdSlam:
         matcher: str = "flann",
         quality_gate: bool = True,
         deterministic: bool = False,
+        options: Dict[str, str] = ...,
     ) -> None: ...
     def track(
         self, rgb: npt.NDArray[np.uint8], depth: npt.NDArray[np.generic], timestamp: float, bgr: bool = False
@@ -248,5 +249,6 @@ def run_tum(
     progress: Optional[Callable[[int, int, str], object]] = None,
     minimap_keyframes: int = 10,
     deterministic: bool = False,
+    options: Dict[str, str] = ...,
 ) -> RgbdSlam:
     """A new RgbdSlam run over a TUM folder."""

@@ -224,10 +224,9 @@ Frontend::LocalMatches Frontend::matchLocalMap(const Frame& frame, const Eigen::
   return matched;
 }
 
-Frontend::MovingPoints Frontend::rejectMovingPoints(const Frame& frame, const LocalMatches& matched,
-                                                    const Eigen::Isometry3d& pose_wc) {
-  // Each match with depth is checked against the motion of the static
-  // majority; flagged ones leave the pose and never become landmarks.
+std::vector<bool> Frontend::flagByDisplacement(const Frame& frame, const LocalMatches& matched,
+                                               const Eigen::Isometry3d& pose_wc) const {
+  // Each match with depth is checked against the motion of the static majority.
   std::vector<Eigen::Vector3d> with_depth_world, with_depth_measured;
   std::vector<std::size_t> with_depth_match;
   for (std::size_t m = 0; m < matched.size(); ++m) {
@@ -241,9 +240,17 @@ Frontend::MovingPoints Frontend::rejectMovingPoints(const Frame& frame, const Lo
   const std::vector<bool> moving = flagDynamicByDisplacement(with_depth_world, with_depth_measured, pose_wc,
                                                              options_.depth_noise, options_.dynamic_filter);
   std::vector<bool> is_dynamic(matched.size(), false);
+  for (std::size_t k = 0; k < moving.size(); ++k)
+    if (moving[k]) is_dynamic[with_depth_match[k]] = true;
+  return is_dynamic;
+}
+
+Frontend::MovingPoints Frontend::rejectMovingPoints(const Frame& frame, const LocalMatches& matched,
+                                                    const Eigen::Isometry3d& pose_wc) {
+  // Flagged matches leave the pose and never become landmarks; each distance is computed only when selected.
+  std::vector<bool> is_dynamic(matched.size(), false);
   if (options_.dynamic_distance != DynamicDistanceKind::EpipolarHistory)
-    for (std::size_t k = 0; k < moving.size(); ++k)
-      if (moving[k]) is_dynamic[with_depth_match[k]] = true;
+    is_dynamic = flagByDisplacement(frame, matched, pose_wc);
   if (options_.dynamic_distance != DynamicDistanceKind::Displacement) {
     const std::vector<bool> by_history = flagByEpipolarHistory(frame, matched, pose_wc);
     for (std::size_t m = 0; m < matched.size(); ++m) is_dynamic[m] = is_dynamic[m] || by_history[m];

@@ -215,12 +215,17 @@ class Frontend {
   /// Descriptor matches of the frame against the local map: everywhere, or in regions of interest.
   std::vector<cv::DMatch> localDescriptorMatches(const Frame& frame, const Eigen::Isometry3d& guess_wc,
                                                  double gate_px) const;
-  /// Where each local map point is expected in a frame at `guess_wc`: Eq. 8 for points on a plane of the last keyframe, else projection.
+  /// Where each local map point is expected in a frame at `guess_wc`: Eq. 8 for points on a plane of the last keyframe,
+  /// else projection.
   std::vector<Eigen::Vector2d> predictLocalMapPixels(const Eigen::Isometry3d& guess_wc) const;
   /// Starts the record of the new keyframe's planes (MatchRegion::Homography).
   void recordKeyframePlanes(const Frame& frame);
   /// Records a point's pixel in the new keyframe, with the plane it lies on.
   void recordKeyframePixel(MapPointId id, const Frame& frame, std::size_t feature);
+  /// Flags matches with depth whose 3D displacement disagrees with the static majority's motion
+  /// (DynamicDistanceKind other than EpipolarHistory).
+  std::vector<bool> flagByDisplacement(const Frame& frame, const LocalMatches& matched,
+                                       const Eigen::Isometry3d& pose_wc) const;
   /// Flags matches by the Eq. 6 distance history (DynamicDistanceKind other than Displacement).
   std::vector<bool> flagByEpipolarHistory(const Frame& frame, const LocalMatches& matched,
                                           const Eigen::Isometry3d& pose_wc);
