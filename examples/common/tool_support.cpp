@@ -84,7 +84,6 @@ std::string describeRange(bool integer, double minimum, double maximum, bool min
 
 }  // namespace detail
 
-// Issue #11 ablation options: named choices.
 void NamedValue::xparse(boost::any& value_store, const std::vector<std::string>& tokens) const {
   namespace po = boost::program_options;
   const std::string& name = po::validators::get_single_string(tokens);

@@ -22,7 +22,6 @@ struct PnpOptions {
   int min_inliers = 12;
   double huber_px = 2.0;
   int refine_max_iterations = 20;
-  // Issue #11 ablation options: dense odometry, equalisation, PnP (docs/frontend_ablation.md).
   /// The solver inside RANSAC; the Huber refinement follows either.
   PnpMethod method = PnpMethod::Ap3p;
 };

@@ -34,7 +34,7 @@ struct DescriptorMatcherOptions {
   int lsh_key_bits = 14;
   int lsh_multi_probe_level = 1;
   std::uint64_t lsh_seed = 0x5eed;
-  // Issue #11 ablation options: the KD-tree matcher (MatcherKind::KdTree).
+  /// The KD-tree matcher's options (MatcherKind::KdTree).
   BinaryKdTreeOptions kd_tree;
 };
 

@@ -33,11 +33,9 @@ struct FeatureExtractorOptions {
   /// 0.5 px): GFTT returns whole pixels, whose rounding alone is 0.3 px of
   /// noise on every pose. min_distance_px then holds to within 1 px.
   bool subpixel = true;
-  // Issue #11 ablation options: descriptor.
   /// ORB's rotated BRIEF, or the front-end paper's modified BRIEF (Eq. 7);
   /// both 32 bytes per row, steered by the same intensity-centroid angle.
   DescriptorKind descriptor = DescriptorKind::Orb;
-  // Issue #11 ablation options: dense odometry, equalisation, PnP (docs/frontend_ablation.md).
   /// How a frame with fewer than min_features_before_clahe corners is equalised before detecting again.
   EqualizationMethod equalization = EqualizationMethod::Clahe;
 };

@@ -73,8 +73,9 @@ struct FrontendOptions {
   /// (once may be depth noise; it is left out of that frame's pose either way).
   int dynamic_votes_to_exclude = 2;
 
-  // Issue #11 ablation options: dynamic points, matching (the descriptor is features.descriptor,
-  // the KD-tree matcher matcher.kind).
+  // The papers' techniques, each off by default, compared in docs/frontend_ablation.md. The descriptor is
+  // features.descriptor, the KD-tree matcher matcher.kind, equalisation features.equalization, the PnP solver
+  // pnp.method.
   /// Where local-map descriptors are searched: everywhere (today), or only in
   /// regions of interest around where each point is predicted to appear.
   MatchRegion match_region = MatchRegion::Everywhere;
@@ -83,8 +84,6 @@ struct FrontendOptions {
   /// The distance that flags moving points in 3D-2D tracking.
   DynamicDistanceKind dynamic_distance = DynamicDistanceKind::Displacement;
   DynamicPointHistoryOptions dynamic_history;
-  // Issue #11 ablation options: dense odometry, equalisation, PnP (docs/frontend_ablation.md;
-  // equalisation is features.equalization, the PnP solver pnp.method).
   /// OpenCV's dense odometry as a motion prior and/or a fallback pose; off by default.
   DenseOdometryOptions dense_odometry;
 };
