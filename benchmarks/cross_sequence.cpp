@@ -15,12 +15,14 @@
 #include <iomanip>
 #include <iostream>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 #include <boost/program_options.hpp>
 
 #include "rgbd_odometry_runs.h"
+#include "weighted_icp/frontend/slam/frontend_choices.h"
 #include "weighted_icp/io/camera.h"
 #include "weighted_icp/io/tum_sequence.h"
 #include "weighted_icp/simulation/sequence_variants.h"
@@ -126,6 +128,7 @@ int main(int argc, char** argv) {
                 runs = "default,relative-brisque,absolute,paper,no-gate,opencv",
                 sequences = "fr1_head,fr3_head,synthetic";
     std::size_t max_frames = 0, synthetic_frames = 150;
+    std::vector<std::string> choices;
     po::options_description description("wicp_benchmark_cross_sequence options");
     // clang-format off
     description.add_options()
@@ -136,7 +139,10 @@ int main(int argc, char** argv) {
         ("synthetic-frames", po::value(&synthetic_frames)->default_value(synthetic_frames), "synthetic sequence length (0 = none)")
         ("sequences", po::value(&sequences)->default_value(sequences), "comma-separated: fr1_head, fr3_head, synthetic")
         ("variants", po::value(&variants)->default_value(variants), "comma-separated variants (kinds of wicp_make_variant, or kinect)")
-        ("runs", po::value(&runs)->default_value(runs), "comma-separated: default, relative-brisque, absolute, paper, no-gate, opencv");
+        ("runs", po::value(&runs)->default_value(runs), "comma-separated: default, relative-brisque, absolute, paper, no-gate, opencv")
+        ("frontend-option", po::value(&choices)->composing(),
+         "KEY=VALUE, repeatable: a front-end choice by wicp_rgbd_slam's option name (pnp=iterative, "
+         "descriptor=modified-brief, dense-odometry=prior, ...), applied to every run but opencv");
     // clang-format on
     po::variables_map vm;
     po::store(po::parse_command_line(argc, argv, description), vm);
@@ -146,7 +152,18 @@ int main(int argc, char** argv) {
     }
     po::notify(vm);
     requireOutsideSourceTree(scratch);
-    const std::vector<Tracker> columns = trackers(runs);
+    std::vector<Tracker> columns = trackers(runs);
+    for (const std::string& choice : choices) {
+      const std::size_t equals = choice.find('=');
+      if (equals == std::string::npos) throw po::error("--frontend-option " + choice + ": expected KEY=VALUE");
+      for (Tracker& column : columns) {
+        try {
+          frontend::setFrontendChoice(column.options.frontend, choice.substr(0, equals), choice.substr(equals + 1));
+        } catch (const std::invalid_argument& e) {
+          throw po::error(std::string("--frontend-option: ") + e.what());
+        }
+      }
+    }
     std::vector<std::string> variant_names{"original"};
     std::stringstream list(variants);
     for (std::string name; std::getline(list, name, ',');) {

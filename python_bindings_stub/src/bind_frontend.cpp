@@ -1,6 +1,5 @@
 // The RGB-D front end for Python: RgbdSlam on a TUM folder or frame by frame, the GIL released while it works.
 #include <filesystem>
-#include <functional>
 #include <map>
 #include <mutex>
 #include <optional>
@@ -15,6 +14,7 @@
 
 #include "arrays.h"
 #include "bindings.h"
+#include "weighted_icp/frontend/slam/frontend_choices.h"
 #include "weighted_icp/frontend/slam/rgbd_slam.h"
 #include "weighted_icp/io/camera.h"
 #include "weighted_icp/io/tum_sequence.h"
@@ -185,37 +185,6 @@ class PythonSlam {
   Trajectory groundtruth_;
 };
 
-/// Sets one of the front end's named choices as wicp_rgbd_slam's option of the same name does, by the library's
-/// own parser; a wrong key or name raises ValueError naming it.
-void setFrontendChoice(frontend::FrontendOptions& options, const std::string& key, const std::string& name) {
-  using Setter = std::function<void(frontend::FrontendOptions&, const std::string&)>;
-  static const std::vector<std::pair<std::string, Setter>> setters = {
-      {"quality-gate", [](auto& o, const auto& n) { o.quality.mode = frontend::parseQualityGateMode(n); }},
-      {"quality-measure", [](auto& o, const auto& n) { o.quality.measure = frontend::parseQualityMeasure(n); }},
-      {"descriptor", [](auto& o, const auto& n) { o.features.descriptor = frontend::parseDescriptorKind(n); }},
-      {"match-region", [](auto& o, const auto& n) { o.match_region = frontend::parseMatchRegion(n); }},
-      {"dynamic-distance", [](auto& o, const auto& n) { o.dynamic_distance = frontend::parseDynamicDistanceKind(n); }},
-      {"equalization", [](auto& o, const auto& n) { o.features.equalization = frontend::parseEqualizationMethod(n); }},
-      {"pnp", [](auto& o, const auto& n) { o.pnp.method = frontend::parsePnpMethod(n); }},
-      {"dense-odometry", [](auto& o, const auto& n) { o.dense_odometry.use = frontend::parseDenseOdometryUse(n); }},
-      {"dense-odometry-kind",
-       [](auto& o, const auto& n) { o.dense_odometry.kind = frontend::parseDenseOdometryKind(n); }},
-  };
-  std::string keys;
-  for (const auto& [known, set] : setters) {
-    if (known == key) {
-      try {
-        set(options, name);
-      } catch (const std::invalid_argument& e) {
-        throw py::value_error("options['" + key + "']: " + e.what());
-      }
-      return;
-    }
-    keys += (keys.empty() ? "" : ", ") + known;
-  }
-  throw py::value_error("options: unknown key '" + key + "' (expected " + keys + ")");
-}
-
 std::unique_ptr<PythonSlam> makeSlam(const py::object& camera, std::size_t minimap_keyframes,
                                      const std::string& matcher, bool quality_gate, bool deterministic,
                                      const std::map<std::string, std::string>& choices) {
@@ -224,7 +193,13 @@ std::unique_ptr<PythonSlam> makeSlam(const py::object& camera, std::size_t minim
   options.minimap_keyframes = minimap_keyframes;
   options.frontend.matcher.kind = frontend::parseMatcherKind(matcher);
   options.frontend.quality_gate = quality_gate;
-  for (const auto& [key, name] : choices) setFrontendChoice(options.frontend, key, name);
+  for (const auto& [key, name] : choices) {
+    try {
+      frontend::setFrontendChoice(options.frontend, key, name);
+    } catch (const std::invalid_argument& e) {
+      throw py::value_error(std::string("options: ") + e.what());
+    }
+  }
   options.backend.background_thread = !deterministic;
   return std::make_unique<PythonSlam>(toCamera(camera), options);
 }
@@ -299,8 +274,9 @@ void bindFrontend(py::module_& m) {
            "camera: a Camera, 'fr1'|'fr2'|'fr3' or a YAML path. deterministic runs bundle adjustment inline "
            "(reproducible) instead of in its own thread. options: the papers' techniques by wicp_rgbd_slam's "
            "option names and values, e.g. {'quality-measure': 'brisque', 'pnp': 'iterative'} (keys: "
-           "quality-gate, quality-measure, descriptor, match-region, dynamic-distance, equalization, pnp, "
-           "dense-odometry, dense-odometry-kind); a wrong key or value raises ValueError.")
+           "matcher, quality-gate, quality-measure, descriptor, match-region, dynamic-distance, equalization, "
+           "pnp, dense-odometry, dense-odometry-kind; options win over the matcher argument); a wrong key or "
+           "value raises ValueError.")
       .def("track", &PythonSlam::track, py::arg("rgb"), py::arg("depth"), py::arg("timestamp"), py::arg("bgr") = false,
            "Tracks one frame: rgb (H, W, 3) uint8 in RGB order (bgr=True: OpenCV's order, not copied) or (H, W) "
            "grey; depth (H, W) uint16 raw (divided by the camera's depth_factor) or float32 metres. The GIL is "

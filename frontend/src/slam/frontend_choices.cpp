@@ -1,0 +1,59 @@
+// The front end's named choices by wicp_rgbd_slam's option names: one table of keys for every caller.
+#include "weighted_icp/frontend/slam/frontend_choices.h"
+
+#include <functional>
+#include <stdexcept>
+#include <utility>
+
+namespace weighted_icp::frontend {
+
+namespace {
+
+using Setter = std::function<void(FrontendOptions&, const std::string&)>;
+
+const std::vector<std::pair<std::string, Setter>>& setters() {
+  static const std::vector<std::pair<std::string, Setter>> table = {
+      {"matcher", [](FrontendOptions& o, const std::string& v) { o.matcher.kind = parseMatcherKind(v); }},
+      {"quality-gate", [](FrontendOptions& o, const std::string& v) { o.quality.mode = parseQualityGateMode(v); }},
+      {"quality-measure", [](FrontendOptions& o, const std::string& v) { o.quality.measure = parseQualityMeasure(v); }},
+      {"descriptor", [](FrontendOptions& o, const std::string& v) { o.features.descriptor = parseDescriptorKind(v); }},
+      {"match-region", [](FrontendOptions& o, const std::string& v) { o.match_region = parseMatchRegion(v); }},
+      {"dynamic-distance",
+       [](FrontendOptions& o, const std::string& v) { o.dynamic_distance = parseDynamicDistanceKind(v); }},
+      {"equalization",
+       [](FrontendOptions& o, const std::string& v) { o.features.equalization = parseEqualizationMethod(v); }},
+      {"pnp", [](FrontendOptions& o, const std::string& v) { o.pnp.method = parsePnpMethod(v); }},
+      {"dense-odometry",
+       [](FrontendOptions& o, const std::string& v) { o.dense_odometry.use = parseDenseOdometryUse(v); }},
+      {"dense-odometry-kind",
+       [](FrontendOptions& o, const std::string& v) { o.dense_odometry.kind = parseDenseOdometryKind(v); }},
+  };
+  return table;
+}
+
+}  // namespace
+
+void setFrontendChoice(FrontendOptions& options, const std::string& key, const std::string& value) {
+  for (const auto& [name, set] : setters()) {
+    if (name != key) continue;
+    try {
+      set(options, value);
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(key + ": " + e.what());
+    }
+    return;
+  }
+  std::string expected;
+  const auto keys = frontendChoiceKeys();
+  for (std::size_t i = 0; i < keys.size(); ++i)
+    expected += (i == 0 ? "" : i + 1 == keys.size() ? " or " : ", ") + keys[i];
+  throw std::invalid_argument("unknown front-end option '" + key + "' (expected " + expected + ")");
+}
+
+std::vector<std::string> frontendChoiceKeys() {
+  std::vector<std::string> keys;
+  for (const auto& entry : setters()) keys.push_back(entry.first);
+  return keys;
+}
+
+}  // namespace weighted_icp::frontend

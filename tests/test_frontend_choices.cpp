@@ -1,0 +1,59 @@
+// The front end's named choices by wicp_rgbd_slam's option names: each key sets its option through the
+// library's parser, and a wrong key or value is refused naming it.
+
+#include <stdexcept>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "weighted_icp/frontend/slam/frontend_choices.h"
+
+namespace {
+
+using namespace weighted_icp::frontend;
+
+TEST(FrontendChoices, EachKeySetsItsOption) {
+  FrontendOptions options;
+  setFrontendChoice(options, "pnp", "iterative");
+  setFrontendChoice(options, "quality-measure", "brisque");
+  setFrontendChoice(options, "descriptor", "modified-brief");
+  setFrontendChoice(options, "match-region", "homography");
+  setFrontendChoice(options, "dynamic-distance", "both");
+  setFrontendChoice(options, "equalization", "global");
+  setFrontendChoice(options, "dense-odometry", "prior");
+  setFrontendChoice(options, "dense-odometry-kind", "icp");
+  setFrontendChoice(options, "quality-gate", "absolute");
+  setFrontendChoice(options, "matcher", "kd-tree");
+  EXPECT_EQ(options.pnp.method, PnpMethod::Iterative);
+  EXPECT_EQ(options.quality.measure, QualityMeasure::Brisque);
+  EXPECT_EQ(options.features.descriptor, DescriptorKind::ModifiedBrief);
+  EXPECT_EQ(options.match_region, MatchRegion::Homography);
+  EXPECT_EQ(options.dynamic_distance, DynamicDistanceKind::Both);
+  EXPECT_EQ(options.features.equalization, EqualizationMethod::Global);
+  EXPECT_EQ(options.dense_odometry.use, DenseOdometryUse::Prior);
+  EXPECT_EQ(options.dense_odometry.kind, DenseOdometryKind::Icp);
+  EXPECT_EQ(options.quality.mode, QualityGateMode::Absolute);
+  EXPECT_EQ(options.matcher.kind, MatcherKind::KdTree);
+  EXPECT_EQ(frontendChoiceKeys().size(), 10u);
+}
+
+TEST(FrontendChoices, AWrongKeyOrValueIsNamed) {
+  FrontendOptions options;
+  try {
+    setFrontendChoice(options, "pnp", "epnp");
+    ADD_FAILURE() << "no error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_EQ(std::string(e.what()), "pnp: unknown PnP method 'epnp' (expected ap3p or iterative)");
+  }
+  try {
+    setFrontendChoice(options, "pnp-method", "ap3p");
+    ADD_FAILURE() << "no error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("unknown front-end option 'pnp-method' (expected matcher, quality-gate, "),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(options.pnp.method, PnpMethod::Ap3p);  // a refused value changes nothing
+}
+
+}  // namespace
