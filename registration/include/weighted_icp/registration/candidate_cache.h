@@ -69,7 +69,8 @@ class CandidateCache {
   /// What the last query of a slot did.
   enum class Action : std::uint8_t { kNone, kReused, kSearched };
 
-  /// @brief Forgets every entry (the target changed) and sizes the cache for `slots` queries.
+  /// @brief Forgets every entry and its storage (the target changed), leaving `slots` empty slots; resize()
+  /// sizes it for a k before the next queries (until then queries are answered by uncached searches).
   /// @param slots  queries per pass
   void reset(std::size_t slots);
   /// @brief Sizes the cache for `slots` queries of up to k = `k` neighbours, keeping the entries of the
