@@ -145,4 +145,50 @@ TEST(CandidateReuse, ReusedCandidatesKeepPclsAnswerWithTiesAndAJumpIsSearchedAga
   }
 }
 
+TEST(CandidateReuse, ManySmallStepsAreAnsweredFromTheRememberedNearestAsTheTreeAnswers) {
+  // Late ICP: every point moves a little per call. Most calls are answered from the remembered k + 1
+  // nearest (no ranking of all candidates); neighbours whose order swaps on the way must not be missed.
+  // Random weights make the choice depend on all k neighbours and their order.
+  const auto target = randomCloud(3000, 5);
+  auto source = randomCloud(2000, 6);
+  for (std::size_t i = 0; i < 200; ++i) source->push_back((*target)[i * 7]);  // ties at distance 0
+  std::mt19937 rng(7);
+  std::uniform_int_distribution<int> level(0, 3);  // few levels: equal weights go to the nearer point
+  std::vector<double> weights(target->size());
+  for (auto& w : weights) w = level(rng);
+  WeightedXyz cached(5), uncached(5);
+  for (WeightedXyz* ce : {&cached, &uncached}) {
+    ce->setInputTarget(target);
+    ce->setTargetWeights(weights);
+  }
+  uncached.setCandidateReuse(false);
+  auto moved = std::make_shared<Cloud>();
+  std::size_t reused = 0, queries = 0;
+  for (int step = 0; step < 16; ++step) {
+    SCOPED_TRACE(::testing::Message() << "step " << step);
+    const double s = 1.0 - step / 32.0;  // steps shrink, as ICP's do (point spacing ~0.13, steps ~1 cm)
+    pcl::transformPointCloud(*source, *moved,
+                             Displacement{0.01 * step * s, -0.006 * step, 0.004 * step, 0.3 * step * s, 0, 0.5 * step}
+                                 .toIsometry()
+                                 .matrix()
+                                 .cast<float>());
+    expectSame(correspondencesOf(uncached, moved), correspondencesOf(cached, moved));
+    if (step > 0) {
+      reused += cached.getLastReusedCount();
+      queries += moved->size();
+    }
+  }
+  EXPECT_GT(reused, queries / 2);
+
+  // Fewer neighbours on the same object (refinement's k = 1), then more than it was sized for.
+  for (const unsigned k : {1u, 8u}) {
+    SCOPED_TRACE(::testing::Message() << "k " << k);
+    cached.setNumberOfNeighbors(k);
+    uncached.setNumberOfNeighbors(k);
+    expectSame(correspondencesOf(uncached, moved), correspondencesOf(cached, moved));
+    expectSame(correspondencesOf(uncached, moved), correspondencesOf(cached, moved));
+    EXPECT_GT(cached.getLastReusedCount(), moved->size() * 9 / 10);
+  }
+}
+
 }  // namespace

@@ -236,12 +236,12 @@ void WeightedCorrespondenceEstimation<PointSource, PointTarget, Scalar>::chooseT
     double max_dist_sqr, pcl::Correspondences& per_source) {
   const std::size_t n = indices_->size();
   per_source.resize(n);
-  if (reuse_candidates_ && cache_.slots() != n) cache_.resize(n);
   const unsigned threads = detail::threadsFor(threads_, n);
   // One scratch per thread, made before the loop so that an allocation failure is thrown here.
   const std::size_t scratch_size = detail::scratchSize(k_, target_index_);
+  if (reuse_candidates_) cache_.resize(n, scratch_size);
   std::vector<NearestNeighborIndex::Scratch> scratches(threads, NearestNeighborIndex::Scratch(scratch_size));
-  std::vector<CandidateCache::Work> works(threads, CandidateCache::Work(scratch_size));
+  std::vector<CandidateCache::Work> works(threads, cache_.makeWork());
   // Each source point is decided on its own and written to its own slot (and
   // cache entry), so the result cannot depend on how the loop is split.
   pool_.run(n, detail::kChunk, threads, [&](std::size_t begin, std::size_t end, unsigned worker) {
