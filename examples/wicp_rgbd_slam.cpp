@@ -5,8 +5,10 @@
 //   session.txt     the whole session map in the same format
 //   map.ply         landmarks with weights and raw metrics
 //   graph.txt       the mini-map graph (docs/mapping.md), loop edges included
+//   loops.txt       the accepted loops (keyframe timestamps, relative pose, inliers, fitness)
 //   session/        the session folder wicp_merge reads
 //   report.json     counts, timing, skipped frames, loops, ATE when ground truth exists
+//   groundtruth.txt the synthetic sequence's true poses (TUM format), for wicp_evaluate
 // Loops are closed by default (place recognition with the default vocabulary
 // trained at build time, geometric verification, pose graph); --no-loop-closure
 // turns that off.
@@ -19,6 +21,7 @@
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
+#include <map>
 #include <optional>
 #include <sstream>
 
@@ -28,6 +31,7 @@
 #include "interrupt.h"
 #include "plotting.h"
 #include "tool_support.h"
+#include "weighted_icp/core/named_values.h"
 #include "weighted_icp/core/statistics.h"
 #include "weighted_icp/io/atomic_folder.h"
 #include "weighted_icp/io/cloud_io.h"
@@ -57,6 +61,8 @@ class FrameSource {
   virtual Trajectory groundTruth() const = 0;
   virtual const PinholeCamera& camera() const = 0;
   virtual std::string describe() const = 0;
+  /// True when the ground truth is a file of the dataset already (TUM), false when only this tool knows it.
+  virtual bool groundTruthOnDisk() const = 0;
 };
 
 class TumSource : public FrameSource {
@@ -73,6 +79,7 @@ class TumSource : public FrameSource {
   Trajectory groundTruth() const override { return sequence_.groundTruth(); }
   const PinholeCamera& camera() const override { return camera_; }
   std::string describe() const override { return "TUM sequence " + sequence_.directory(); }
+  bool groundTruthOnDisk() const override { return true; }
 
  private:
   io::TumSequence sequence_;
@@ -81,7 +88,8 @@ class TumSource : public FrameSource {
 
 class SyntheticSource : public FrameSource {
  public:
-  explicit SyntheticSource(const simulation::SyntheticRgbdOptions& options) : sequence_(options) {}
+  explicit SyntheticSource(const simulation::SyntheticRgbdOptions& options)
+      : sequence_(options), tracker_camera_(sequence_.trackerCamera()) {}
   std::size_t size() const override { return sequence_.size(); }
   RgbdFrame load(std::size_t i) const override { return sequence_.frame(i).rgbd; }
   Trajectory groundTruth() const override {
@@ -90,17 +98,27 @@ class SyntheticSource : public FrameSource {
       truth.push_back({sequence_.timestamp(i), sequence_.cameraToWorld(i)});
     return truth;
   }
-  const PinholeCamera& camera() const override { return sequence_.options().camera; }
+  bool groundTruthOnDisk() const override { return false; }
+  /// The camera the tracker is given, with the calibration error if one was asked for.
+  const PinholeCamera& camera() const override { return tracker_camera_; }
   std::string describe() const override {
+    const simulation::SyntheticRgbdOptions& options = sequence_.options();
     std::ostringstream out;
-    out << "synthetic sequence (seed " << sequence_.options().seed << ", " << sequence_.options().frames_per_loop
-        << " frames per loop" << (sequence_.options().moving_object ? ", moving object" : "")
-        << (sequence_.options().dim_lighting ? ", dim lighting" : "") << ")";
+    out << "synthetic sequence (seed " << options.seed << ", " << options.frames_per_loop << " frames per loop"
+        << (options.moving_object ? ", moving object" : "") << (options.dim_lighting ? ", dim lighting" : "")
+        << (options.repeated_texture ? ", repeated texture" : "");
+    if (options.room_scale != 1.0) out << ", room scaled by " << options.room_scale;
+    if (options.focal_length_error != 0.0 || options.principal_point_error_x_px != 0.0 ||
+        options.principal_point_error_y_px != 0.0)
+      out << ", tracker's camera off by focal " << options.focal_length_error * 100.0 << " %, cx "
+          << options.principal_point_error_x_px << " px, cy " << options.principal_point_error_y_px << " px";
+    out << ")";
     return out.str();
   }
 
  private:
   simulation::SyntheticRgbdSequence sequence_;
+  PinholeCamera tracker_camera_;
 };
 
 /// A quantile of the per-frame times; 0 when no frame was timed.
@@ -190,7 +208,26 @@ void addAte(const Trajectory& truth, const Trajectory& trajectory, tools::JsonOb
   }
 }
 
-/// Writes trajectory.txt, session.txt, minimaps/, map.ply, graph.txt and session/ into `dir`.
+/// loops.txt: one accepted loop a line, `query_timestamp match_timestamp tx ty tz qx qy qz qw inliers fitness`
+/// (the query keyframe's camera in the match keyframe's, as the pose graph took it), so that a run with ground truth
+/// can tell a right loop from a wrong one.
+void writeLoops(const fs::path& path, const mapping::LoopClosingSlam& slam) {
+  std::map<frontend::KeyframeId, double> timestamps;
+  for (const frontend::Keyframe& keyframe : slam.slam().map().keyframes()) timestamps[keyframe.id] = keyframe.timestamp;
+  std::ostringstream out;
+  out << "# query_timestamp match_timestamp tx ty tz qx qy qz qw inliers fitness\n" << std::setprecision(17);
+  for (const mapping::LoopConstraint& loop : slam.acceptedLoops()) {
+    const auto query = timestamps.find(loop.query), match = timestamps.find(loop.match);
+    if (query == timestamps.end() || match == timestamps.end()) continue;  // culled by bundle adjustment since
+    const Eigen::Quaterniond q(loop.query_in_match.linear());
+    const Eigen::Vector3d t = loop.query_in_match.translation();
+    out << query->second << ' ' << match->second << ' ' << t.x() << ' ' << t.y() << ' ' << t.z() << ' ' << q.x() << ' '
+        << q.y() << ' ' << q.z() << ' ' << q.w() << ' ' << loop.inliers << ' ' << loop.fitness << '\n';
+  }
+  tools::writeTextFile(path.string(), out.str());
+}
+
+/// Writes trajectory.txt, session.txt, minimaps/, map.ply, graph.txt, loops.txt and session/ into `dir`.
 void writeMaps(const fs::path& dir, const mapping::LoopClosingSlam& slam, const PinholeCamera& camera,
                std::size_t minimap_keyframes, const Trajectory& trajectory, const LandmarkMap& session,
                const std::vector<LandmarkMap>& minimaps) {
@@ -207,6 +244,7 @@ void writeMaps(const fs::path& dir, const mapping::LoopClosingSlam& slam, const 
   mapping::saveMiniMapGraph(mapping::MiniMapGraph::fromSlamMap(slam.slam().map(), minimap_keyframes),
                             (dir / "graph.txt").string());
   mapping::saveSession(mapping::captureSession(slam.slam(), camera), (dir / "session").string());
+  writeLoops(dir / "loops.txt", slam);
 }
 
 tools::JsonObject makeReport(const FrameSource& source, std::size_t frames, const mapping::LoopClosingSlam& closing,
@@ -260,7 +298,11 @@ int writeAndPublish(io::AtomicFolder& folder, const FrameSource& source, std::si
   writeMaps(folder.path(), closing, source.camera(), minimap_keyframes, trajectory, session, minimaps);
   tools::JsonObject report = makeReport(source, frames, closing, counts, minimaps.size());
   std::optional<metrics::AbsoluteTrajectoryError> ate;
-  addAte(source.groundTruth(), trajectory, report, ate);
+  const Trajectory truth = source.groundTruth();
+  addAte(truth, trajectory, report, ate);
+  // The synthetic sequence's truth exists nowhere else: written so that runs can be compared frame by frame.
+  if (!truth.empty() && !source.groundTruthOnDisk())
+    io::writeTrajectory(truth, (folder.path() / "groundtruth.txt").string());
   // The picture beside trajectory.txt; a missing matplotlib is a warning, not a failed run.
   if (ate)
     tools::plotTrajectory("wicp_rgbd_slam", source.groundTruth(), trajectory, ate->alignment, 0.02,
@@ -278,12 +320,13 @@ int writeAndPublish(io::AtomicFolder& folder, const FrameSource& source, std::si
     std::cout << std::setprecision(2) << "ATE RMSE " << ate->translation.rmse * 100 << " cm over " << ate->pairs
               << " poses\n";
   std::cout << "wrote " << folder.target().string()
-            << "/{trajectory.txt, session.txt, minimaps/, map.ply, graph.txt, session/, report.json}\n";
+            << "/{trajectory.txt, session.txt, minimaps/, map.ply, graph.txt, loops.txt, session/, report.json}\n";
   return 0;
 }
 
 /// The loop detector over the vocabulary given, else the default one installed with the tools.
-mapping::LoopDetector makeDetector(const std::string& vocabulary_option, const PinholeCamera& camera) {
+mapping::LoopDetector makeDetector(const std::string& vocabulary_option, const PinholeCamera& camera,
+                                   mapping::LoopEdgeSource edge) {
   std::string path = vocabulary_option;
   if (path.empty()) {
     path = tools::findToolDataFile("default_vocabulary.txt");
@@ -293,9 +336,20 @@ mapping::LoopDetector makeDetector(const std::string& vocabulary_option, const P
           "give --vocabulary FILE (wicp_vocabulary train makes one) or --no-loop-closure");
   }
   auto vocabulary = std::make_shared<const mapping::BinaryVocabulary>(mapping::BinaryVocabulary::load(path));
-  return mapping::asLoopDetector(std::make_shared<mapping::BowLoopDetector>(std::move(vocabulary), camera));
+  mapping::LoopDetectorOptions options;
+  options.verification.edge = edge;
+  return mapping::asLoopDetector(
+      std::make_shared<mapping::BowLoopDetector>(std::move(vocabulary), camera, std::move(options)));
 }
 
+}  // namespace
+
+namespace {
+/// --odometry-information's names: the pose graph's odometry edges from tracking, or the fixed noise model.
+std::string odometryInformationName(bool from_tracking) { return from_tracking ? "tracking" : "model"; }
+bool parseOdometryInformation(const std::string& name) {
+  return weighted_icp::parseNamedValue(name, {true, false}, odometryInformationName, "odometry information");
+}
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -305,6 +359,7 @@ int main(int argc, char** argv) {
   return tools::runTool("wicp_rgbd_slam", [&] {
     std::string dataset, camera_spec, out_dir;
     std::string vocabulary_path;
+    mapping::LoopEdgeSource loop_edge = mapping::LoopEdgeSource::Pnp;
     std::size_t max_frames = 0, first_frame = 0;
     mapping::LoopClosingSlamOptions closing_options;
     frontend::RgbdSlamOptions& options = closing_options.slam;
@@ -349,6 +404,12 @@ int main(int argc, char** argv) {
         ("no-loop-closure", "track and map only: no place recognition, no pose graph")
         ("vocabulary", po::value(&vocabulary_path), "place-recognition vocabulary (wicp_vocabulary train); "
                                                     "default: the one built with the tools")
+        ("loop-edge", tools::namedValue(&loop_edge, mapping::parseLoopEdgeSource,
+                                        [](mapping::LoopEdgeSource e) { return mapping::toString(e); }),
+         "a verified loop's edge: PnP's pose (the weighted ICP checks it) or the ICP-refined pose")
+        ("odometry-information", tools::namedValue(&closing_options.odometry_from_tracking, parseOdometryInformation,
+                                                   odometryInformationName),
+         "the pose graph's odometry edges: information from tracking (reprojection Hessians) or the fixed noise model")
         ("synthetic-frames", tools::rangedValue(&synthetic.frames, std::size_t{1}, std::size_t{100000})
                                  ->default_value(synthetic.frames),
          "synthetic: frames (1-100000)")
@@ -360,7 +421,18 @@ int main(int argc, char** argv) {
          "synthetic: frames to go once round; fewer than --synthetic-frames makes a loop (10-1e6)")
         ("depth-noise", tools::rangedValue(&synthetic.depth_noise_coefficient, 0.0, 1.0)
                             ->default_value(synthetic.depth_noise_coefficient),
-         "synthetic: depth noise sigma_z = COEFF * z^2 (0-1)");
+         "synthetic: depth noise sigma_z = COEFF * z^2 (0-1)")
+        ("repeated-texture", po::bool_switch(&synthetic.repeated_texture),
+         "synthetic: every surface shows the same texture tile (perceptual aliasing)")
+        ("room-scale", tools::rangedValue(&synthetic.room_scale, 1.0, 4.0)->default_value(1.0),
+         "synthetic: stretch the room's floor plan and the camera's path by this (farther, noisier walls) (1-4)")
+        ("focal-error", tools::rangedValue(&synthetic.focal_length_error, -0.2, 0.2)->default_value(0.0),
+         "synthetic: the tracker is given fx, fy off by this fraction (an uncalibrated camera; the images are "
+         "rendered with the true ones) (-0.2-0.2)")
+        ("cx-error", tools::rangedValue(&synthetic.principal_point_error_x_px, -100.0, 100.0)->default_value(0.0),
+         "synthetic: the tracker is given cx off by this many pixels (-100-100)")
+        ("cy-error", tools::rangedValue(&synthetic.principal_point_error_y_px, -80.0, 80.0)->default_value(0.0),
+         "synthetic: the tracker is given cy off by this many pixels (-80-80)");
     // clang-format on
     // The papers' techniques, each an option off by default (issue #11; docs/frontend_ablation.md). Each name is
     // read by the library's parser, so the names and the error listing them exist once.
@@ -415,7 +487,7 @@ int main(int argc, char** argv) {
                       std::to_string(frames) + ")");
     // Loaded before the long run, so a bad vocabulary costs nothing.
     mapping::LoopDetector detector;
-    if (closing_options.loop_closure) detector = makeDetector(vocabulary_path, source->camera());
+    if (closing_options.loop_closure) detector = makeDetector(vocabulary_path, source->camera(), loop_edge);
     // Checked and created before the long run, so a refused --out costs nothing.
     io::AtomicFolder folder = tools::openOutputFolder(out_dir, vm.count("overwrite") > 0);
     std::cout << "running on " << source->describe() << ", frames " << first_frame << " to " << frames

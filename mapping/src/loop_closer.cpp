@@ -4,19 +4,39 @@
 #include <stdexcept>
 #include <utility>
 
+#include "weighted_icp/mapping/keyframe_snapshot.h"
+
 namespace weighted_icp::mapping {
 
 namespace {
 
-/// Nodes at the keyframe poses (the first fixed), odometry edges between consecutive keyframes.
-PoseGraph odometryGraph(const frontend::KeyframePoses& keyframes, const OdometryNoiseModel& model) {
+/// Per keyframe (in keyframes.ids order), its pose covariance from tracking, when its landmarks hold it.
+std::vector<std::optional<Covariance6d>> trackingCovariances(const frontend::Map& map,
+                                                             const frontend::KeyframePoses& keyframes,
+                                                             const PinholeCamera& camera,
+                                                             const TrackingInformationOptions& options) {
+  const KeyframeSnapshot snapshot = KeyframeSnapshot::of(map);
+  std::vector<std::optional<Covariance6d>> covariances;
+  for (const frontend::KeyframeId id : keyframes.ids)
+    covariances.push_back(keyframePoseCovariance(snapshot, id, camera, options));
+  return covariances;
+}
+
+/// Nodes at the keyframe poses (the first fixed), odometry edges between consecutive keyframes: information from
+/// tracking where both keyframes have a covariance (and no tracking loss lies between), else the noise model.
+PoseGraph odometryGraph(const frontend::KeyframePoses& keyframes, const LoopClosingOptions& options,
+                        const std::vector<std::optional<Covariance6d>>& covariances) {
   PoseGraph graph;
   for (std::size_t i = 0; i < keyframes.ids.size(); ++i) graph.addNode(keyframes.ids[i], keyframes.poses_wc[i], i == 0);
   for (std::size_t i = 1; i < keyframes.ids.size(); ++i) {
     const Eigen::Isometry3d relative = keyframes.poses_wc[i - 1].inverse() * keyframes.poses_wc[i];
     const bool across_segments = keyframes.segments[i - 1] != keyframes.segments[i];
-    graph.addEdge({keyframes.ids[i - 1], keyframes.ids[i], relative,
-                   odometryInformation(relative, model, across_segments), PoseGraphEdgeKind::Odometry});
+    const bool tracked = !across_segments && i < covariances.size() && covariances[i - 1] && covariances[i];
+    const Information6d information =
+        tracked ? trackedOdometryInformation(keyframes.poses_wc[i - 1], *covariances[i - 1], keyframes.poses_wc[i],
+                                             *covariances[i], options.tracking)
+                : odometryInformation(relative, options.odometry, across_segments);
+    graph.addEdge({keyframes.ids[i - 1], keyframes.ids[i], relative, information, PoseGraphEdgeKind::Odometry});
   }
   return graph;
 }
@@ -125,7 +145,10 @@ void LoopCloser::process(frontend::KeyframeId keyframe) {
 bool LoopCloser::closeLoop(const LoopConstraint& candidate) {
   for (int attempt = 0; attempt <= options_.max_stale_retries; ++attempt) {
     const frontend::KeyframePoses keyframes = map_.keyframePoses();
-    PoseGraph graph = odometryGraph(keyframes, options_.odometry);
+    const std::vector<std::optional<Covariance6d>> covariances =
+        options_.tracking_camera ? trackingCovariances(map_, keyframes, *options_.tracking_camera, options_.tracking)
+                                 : std::vector<std::optional<Covariance6d>>{};
+    PoseGraph graph = odometryGraph(keyframes, options_, covariances);
     const auto known = [&graph](const LoopConstraint& loop) {
       return graph.poses().count(loop.query) && graph.poses().count(loop.match);
     };

@@ -5,11 +5,25 @@
 
 namespace weighted_icp::mapping {
 
+namespace {
+
+/// The loop closer's options, with this run's camera for the odometry information from tracking when asked.
+LoopClosingOptions loopClosingOptions(const PinholeCamera& camera, const LoopClosingSlamOptions& options) {
+  LoopClosingOptions closing = options.loop_closing;
+  if (options.odometry_from_tracking && !closing.tracking_camera) {
+    closing.tracking_camera = camera;
+    closing.tracking_camera->distortion = {};  // keyframe pixels are undistorted
+  }
+  return closing;
+}
+
+}  // namespace
+
 LoopClosingSlam::LoopClosingSlam(const PinholeCamera& camera, LoopDetector detector,
                                  const LoopClosingSlamOptions& options)
     : slam_(camera, options.slam) {
   if (options.loop_closure)
-    loop_closer_ = std::make_unique<LoopCloser>(slam_.map(), std::move(detector), options.loop_closing);
+    loop_closer_ = std::make_unique<LoopCloser>(slam_.map(), std::move(detector), loopClosingOptions(camera, options));
 }
 
 const frontend::FrameRecord& LoopClosingSlam::process(const RgbdFrame& image) {

@@ -13,11 +13,20 @@
 
 #include <pcl/kdtree/kdtree_flann.h>
 
+#include "weighted_icp/core/named_values.h"
 #include "weighted_icp/mapping/binary_vocabulary.h"
 #include "weighted_icp/registration/landmark_alignment.h"
 #include "weighted_icp/registration/landmark_point.h"
 
 namespace weighted_icp::mapping {
+
+std::string toString(LoopEdgeSource source) { return source == LoopEdgeSource::Pnp ? "pnp" : "icp"; }
+
+LoopEdgeSource parseLoopEdgeSource(const std::string& name) {
+  return parseNamedValue(
+      name, {LoopEdgeSource::Pnp, LoopEdgeSource::Icp}, [](LoopEdgeSource s) { return toString(s); },
+      "loop edge source");
+}
 
 namespace {
 
@@ -26,6 +35,7 @@ constexpr double kRadiansToDegrees = 180.0 / 3.14159265358979323846;
 /// Query features matched to landmarks: the 3D point (match map's world frame) and the query's pixel.
 struct Matches {
   std::vector<Eigen::Vector3d> points;
+  std::vector<Eigen::Matrix3d> covariances;  // of the landmarks, world frame
   std::vector<Eigen::Vector2d> pixels;
 };
 
@@ -34,11 +44,13 @@ Matches matchToLandmarks(const frontend::Keyframe& query, const KeyframeSnapshot
                          const LoopVerificationOptions& options) {
   std::vector<BinaryDescriptor> landmark_descriptors;
   std::vector<Eigen::Vector3d> landmark_positions;
+  std::vector<Eigen::Matrix3d> landmark_covariances;
   for (const Landmark& landmark : local.landmarks) {
     const frontend::MapPoint& point = match_map.points.at(landmark.id);
     if (point.descriptor.empty() || !point.position.allFinite()) continue;
     landmark_descriptors.push_back(toBinaryDescriptors(point.descriptor).front());
     landmark_positions.push_back(point.position);
+    landmark_covariances.push_back(point.covariance.allFinite() ? point.covariance : Eigen::Matrix3d::Zero());
   }
   Matches matches;
   const std::vector<BinaryDescriptor> features = toBinaryDescriptors(query.descriptors);
@@ -58,6 +70,7 @@ Matches matchToLandmarks(const frontend::Keyframe& query, const KeyframeSnapshot
     if (best > options.max_hamming_distance) continue;
     if (second != std::numeric_limits<int>::max() && best >= options.ratio * second) continue;
     matches.points.push_back(landmark_positions[best_index]);
+    matches.covariances.push_back(landmark_covariances[best_index]);
     matches.pixels.push_back(query.pixels[f]);
   }
   return matches;
@@ -142,6 +155,39 @@ Eigen::Matrix<double, 6, 6> icpInformation(const LandmarkMap& query_local, const
   return 0.5 * (information + information.transpose());
 }
 
+/// Gauss-Newton Hessian of the PnP inliers' reprojection residuals at X = query_in_match, for the pose graph's
+/// perturbation of a relative pose (translation added in the match camera's frame, rotation vector applied on the
+/// right): with c = X^-1 p the landmark in the query camera, dc = [-R^T, [c]x] (dt, dr). Each residual is whitened
+/// by sigma^2 I (sigma: the inliers' RMS per coordinate, at least min_sigma) plus its landmark's covariance
+/// projected into the image, so a loop seen through poorly triangulated landmarks claims less.
+Eigen::Matrix<double, 6, 6> pnpInformation(const Matches& matches, const std::vector<int>& inliers,
+                                           const Eigen::Isometry3d& query_wc, const Eigen::Isometry3d& match_wc,
+                                           const PinholeCamera& camera, double rms_px, double min_sigma_px) {
+  const Eigen::Isometry3d query_in_match = match_wc.inverse() * query_wc;
+  const Eigen::Matrix3d R = query_in_match.linear();
+  const Eigen::Isometry3d world_to_query = query_wc.inverse();
+  const double sigma = std::max(min_sigma_px, rms_px / std::sqrt(2.0));  // RMS of the 2D error: two coordinates
+  Eigen::Matrix<double, 6, 6> information = Eigen::Matrix<double, 6, 6>::Zero();
+  for (const int i : inliers) {
+    const std::size_t m = static_cast<std::size_t>(i);
+    const Eigen::Vector3d c = world_to_query * matches.points[m];
+    if (!(c.z() > 0.0)) continue;
+    Eigen::Matrix<double, 2, 3> projection;
+    projection << camera.fx / c.z(), 0.0, -camera.fx * c.x() / (c.z() * c.z()), 0.0, camera.fy / c.z(),
+        -camera.fy * c.y() / (c.z() * c.z());
+    Eigen::Matrix<double, 3, 6> dc;
+    dc.leftCols<3>() = -R.transpose();
+    dc.rightCols<3>() = skew(c);
+    const Eigen::Matrix<double, 2, 6> J = projection * dc;
+    const Eigen::Matrix3d point_covariance =
+        world_to_query.linear() * matches.covariances[m] * world_to_query.linear().transpose();
+    const Eigen::Matrix2d pixel_covariance =
+        sigma * sigma * Eigen::Matrix2d::Identity() + projection * point_covariance * projection.transpose();
+    information += J.transpose() * pixel_covariance.inverse() * J;
+  }
+  return 0.5 * (information + information.transpose());
+}
+
 /// The paper's weighted ICP with its refinement stage, from the PnP guess, correspondences limited so that
 /// the parts of the mini-maps without a counterpart do not pull.
 AlignmentResult alignMiniMaps(const LandmarkCloud::Ptr& query_cloud, const LandmarkCloud::Ptr& match_cloud,
@@ -213,6 +259,8 @@ LoopVerifier::LoopVerifier(const PinholeCamera& camera, LoopVerificationOptions 
   if (!fraction(options_.ratio) || !fraction(options_.min_overlap))
     throw std::invalid_argument("LoopVerifier: ratio and min_overlap must be in [0, 1]");
   if (options_.k < 1) throw std::invalid_argument("LoopVerifier: k must be at least 1");
+  if (!positive(options_.min_pixel_sigma_px))
+    throw std::invalid_argument("LoopVerifier: min_pixel_sigma_px must be > 0");
 }
 
 LoopPrior odometryPrior(const KeyframeSnapshot& map, frontend::KeyframeId query, frontend::KeyframeId match,
@@ -290,11 +338,15 @@ LoopVerification LoopVerifier::verify(const KeyframeSnapshot& query_map, fronten
   const Overlap overlap = measureOverlap(*query_cloud, match_cloud, correction, options_.inlier_distance_m);
   result.overlap = overlap.fraction;
   result.constraint.fitness = overlap.fitness;
-  result.constraint.query_in_match = match_wc.inverse() * correction * query_wc;
+  const bool pnp_edge = options_.edge == LoopEdgeSource::Pnp;
+  result.constraint.query_in_match =
+      pnp_edge ? result.pnp_query_in_match : Eigen::Isometry3d(match_wc.inverse() * correction * query_wc);
   if (const std::string why = disagreement(result, options_, prior); !why.empty()) return refuse(why);
 
-  result.constraint.information = icpInformation(query_local, match_local, overlap, query_wc, match_wc, correction,
-                                                 result.constraint.query_in_match);
+  result.constraint.information = pnp_edge ? pnpInformation(matches, pnp.inliers, pnp.pose_wc, match_wc, camera_,
+                                                            pnp.rms_reprojection_px, options_.min_pixel_sigma_px)
+                                           : icpInformation(query_local, match_local, overlap, query_wc, match_wc,
+                                                            correction, result.constraint.query_in_match);
   result.accepted = true;
   return result;
 }

@@ -56,7 +56,7 @@ std::uint64_t subSeed(std::uint64_t seed, Stream stream, std::uint64_t index = 0
 // Texture resolution: 4 mm, a pixel at 2 m. The moving object passes at 1 m, so finer.
 constexpr double kRoomTexelsPerMetre = 250.0, kObjectTexelsPerMetre = 500.0;
 
-const Eigen::Vector3d kRoomSize(6.0, 5.0, 3.0);
+const Eigen::Vector3d kRoomSize(6.0, 5.0, 3.0);  // at room_scale 1
 
 // The repeated texture's tile (perceptual aliasing): a square metre, about what the camera sees of a wall
 // two metres away in a third of the image, so every view holds a few copies of it.
@@ -125,6 +125,8 @@ Eigen::Matrix3d yawRotation(double yaw) { return Eigen::AngleAxisd(yaw, Eigen::V
 }  // namespace
 
 struct SyntheticRgbdSequence::Scene {
+  Eigen::Vector3d room_size = kRoomSize;
+  std::vector<SceneBox> furniture;  // furnitureLayout() with room_scale applied to the floor positions
   FaceTextures room_faces;
   std::vector<FaceTextures> furniture_faces;
   FaceTextures object_faces;
@@ -164,6 +166,13 @@ void validate(const SyntheticRgbdOptions& options) {
   require(options.max_depth * camera.depth_factor <= 65535.0,
           "max_depth * depth_factor must fit the 16-bit depth image (65535)");
   require(options.max_incidence_deg > 0.0 && options.max_incidence_deg <= 90.0, "max_incidence_deg must be in (0, 90]");
+  require(options.room_scale >= 1.0 && options.room_scale <= 4.0, "room_scale must be in [1, 4]");
+  // A focal length off by a fifth or a principal point a sixth of the image away is not a calibration error
+  // but a different camera; the bounds also keep the tracker's camera valid.
+  require(std::abs(options.focal_length_error) <= 0.2, "focal_length_error must be in [-0.2, 0.2]");
+  require(std::abs(options.principal_point_error_x_px) <= camera.width / 6.0 &&
+              std::abs(options.principal_point_error_y_px) <= camera.height / 6.0,
+          "principal_point_error_x_px, _y_px must be within a sixth of the image's width, height");
 }
 
 }  // namespace
@@ -171,7 +180,11 @@ void validate(const SyntheticRgbdOptions& options) {
 SyntheticRgbdSequence::SyntheticRgbdSequence(const SyntheticRgbdOptions& options) : options_(options) {
   validate(options_);
   auto scene = std::make_unique<Scene>();
-  const auto& layout = furnitureLayout();
+  scene->room_size =
+      Eigen::Vector3d(kRoomSize.x() * options_.room_scale, kRoomSize.y() * options_.room_scale, kRoomSize.z());
+  scene->furniture = furnitureLayout();
+  for (SceneBox& box : scene->furniture) box.center.head<2>() *= options_.room_scale;
+  const auto& layout = scene->furniture;
   scene->furniture_faces.resize(layout.size());
   // One job per box, each with its own seed: the result does not depend on threads.
   const int jobs = static_cast<int>(layout.size()) + 2;
@@ -190,7 +203,7 @@ SyntheticRgbdSequence::SyntheticRgbdSequence(const SyntheticRgbdOptions& options
       if (job < static_cast<int>(layout.size()))
         scene->furniture_faces[job] = boxTextures(layout[job].size, subSeed(seed, Stream::RoomTextures, job + 1));
       else if (job == static_cast<int>(layout.size()))
-        scene->room_faces = boxTextures(kRoomSize, subSeed(seed, Stream::RoomTextures, 0));
+        scene->room_faces = boxTextures(scene->room_size, subSeed(seed, Stream::RoomTextures, 0));
       else if (options_.moving_object)
         scene->object_faces =
             makeBoxTextures(kObjectSize, kObjectTexelsPerMetre, subSeed(seed, Stream::ObjectTextures));
@@ -209,8 +222,17 @@ SyntheticRgbdSequence& SyntheticRgbdSequence::operator=(SyntheticRgbdSequence&&)
 
 std::size_t SyntheticRgbdSequence::size() const { return options_.frames; }
 const SyntheticRgbdOptions& SyntheticRgbdSequence::options() const { return options_; }
-Eigen::Vector3d SyntheticRgbdSequence::roomSize() const { return kRoomSize; }
-const std::vector<SceneBox>& SyntheticRgbdSequence::furniture() const { return furnitureLayout(); }
+
+PinholeCamera SyntheticRgbdSequence::trackerCamera() const {
+  PinholeCamera camera = options_.camera;
+  camera.fx *= 1.0 + options_.focal_length_error;
+  camera.fy *= 1.0 + options_.focal_length_error;
+  camera.cx += options_.principal_point_error_x_px;
+  camera.cy += options_.principal_point_error_y_px;
+  return camera;
+}
+Eigen::Vector3d SyntheticRgbdSequence::roomSize() const { return scene_->room_size; }
+const std::vector<SceneBox>& SyntheticRgbdSequence::furniture() const { return scene_->furniture; }
 
 double SyntheticRgbdSequence::timestamp(std::size_t i) const { return static_cast<double>(i) / options_.fps; }
 
@@ -221,13 +243,15 @@ struct PathPoint {
   double heading;  // radians from +x about +z, the direction the camera faces
 };
 
-PathPoint pathPoint(double angle_start, const std::array<double, 6>& phase, double frames_per_loop, std::size_t i) {
+PathPoint pathPoint(double angle_start, const std::array<double, 6>& phase, double frames_per_loop, double room_scale,
+                    std::size_t i) {
   const double frame = static_cast<double>(i);
   const auto wave = [&](double amplitude, double period_frames, double phase_offset) {
     return amplitude * std::sin(2.0 * kPi * frame / period_frames + phase_offset);
   };
   const double angle = angle_start + 2.0 * kPi * frame / frames_per_loop;
-  const Eigen::Vector3d on_ellipse(kPathSemiAxisX * std::cos(angle), kPathSemiAxisY * std::sin(angle), kCameraHeight);
+  const Eigen::Vector3d on_ellipse(room_scale * kPathSemiAxisX * std::cos(angle),
+                                   room_scale * kPathSemiAxisY * std::sin(angle), kCameraHeight);
   const Eigen::Vector3d tremor(wave(0.02, 110.0, phase[3]), wave(0.02, 130.0, phase[4]), wave(0.015, 90.0, phase[5]));
   const double heading = std::atan2(on_ellipse.y(), on_ellipse.x()) + wave(12.0 * kDegree, 300.0, phase[0]);
   return {on_ellipse + tremor, heading};
@@ -237,7 +261,7 @@ PathPoint pathPoint(double angle_start, const std::array<double, 6>& phase, doub
 
 Eigen::Isometry3d SyntheticRgbdSequence::cameraToWorld(std::size_t i) const {
   const auto& phase = scene_->path_phases;
-  const PathPoint point = pathPoint(scene_->path_start_angle, phase, options_.frames_per_loop, i);
+  const PathPoint point = pathPoint(scene_->path_start_angle, phase, options_.frames_per_loop, options_.room_scale, i);
   const double frame = static_cast<double>(i);
   const double tilt_down = (kTiltDownDeg + 4.0 * std::sin(2.0 * kPi * frame / 210.0 + phase[1])) * kDegree;
   const double roll = 2.0 * kDegree * std::sin(2.0 * kPi * frame / 170.0 + phase[2]);
@@ -260,8 +284,8 @@ std::optional<SceneBox> SyntheticRgbdSequence::movingObject(std::size_t i) const
   if (step >= kCrossingFrames) return std::nullopt;
   // A straight line in the world, across the view of the crossing's middle frame.
   const std::size_t middle_frame = kFirstCrossing + crossing * kCrossingPeriod + kCrossingFrames / 2;
-  const PathPoint middle =
-      pathPoint(scene_->path_start_angle, scene_->path_phases, options_.frames_per_loop, middle_frame);
+  const PathPoint middle = pathPoint(scene_->path_start_angle, scene_->path_phases, options_.frames_per_loop,
+                                     options_.room_scale, middle_frame);
   const Eigen::Vector3d forward(std::cos(middle.heading), std::sin(middle.heading), 0.0);
   const Eigen::Vector3d left(-forward.y(), forward.x(), 0.0);
   const double progress = (static_cast<double>(step) + 0.5) / kCrossingFrames;  // (0, 1)
@@ -443,7 +467,8 @@ SyntheticRgbdFrame SyntheticRgbdSequence::frame(std::size_t i) const {
   cv::Mat raw_depth(camera.height, camera.width, CV_16UC1);
   frame.moving_object_mask.create(camera.height, camera.width, CV_8UC1);
 
-  const TexturedBox room{RayBox::centred(Eigen::Vector3d(0.0, 0.0, kRoomSize.z() / 2.0), kRoomSize, 0.0),
+  const Eigen::Vector3d& room_size = scene_->room_size;
+  const TexturedBox room{RayBox::centred(Eigen::Vector3d(0.0, 0.0, room_size.z() / 2.0), room_size, 0.0),
                          &scene_->room_faces, kRoomTexelsPerMetre, true, false};
   std::vector<TexturedBox> boxes;
   for (std::size_t k = 0; k < furniture().size(); ++k)

@@ -19,6 +19,7 @@
 #include "weighted_icp/frontend/slam/map.h"
 #include "weighted_icp/mapping/loop_constraint.h"
 #include "weighted_icp/mapping/pose_graph.h"
+#include "weighted_icp/mapping/tracking_information.h"
 
 namespace weighted_icp::mapping {
 
@@ -34,6 +35,13 @@ struct LoopClosingOptions {
   /// @brief Information of the odometry edges (consecutive keyframes, poses as tracking and bundle adjustment left
   /// them).
   OdometryNoiseModel odometry;
+  /// @brief When set, the odometry edges' information is estimated from tracking (tracking_information.h: each
+  /// keyframe's reprojection Hessian against its landmarks, with the pixels measured by this camera); an edge whose
+  /// keyframes are not held by enough landmarks, or that spans a tracking loss, keeps the noise model. Unset: the
+  /// noise model for every edge. LoopClosingSlam sets it to its camera.
+  std::optional<PinholeCamera> tracking_camera;
+  /// @brief How the tracking estimate is made (with tracking_camera).
+  TrackingInformationOptions tracking;
   /// @brief Solver and loop-consistency gate.
   PoseGraphOptions pose_graph;
   /// @brief Times the optimisation is run again when a correction was applied while it ran (its poses are stale).

@@ -22,6 +22,9 @@ struct LoopClosingSlamOptions {
   LoopClosingOptions loop_closing;
   /// @brief false: no loop closing at all (the detector is never called), as `--no-loop-closure`.
   bool loop_closure = true;
+  /// @brief true: the pose graph's odometry edges take their information from tracking (the camera is given to
+  /// loop_closing.tracking_camera unless one is set there); false: the noise model for every edge.
+  bool odometry_from_tracking = true;
 };
 
 /// @brief frontend::RgbdSlam plus loop closing. Every keyframe goes to the loop closer; the corrections it posts

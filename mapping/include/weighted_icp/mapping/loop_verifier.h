@@ -16,6 +16,24 @@
 
 namespace weighted_icp::mapping {
 
+/// @brief Which of the two measurements of a verified loop becomes its edge.
+enum class LoopEdgeSource {
+  /// PnP's pose from the descriptor matches (true correspondences, pixel-accurate), with the Gauss-Newton
+  /// information of its reprojection residuals; the weighted ICP only checks it. On synthetic loops PnP alone was
+  /// mostly within 0.05-0.3 cm of the truth, the ICP-refined pose 0.1-1.6 cm (its nearest neighbours are not true
+  /// correspondences), so the default.
+  Pnp,
+  /// The weighted ICP's refinement of the PnP pose, with the Hessian of its point-to-point residuals (before
+  /// issue #6's drift work; kept for comparison).
+  Icp
+};
+
+/// @brief "pnp" or "icp", the name parseLoopEdgeSource reads. @param source the edge's source
+std::string toString(LoopEdgeSource source);
+/// @brief The source named "pnp" or "icp". @param name the name
+/// @throws std::invalid_argument "unknown loop edge source '<name>' (expected pnp or icp)"
+LoopEdgeSource parseLoopEdgeSource(const std::string& name);
+
 /// @brief What a loop must show to be accepted.
 struct LoopVerificationOptions {
   /// Keyframes either side of the candidate (same segment) whose landmarks form its local map: what the
@@ -50,6 +68,11 @@ struct LoopVerificationOptions {
   /// geometry disagree.
   double max_icp_correction_m = 0.10;
   double max_icp_correction_deg = 5.0;
+  /// Which pose (and information) the accepted loop carries.
+  LoopEdgeSource edge = LoopEdgeSource::Pnp;
+  /// PnP edge: the pixel noise is taken as the inliers' reprojection RMS, but never below this (pixels per
+  /// coordinate), so a lucky fit does not claim sub-pixel features.
+  double min_pixel_sigma_px = 0.5;
 };
 
 /// @brief What the odometry says of a loop in one session: the relative pose its (drifting) keyframe poses
@@ -121,9 +144,11 @@ class LoopVerifier {
   ///
   /// The query's features are matched to the landmarks of the match's neighbourhood; RANSAC PnP gives the
   /// query camera's pose in the match map's frame; the query's local landmark cloud, moved by it, is aligned
-  /// to the match's by the weighted ICP with refinement. query_in_match is then match_wc^-1 * correction *
-  /// query_wc. The information matrix is the Gauss-Newton Hessian of the ICP's point-to-point residuals at
-  /// the solution, each whitened by both landmarks' covariances (docs/place_recognition.md).
+  /// to the match's by the weighted ICP with refinement, which must agree with PnP. With LoopEdgeSource::Pnp (the
+  /// default) query_in_match is PnP's pose relative to the match keyframe and the information the Gauss-Newton
+  /// Hessian of the inliers' reprojection residuals, each whitened by the pixel noise plus its landmark's projected
+  /// covariance. With LoopEdgeSource::Icp it is match_wc^-1 * correction * query_wc and the Hessian of the ICP's
+  /// point-to-point residuals, whitened by both landmarks' covariances (docs/place_recognition.md).
   /// @param query_map the map holding the query keyframe
   /// @param query its id; unknown throws std::invalid_argument
   /// @param match_map the map holding the candidate

@@ -47,6 +47,12 @@ struct SyntheticRgbdOptions {
   /// (kRepeatedTileMetres square, drawn from the seed) repeated, so distinct places look alike and only
   /// geometry tells them apart. Off: every face has its own texture.
   bool repeated_texture = false;
+  /// A larger room: its floor plan (6 x 5 m), the furniture's places along the walls and the camera's ellipse are
+  /// stretched by this factor (height, furniture sizes and textures stay), so the walls are farther, their depth
+  /// noisier (it grows with the square of the distance) and more of them beyond the sensor's range: a hall rather
+  /// than an office, where odometry drifts more. The path is longer by the same factor, so keep the motion per
+  /// frame by raising frames_per_loop with it. 1: the default room.
+  double room_scale = 1.0;
 
   /// A textured box carried across the view now and then, covering up to
   /// about a fifth of the image while it passes.
@@ -66,6 +72,17 @@ struct SyntheticRgbdOptions {
   double min_depth = 0.4;
   double max_depth = 4.5;
   double max_incidence_deg = 75.0;
+
+  /// Calibration error, the drift of a real camera nobody calibrated: the images are rendered with `camera`,
+  /// but trackerCamera() hands the tracker intrinsics that are off by this much, as a user who takes a
+  /// datasheet's or a driver's default intrinsics has (TUM freiburg 1 against the Kinect default 525 / 319.5 /
+  /// 239.5: focal lengths 1.5 % too long, cy 16 px off). Every 3D point the tracker back-projects is then
+  /// stretched sideways and every bearing bent, so the odometry drifts steadily with the motion, more on turns,
+  /// and no amount of averaging removes it. focal_length_error is relative (0.02: fx and fy believed 2 %
+  /// longer), the offsets in pixels. Zero (the default): the tracker gets `camera` itself.
+  double focal_length_error = 0.0;
+  double principal_point_error_x_px = 0.0;
+  double principal_point_error_y_px = 0.0;
 };
 
 /// @brief An axis-aligned box turned by `yaw` about the vertical axis through its centre.
@@ -99,6 +116,10 @@ class SyntheticRgbdSequence {
   std::size_t size() const;
   /// @brief The options it was made with.
   const SyntheticRgbdOptions& options() const;
+  /// @brief The intrinsics to give the tracker: options().camera with the calibration error applied (fx, fy
+  /// times 1 + focal_length_error, cx, cy moved by the principal-point errors); options().camera itself when
+  /// they are zero. Ground truth (cameraToWorld) is unaffected: it is where the camera really was.
+  PinholeCamera trackerCamera() const;
 
   /// @brief Renders frame i.
   /// @param i 0 <= i < size(), else std::out_of_range
@@ -108,7 +129,7 @@ class SyntheticRgbdSequence {
   /// @brief The timestamp of frame i: i / fps seconds.
   double timestamp(std::size_t i) const;
 
-  /// @brief The room's size: it spans [-x/2, x/2] x [-y/2, y/2] x [0, z].
+  /// @brief The room's size (room_scale applied): it spans [-x/2, x/2] x [-y/2, y/2] x [0, z].
   Eigen::Vector3d roomSize() const;
   /// @brief The furniture standing in the room.
   const std::vector<SceneBox>& furniture() const;

@@ -1,0 +1,100 @@
+// Odometry information from tracking: a keyframe held by fewer landmarks is less certain, and a pose graph whose
+// odometry edges carry that information puts a loop's correction on the weak edge instead of spreading it.
+#include <cmath>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <Eigen/Eigenvalues>
+
+#include "mapping_fixtures.h"
+#include "pose_graph_fixtures.h"
+#include "weighted_icp/mapping/pose_graph.h"
+#include "weighted_icp/mapping/tracking_information.h"
+
+namespace weighted_icp::testing {
+namespace {
+
+using mapping::Covariance6d;
+
+TEST(TrackingInformation, FewerLandmarksGiveALargerCovarianceAndUnknownKeyframesNone) {
+  const SyntheticKeyframes data = syntheticKeyframes(12, false, 180.0, {0, 6});
+  const auto full = mapping::keyframePoseCovariance(data.snapshot, 1, data.camera);
+  ASSERT_TRUE(full.has_value());
+  using Solver = Eigen::SelfAdjointEigenSolver<Covariance6d>;
+  EXPECT_GT(Solver(*full).eigenvalues().minCoeff(), 0.0);
+  EXPECT_LT((*full - full->transpose()).norm(), 1e-9 * full->norm());
+
+  // The same keyframe seeing a quarter of its landmarks: every standard deviation grows.
+  mapping::KeyframeSnapshot thinned = data.snapshot;
+  std::vector<frontend::MapPointId>& observed = thinned.keyframes.at(1).observed_points;
+  std::vector<frontend::MapPointId> kept;
+  for (std::size_t i = 0; i < observed.size(); i += 4) kept.push_back(observed[i]);
+  observed = kept;
+  const auto weak = mapping::keyframePoseCovariance(thinned, 1, data.camera);
+  ASSERT_TRUE(weak.has_value());
+  for (int axis = 0; axis < 6; ++axis) EXPECT_GT((*weak)(axis, axis), (*full)(axis, axis)) << "axis " << axis;
+
+  EXPECT_FALSE(mapping::keyframePoseCovariance(data.snapshot, 99, data.camera).has_value());
+  observed.resize(3);  // below min_observations
+  EXPECT_FALSE(mapping::keyframePoseCovariance(thinned, 1, data.camera).has_value());
+}
+
+/// A circle of 40 keyframes whose odometry is exact but for one step (`bad`), which is 8 cm and 2 degrees off.
+DriftedLoop loopWithOneBadStep(std::size_t bad) {
+  DriftedLoop loop = makeDriftedLoop(40, 2.0, 0.0, 0.0);
+  for (std::size_t i = 0; i < loop.odometry.size(); ++i) loop.odometry[i] = loop.truth[i].inverse() * loop.truth[i + 1];
+  Eigen::Isometry3d error = Eigen::Isometry3d::Identity();
+  error.translation() = Eigen::Vector3d(0.08, 0.0, 0.0);
+  error.linear() = Eigen::AngleAxisd(2.0 * M_PI / 180, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  loop.odometry[bad] = loop.odometry[bad] * error;
+  loop.drifted.resize(1);
+  for (const Eigen::Isometry3d& step : loop.odometry) loop.drifted.push_back(loop.drifted.back() * step);
+  return loop;
+}
+
+TEST(TrackingInformation, ThePoseGraphPutsTheLoopCorrectionOnTheWeaklyTrackedEdge) {
+  const std::size_t bad = 20;
+  const DriftedLoop loop = loopWithOneBadStep(bad);
+  // Keyframes 20 and 21 were tracked poorly (few landmarks): their standard deviations are 1000 times the others'.
+  Covariance6d good = Covariance6d::Identity() * 1e-8;
+  const auto covariance = [&](std::size_t k) { return k == bad || k == bad + 1 ? Covariance6d(good * 1e6) : good; };
+  mapping::PoseGraph tracked, uniform = makeOdometryGraph(loop);
+  for (std::size_t i = 0; i < loop.drifted.size(); ++i) tracked.addNode(i, loop.drifted[i], i == 0);
+  for (std::size_t i = 0; i < loop.odometry.size(); ++i)
+    tracked.addEdge(
+        {i, i + 1, loop.odometry[i],
+         mapping::trackedOdometryInformation(loop.drifted[i], covariance(i), loop.drifted[i + 1], covariance(i + 1)),
+         mapping::PoseGraphEdgeKind::Odometry});
+  for (mapping::PoseGraph* graph : {&tracked, &uniform}) {
+    graph->addEdge(trueLoopEdge(loop, 0, 39));
+    const auto summary = graph->optimize();
+    ASSERT_TRUE(summary.ok) << summary.message;
+    EXPECT_EQ(summary.loops_used, 1u);
+  }
+  const double drifted = rmsPositionError(loop, loop.drifted);
+  const double with_tracking = rmsPositionError(loop, posesOf(tracked));
+  const double with_model = rmsPositionError(loop, posesOf(uniform));
+  ASSERT_GT(drifted, 0.02) << "the fixture must drift for the test to mean anything";
+  // The uniform model spreads the correction round the whole loop; the tracked information puts it on the edge
+  // that was wrong, and the chain either side keeps its (exact) shape.
+  EXPECT_LT(with_tracking, with_model / 3) << "tracking " << with_tracking << " m, model " << with_model << " m";
+  EXPECT_LT(with_tracking, drifted / 5) << "drifted " << drifted << " m";
+}
+
+TEST(TrackingInformation, InflationAndFloorsSetTheEdgeStandardDeviations) {
+  Eigen::Isometry3d a = Eigen::Isometry3d::Identity(), b = Eigen::Isometry3d::Identity();
+  b.translation() = Eigen::Vector3d(0.1, 0.0, 0.0);
+  mapping::TrackingInformationOptions options;
+  options.covariance_inflation = 4.0;
+  options.translation_floor_m = 0.001;
+  options.rotation_floor_rad = 0.0;
+  const Covariance6d each = Covariance6d::Identity() * 1e-6;  // 1 mm, 1 mrad
+  const auto information = mapping::trackedOdometryInformation(a, each, b, each, options);
+  // Along the step (x) the rotation of `a` does not move b: variance 4 * (1 + 1) mm^2 + the floor's 1 mm^2.
+  EXPECT_NEAR(information.inverse()(0, 0), 9e-6, 1e-10);
+  // About any axis: 4 * (1 + 1) mrad^2.
+  EXPECT_NEAR(information.inverse()(5, 5), 8e-6, 1e-9);
+}
+
+}  // namespace
+}  // namespace weighted_icp::testing
