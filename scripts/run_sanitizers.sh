@@ -19,6 +19,11 @@
 #     ceres::GradientChecker::ProbeResults reports a heap-buffer-overflow under
 #     ASan: Eigen switches allocators under ASan in our code while Debian's
 #     Ceres was built without it, so memory crosses the two. Not our bug.
+#   tools.install_consumer
+#     tests the installed package, not memory or behaviour: it installs the
+#     build tree, which needs every installed tool built, while this script
+#     builds only the test programs and the tools they run (it failed on the
+#     missing wicp_global_sweep); its consumer is built without sanitizers.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 sanitizers="${1:-address,undefined}"
@@ -53,4 +58,4 @@ export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
 export TSAN_OPTIONS="suppressions=$root/scripts/tsan.supp:halt_on_error=1:second_deadlock_stack=1"
 cmake --build "$build" -j "$(nproc)" --target "${targets[@]}"
 ctest --test-dir "$build" -j "$(nproc)" --output-on-failure --timeout 900 -R "^($regex)\\." \
-  -E 'AnalyticJacobiansMatchNumericDifferentiation'
+  -E 'AnalyticJacobiansMatchNumericDifferentiation|^tools\.install_consumer$'
