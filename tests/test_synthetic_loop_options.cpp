@@ -12,6 +12,18 @@
 namespace weighted_icp::simulation {
 namespace {
 
+/// Two frames of 160 x 120 pixels: enough to compare images and cameras, quick to render.
+SyntheticRgbdOptions twoSmallFrames() {
+  SyntheticRgbdOptions options;
+  options.frames = 2;
+  options.camera.width = 160;
+  options.camera.height = 120;
+  options.camera.fx = options.camera.fy = 130.0;
+  options.camera.cx = 80.0;
+  options.camera.cy = 60.0;
+  return options;
+}
+
 TEST(SyntheticLoopOptions, FramesPerLoopBringsTheCameraBack) {
   SyntheticRgbdOptions options;
   options.frames = 400;
@@ -30,13 +42,7 @@ TEST(SyntheticLoopOptions, FramesPerLoopBringsTheCameraBack) {
 }
 
 TEST(SyntheticLoopOptions, RepeatedTextureChangesImagesNotPoses) {
-  SyntheticRgbdOptions options;
-  options.frames = 2;
-  options.camera.width = 160;
-  options.camera.height = 120;
-  options.camera.fx = options.camera.fy = 130.0;
-  options.camera.cx = 80.0;
-  options.camera.cy = 60.0;
+  SyntheticRgbdOptions options = twoSmallFrames();
   const SyntheticRgbdFrame plain = SyntheticRgbdSequence(options).frame(1);
   options.repeated_texture = true;
   const SyntheticRgbdFrame aliased = SyntheticRgbdSequence(options).frame(1);
@@ -47,13 +53,7 @@ TEST(SyntheticLoopOptions, RepeatedTextureChangesImagesNotPoses) {
 }
 
 TEST(SyntheticLoopOptions, CalibrationErrorChangesTheTrackersCameraNotTheImages) {
-  SyntheticRgbdOptions options;
-  options.frames = 2;
-  options.camera.width = 160;
-  options.camera.height = 120;
-  options.camera.fx = options.camera.fy = 130.0;
-  options.camera.cx = 80.0;
-  options.camera.cy = 60.0;
+  SyntheticRgbdOptions options = twoSmallFrames();
   const SyntheticRgbdSequence calibrated(options);
   const PinholeCamera exact = calibrated.trackerCamera();
   EXPECT_EQ(exact.fx, options.camera.fx);
