@@ -1,6 +1,7 @@
 // Loop closing: map corrections move keyframes and landmarks together, the loop closer corrects a drifted map,
 // the background thread agrees with the inline mode, and errors are carried out.
 #include <atomic>
+#include <random>
 #include <stdexcept>
 
 #include <gtest/gtest.h>
@@ -148,6 +149,97 @@ TEST(LoopCloser, CorrectsTheDriftedMapRefusesTheWrongLoopAndTheThreadAgreesWithI
   ASSERT_EQ(background_poses.size(), inline_poses.size());
   for (std::size_t i = 0; i < inline_poses.size(); ++i)
     EXPECT_LT((background_poses[i].translation() - inline_poses[i].translation()).norm(), 1e-6) << "keyframe " << i;
+}
+
+TEST(MapCorrection, OdometryPosesUndoEveryCorrectionAndLaterKeyframesFollowTheOneTheyWereTrackedFrom) {
+  Map map;
+  for (int i = 0; i < 3; ++i) {
+    frontend::Keyframe keyframe;
+    keyframe.pose_wc.translation() = Eigen::Vector3d(i, 0, 0);
+    map.addKeyframe(keyframe);
+  }
+  Eigen::Isometry3d bend = Eigen::Isometry3d::Identity();
+  bend.linear() = Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  bend.translation() = Eigen::Vector3d(0.2, -0.1, 0.5);
+  frontend::PoseGraphCorrection correction;
+  correction.delta_wc = {{0, Eigen::Isometry3d::Identity()}, {1, bend}};  // keyframe 2 follows 1
+  ASSERT_TRUE(map.postCorrection(correction));
+  map.applyPendingCorrection(2);
+  // Tracked after the correction, from keyframe 2 as it now is: one metre further on.
+  frontend::Keyframe later;
+  later.pose_wc = *map.keyframePose(2) * Eigen::Translation3d(1, 0, 0);
+  map.addKeyframe(later);
+  correction.base_corrections = map.corrections();
+  correction.delta_wc = {{0, Eigen::Isometry3d::Identity()}, {1, Eigen::Isometry3d::Identity()}, {2, bend}};
+  ASSERT_TRUE(map.postCorrection(correction));
+  map.applyPendingCorrection(3);
+
+  const frontend::KeyframePoses poses = map.keyframePoses();
+  ASSERT_EQ(poses.odometry_wc.size(), 4u);
+  EXPECT_FALSE((poses.poses_wc[0].inverse() * poses.poses_wc[1]).translation().isApprox(Eigen::Vector3d(1, 0, 0)))
+      << "the corrections bent the map";
+  for (std::size_t i = 1; i < 4; ++i) {
+    const Eigen::Isometry3d measured = poses.odometry_wc[i - 1].inverse() * poses.odometry_wc[i];
+    EXPECT_TRUE(measured.translation().isApprox(Eigen::Vector3d(1, 0, 0), 1e-12)) << "keyframe " << i;
+    EXPECT_TRUE(measured.linear().isApprox(Eigen::Matrix3d::Identity(), 1e-12)) << "keyframe " << i;
+  }
+}
+
+/// Loops from each of the last `count` keyframes to the first ones, each measured with its own error of about a
+/// centimetre and half a degree, as PnP edges are: they disagree with one another more than the odometry does.
+std::vector<mapping::LoopConstraint> noisyLoops(const DriftedLoop& loop, std::size_t count) {
+  std::mt19937 rng(11);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  std::vector<mapping::LoopConstraint> loops;
+  const std::size_t n = loop.truth.size();
+  for (std::size_t query = n - count; query < n; ++query) {
+    const Eigen::Vector3d t(gauss(rng), gauss(rng), gauss(rng)), r(gauss(rng), gauss(rng), gauss(rng));
+    Eigen::Isometry3d error(Eigen::AngleAxisd(0.01 * r.norm(), r.normalized()));
+    error.translation() = 0.01 * t;
+    mapping::PoseGraphEdge edge = trueLoopEdge(loop, query - (n - count), query, error);
+    mapping::LoopConstraint constraint;
+    constraint.query = edge.to;
+    constraint.match = edge.from;
+    constraint.query_in_match = edge.to_in_from;
+    constraint.information = edge.information;
+    loops.push_back(constraint);
+  }
+  return loops;
+}
+
+TEST(LoopCloser, LoopsClosedOneAtATimeEndWhereOneOptimisationOfAllOfThemOverTheOdometryDoes) {
+  const DriftedLoop loop = makeDriftedLoop(60, 3.0, 0.1, 0.005);
+  const std::vector<mapping::LoopConstraint> loops = noisyLoops(loop, 8);
+  Map map;
+  mapping::LoopClosingOptions options;
+  options.background_thread = false;
+  mapping::LoopCloser closer(
+      map,
+      [&loops](const Map&, KeyframeId query) -> std::optional<mapping::LoopConstraint> {
+        for (const mapping::LoopConstraint& constraint : loops)
+          if (constraint.query == query) return constraint;
+        return std::nullopt;
+      },
+      options);
+  for (std::size_t i = 0; i < loop.drifted.size(); ++i) {
+    map.applyPendingCorrection(i);
+    frontend::Keyframe keyframe;  // tracked from the previous keyframe as the map now has it
+    keyframe.pose_wc = i == 0 ? loop.drifted[0] : *map.keyframePose(i - 1) * loop.odometry[i - 1];
+    map.addKeyframe(keyframe);
+    closer.keyframeInserted(i);
+  }
+  map.applyPendingCorrection(0);
+  ASSERT_EQ(closer.stats().loops_accepted, loops.size());
+
+  mapping::PoseGraph batch = makeOdometryGraph(loop);
+  for (const mapping::LoopConstraint& constraint : loops) batch.addEdge(mapping::loopEdge(constraint));
+  ASSERT_TRUE(batch.optimize().ok);
+  const std::vector<Eigen::Isometry3d> expected = posesOf(batch);
+  const std::vector<Eigen::Isometry3d> incremental = map.keyframePoses().poses_wc;
+  ASSERT_EQ(incremental.size(), expected.size());
+  // Edges read from the corrected map instead would keep each earlier loop's error: centimetres off.
+  for (std::size_t i = 0; i < expected.size(); ++i)
+    EXPECT_LT((incremental[i].translation() - expected[i].translation()).norm(), 1e-4) << "keyframe " << i;
 }
 
 TEST(LoopCloser, ADetectorErrorIsCarriedOutAndTheThreadStopsCleanly) {

@@ -24,18 +24,22 @@ std::vector<std::optional<Covariance6d>> trackingCovariances(const frontend::Map
 
 /// Nodes at the keyframe poses (the first fixed), odometry edges between consecutive keyframes: information from
 /// tracking where both keyframes have a covariance (and no tracking loss lies between), else the noise model.
+/// The edges' relative poses are the odometry's (corrections undone), not the corrected map's: the map as earlier
+/// corrections left it is bent by their loop edges' errors, and edges read from it would freeze those errors in.
 PoseGraph odometryGraph(const frontend::KeyframePoses& keyframes, const LoopClosingOptions& options,
                         const std::vector<std::optional<Covariance6d>>& covariances) {
   PoseGraph graph;
   for (std::size_t i = 0; i < keyframes.ids.size(); ++i) graph.addNode(keyframes.ids[i], keyframes.poses_wc[i], i == 0);
+  const std::vector<Eigen::Isometry3d>& measured =
+      keyframes.odometry_wc.size() == keyframes.ids.size() ? keyframes.odometry_wc : keyframes.poses_wc;
   for (std::size_t i = 1; i < keyframes.ids.size(); ++i) {
-    const Eigen::Isometry3d relative = keyframes.poses_wc[i - 1].inverse() * keyframes.poses_wc[i];
+    const Eigen::Isometry3d relative = measured[i - 1].inverse() * measured[i];
     const bool across_segments = keyframes.segments[i - 1] != keyframes.segments[i];
     const bool tracked = !across_segments && i < covariances.size() && covariances[i - 1] && covariances[i];
-    const Information6d information =
-        tracked ? trackedOdometryInformation(keyframes.poses_wc[i - 1], *covariances[i - 1], keyframes.poses_wc[i],
-                                             *covariances[i], options.tracking)
-                : odometryInformation(relative, options.odometry, across_segments);
+    const Information6d information = tracked
+                                          ? trackedOdometryInformation(measured[i - 1], *covariances[i - 1],
+                                                                       measured[i], *covariances[i], options.tracking)
+                                          : odometryInformation(relative, options.odometry, across_segments);
     graph.addEdge({keyframes.ids[i - 1], keyframes.ids[i], relative, information, PoseGraphEdgeKind::Odometry});
   }
   return graph;

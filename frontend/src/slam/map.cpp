@@ -14,6 +14,8 @@ KeyframeId Map::addKeyframe(Keyframe keyframe) {
   keyframe.id = next_keyframe_id_++;
   keyframe.observed_points.clear();
   const KeyframeId id = keyframe.id;
+  // A new keyframe is tracked from the newest one, in the frame the corrections so far have put it in.
+  corrected_by_[id] = corrected_by_.empty() ? Eigen::Isometry3d::Identity() : corrected_by_.rbegin()->second;
   keyframes_.emplace(id, std::move(keyframe));
   return id;
 }
@@ -148,6 +150,7 @@ KeyframePoses Map::keyframePoses() const {
     poses.ids.push_back(id);
     poses.poses_wc.push_back(keyframe.pose_wc);
     poses.segments.push_back(keyframe.segment);
+    poses.odometry_wc.push_back(corrected_by_.at(id).inverse() * keyframe.pose_wc);
   }
   return poses;
 }
@@ -182,7 +185,11 @@ std::optional<Eigen::Isometry3d> Map::applyPendingCorrection(KeyframeId follow) 
   pending_correction_.reset();
   ++revision_;
   ++corrections_;
-  for (auto& [id, keyframe] : keyframes_) keyframe.pose_wc = deltaOf(correction, id) * keyframe.pose_wc;
+  for (auto& [id, keyframe] : keyframes_) {
+    const Eigen::Isometry3d delta = deltaOf(correction, id);
+    keyframe.pose_wc = delta * keyframe.pose_wc;
+    corrected_by_[id] = delta * corrected_by_[id];
+  }
   for (auto& [id, point] : points_) {
     if (point.observations.empty()) continue;
     KeyframeId reference = point.observations.front().keyframe;

@@ -39,6 +39,12 @@ struct KeyframePoses {
   std::vector<KeyframeId> ids;    // ascending
   std::vector<Eigen::Isometry3d> poses_wc;
   std::vector<std::size_t> segments;
+  /// The same poses with every pose-graph correction undone (C_k^-1 * pose_wc, C_k the corrections applied to
+  /// keyframe k, or to the keyframe it was tracked from when it came later): what tracking and bundle adjustment
+  /// measured. Relative poses of neighbours taken from these are odometry; taken from poses_wc they would carry
+  /// the bends that earlier loop corrections put into the map, and a pose graph reading them would keep every
+  /// earlier loop edge's error as if it were measured.
+  std::vector<Eigen::Isometry3d> odometry_wc;
 };
 
 /// @brief A pose-graph correction: per keyframe, the world-frame motion that
@@ -118,6 +124,8 @@ class Map {
   std::uint64_t revision_ = 0;
   std::uint64_t corrections_ = 0;
   std::optional<PoseGraphCorrection> pending_correction_;
+  /// Per keyframe, the world-frame motion all applied corrections gave it (KeyframePoses::odometry_wc).
+  std::map<KeyframeId, Eigen::Isometry3d> corrected_by_;
   KeyframeId next_keyframe_id_ = 0;
   MapPointId next_point_id_ = 0;
 };
