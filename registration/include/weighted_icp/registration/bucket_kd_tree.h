@@ -5,8 +5,9 @@
 // correspondence search asks for k + 1 = 6 or 4(k + 1) = 24 neighbours of
 // queries that are themselves spatially coherent, on clouds of 3k to 1M
 // points. Here the points are copied in the order of the leaves, so a leaf is
-// one contiguous run of xyz (no per-point indirection through a row table),
-// every split is the median of the widest axis (balanced depth whatever the
+// one contiguous run of coordinates (no per-point indirection through a row table),
+// (one array per axis, so that a leaf's distances are computed as one
+// vectorised loop), every split is the median of the widest axis (balanced depth whatever the
 // density, and it terminates on any number of duplicates), and the search
 // keeps per-axis squared gaps to the cell, as Arya and Mount's incremental
 // distance does.
@@ -33,11 +34,13 @@ class BucketKdTree {
   using Row = std::uint32_t;
   /// Points per leaf (at most): measured on the real map's halves against 6, 12 and 24 (docs/performance.md).
   static constexpr std::size_t kDefaultLeafSize = 12;
+  /// Largest leaf size build() accepts (larger ones are clamped to it).
+  static constexpr std::size_t kMaxLeafSize = 64;
 
   /// @brief Builds on `n` points given as packed xyz (copied: the tree does not keep `xyz`).
   /// @param xyz        3n floats, finite
   /// @param n          number of points (< 2^32)
-  /// @param leaf_size  most points per leaf (>= 1)
+  /// @param leaf_size  most points per leaf (clamped to 1 .. kMaxLeafSize)
   void build(const float* xyz, std::size_t n, std::size_t leaf_size = kDefaultLeafSize);
 
   /// @brief Points indexed.
@@ -70,6 +73,7 @@ class BucketKdTree {
     std::uint32_t axis = 0;
   };
   struct Nearest;
+  struct NearestMany;
   struct Within;
 
   void split(std::uint32_t node, std::vector<Row>& order, const float* xyz, std::size_t leaf_size);
@@ -78,8 +82,8 @@ class BucketKdTree {
   bool descend(std::uint32_t node, const float* query, float* gaps, Result& result) const;
 
   std::vector<Node> nodes_;
-  std::vector<float> points_;  // xyz in leaf order
-  std::vector<Row> rows_;      // leaf order -> row
+  std::vector<float> xs_, ys_, zs_;  // coordinates in leaf order, one array per axis
+  std::vector<Row> rows_;            // leaf order -> row
 };
 
 }  // namespace weighted_icp
