@@ -1,4 +1,4 @@
-// NearestNeighborIndex: nanoflann for the search, FLANN (PCL's tree) for the order of ties.
+// NearestNeighborIndex: BucketKdTree for the search, FLANN (PCL's tree) for the order of ties.
 #include "weighted_icp/registration/nearest_neighbor_index.h"
 
 #include <algorithm>
@@ -9,56 +9,20 @@
 #include <flann/algorithms/dist.h>
 #include <flann/algorithms/kdtree_single_index.h>
 #include <flann/util/result_set.h>
-#include <nanoflann.hpp>
+
+#include "weighted_icp/registration/bucket_kd_tree.h"
 
 namespace weighted_icp {
 
 namespace {
 
-/// nanoflann's view of the index's packed xyz.
-struct PackedXyz {
-  const std::vector<float>* xyz;
-  std::size_t kdtree_get_point_count() const { return xyz->size() / 3; }
-  float kdtree_get_pt(std::size_t row, std::size_t dim) const { return (*xyz)[3 * row + dim]; }
-  template <class Box>
-  bool kdtree_get_bbox(Box&) const {
-    return false;
-  }
-};
-
-using NanoTree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<float, PackedXyz, float>, PackedXyz,
-                                                     3, NearestNeighborIndex::Row>;
 using FlannTree = flann::KDTreeSingleIndex<flann::L2_Simple<float>>;
-
-/// Collects every row within a radius, straight into the caller's vector.
-class GatherResultSet {
- public:
-  GatherResultSet(float radius_sq, std::size_t limit, std::vector<NearestNeighborIndex::Row>& rows)
-      : radius_sq_(radius_sq), limit_(limit), rows_(rows) {}
-  bool full() const { return true; }
-  float worstDist() const { return radius_sq_; }
-  /// false stops the search: more than the limit.
-  bool addPoint(float distance, NearestNeighborIndex::Row row) {
-    if (distance <= radius_sq_) rows_.push_back(row);
-    return rows_.size() <= limit_;
-  }
-
- private:
-  float radius_sq_;
-  std::size_t limit_;
-  std::vector<NearestNeighborIndex::Row>& rows_;
-};
-
-/// Leaf size of the nanoflann tree: its default (not tuned; any size gives the same answers).
-constexpr std::size_t kNanoLeafSize = 10;
 
 }  // namespace
 
 struct NearestNeighborIndex::Trees {
-  explicit Trees(const std::vector<float>& xyz)
-      : packed{&xyz}, nano(3, packed, nanoflann::KDTreeSingleIndexAdaptorParams(kNanoLeafSize)) {}
-  PackedXyz packed;
-  NanoTree nano;
+  explicit Trees(const std::vector<float>& xyz) { tree.build(xyz.data(), xyz.size() / 3); }
+  BucketKdTree tree;  // holds its own copy of the points, in leaf order
   // Built on the first tie, under the mutex; read lock-free once published.
   std::mutex flann_mutex;
   std::unique_ptr<FlannTree> flann_storage;
@@ -87,8 +51,7 @@ NearestNeighborIndex& NearestNeighborIndex::operator=(NearestNeighborIndex other
   std::swap(xyz_, other.xyz_);
   std::swap(cloud_indices_, other.cloud_indices_);
   std::swap(trees_, other.trees_);
-  // Swapping vectors keeps their buffers, so each tree still reads the points it was built on.
-  if (trees_) trees_->packed.xyz = &xyz_;
+  // Swapping vectors keeps their buffers, so FLANN's tree (built on xyz_ when a tie needs it) still reads them.
   return *this;
 }
 
@@ -147,10 +110,7 @@ std::size_t NearestNeighborIndex::resolve(const float* xyz, const Row* rows, con
 
 std::size_t NearestNeighborIndex::nearest(const float* xyz, std::size_t count, Row* rows, float* distances) const {
   if (!trees_ || count == 0) return 0;
-  nanoflann::KNNResultSet<float, Row> result(std::min(count, size()));
-  result.init(rows, distances);
-  trees_->nano.findNeighbors(result, xyz, nanoflann::SearchParams());
-  return result.size();
+  return trees_->tree.nearest(xyz, count, rows, distances);
 }
 
 std::size_t NearestNeighborIndex::knn(const float* xyz, Scratch& scratch) const {
@@ -162,9 +122,7 @@ std::size_t NearestNeighborIndex::knn(const float* xyz, Scratch& scratch) const 
 
 bool NearestNeighborIndex::gather(const float* xyz, float radius_sq, std::size_t limit, std::vector<Row>& rows) const {
   if (!trees_) return true;
-  GatherResultSet result(radius_sq, limit, rows);
-  trees_->nano.findNeighbors(result, xyz, nanoflann::SearchParams());
-  return rows.size() <= limit;
+  return trees_->tree.within(xyz, radius_sq, limit, rows);
 }
 
 }  // namespace weighted_icp

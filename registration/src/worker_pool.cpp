@@ -35,15 +35,17 @@ void WorkerPool::run(std::size_t n, std::size_t chunk, unsigned threads, const B
     n_ = n;
     chunk_ = chunk;
     next_ = 0;
+    running_ = 0;
     error_ = nullptr;
     active_ = helpers;
-    finished_ = 0;
     ++generation_;
   }
   wake_.notify_all();
   drain(0);
+  // Done when every chunk is claimed and none is running: a helper the machine has not scheduled yet has
+  // nothing to finish, so the caller never waits for it to wake.
   std::unique_lock<std::mutex> lock(mutex_);
-  done_.wait(lock, [this] { return finished_ == active_; });
+  done_.wait(lock, [this] { return next_ >= n_ && running_ == 0; });
   body_ = nullptr;
   active_ = 0;
   if (error_) std::rethrow_exception(std::exchange(error_, nullptr));
@@ -51,19 +53,34 @@ void WorkerPool::run(std::size_t n, std::size_t chunk, unsigned threads, const B
 
 void WorkerPool::drain(unsigned worker) {
   for (;;) {
-    std::size_t begin;
+    std::size_t begin, end;
+    const Body* body;
     {
       std::lock_guard<std::mutex> lock(mutex_);
-      if (next_ >= n_ || error_) return;
+      // A helper woken after its run ended, or not among this run's helpers, takes nothing.
+      if (next_ >= n_ || (worker != 0 && worker > active_)) return;
       begin = next_;
-      next_ += chunk_;
+      end = std::min(n_, begin + chunk_);
+      next_ = end;
+      ++running_;
+      body = body_;
     }
+    bool failed = false;
     try {
-      (*body_)(begin, std::min(n_, begin + chunk_), worker);
+      (*body)(begin, end, worker);
     } catch (...) {
       std::lock_guard<std::mutex> lock(mutex_);
       if (!error_) error_ = std::current_exception();
+      failed = true;
     }
+    bool finished;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (failed) next_ = n_;  // skip the remaining chunks
+      --running_;
+      finished = next_ >= n_ && running_ == 0;
+    }
+    if (finished) done_.notify_one();
   }
 }
 
@@ -72,16 +89,11 @@ void WorkerPool::workerLoop(unsigned worker) {
   for (;;) {
     {
       std::unique_lock<std::mutex> lock(mutex_);
-      wake_.wait(lock, [&] { return stopping_ || (generation_ != seen && worker <= active_); });
+      wake_.wait(lock, [&] { return stopping_ || generation_ != seen; });
       if (stopping_) return;
       seen = generation_;
     }
     drain(worker);
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      ++finished_;
-    }
-    done_.notify_one();
   }
 }
 

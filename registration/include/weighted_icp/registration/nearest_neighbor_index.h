@@ -4,8 +4,8 @@
 // pcl::KdTreeFLANN (FLANN's single kd-tree, 15 points per leaf, float L2)
 // defines the answer: the k nearest in order, float squared distances, and
 // among equal distances the order in which FLANN's traversal met them. The
-// search itself runs on nanoflann's kd-tree, about twice as fast per query
-// (docs/performance.md), asking for k + 1 neighbours: when the k + 1 nearest
+// search itself runs on our BucketKdTree (faster per query than FLANN's and
+// than nanoflann's, which it replaced; docs/performance.md), asking for k + 1 neighbours: when the k + 1 nearest
 // distances are all different, the k nearest and their order are determined
 // by the distances alone, so any exact index gives FLANN's answer; when two of
 // them are equal, the order is FLANN's traversal order, and the query is
@@ -80,7 +80,7 @@ class NearestNeighborIndex {
   template <typename PointT>
   static void requireIndexable(const pcl::PointCloud<PointT>& cloud, const std::string& what);
 
-  /// @brief The squared distance as FLANN's and nanoflann's L2_Simple<float> compute it, term by term in float.
+  /// @brief The squared distance as FLANN's L2_Simple<float> (and BucketKdTree) compute it, term by term in float.
   /// @param a, b  two xyz triples
   static float squaredDistance(const float* a, const float* b) {
     const float d0 = a[0] - b[0];

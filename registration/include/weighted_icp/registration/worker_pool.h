@@ -6,7 +6,9 @@
 // started per call (docs/performance.md): workers here block on a condition
 // variable between loops (a passive wait) and take chunks of the loop from a
 // shared counter, so a thread the machine delays leaves its chunks to the
-// others. Which thread runs a chunk never changes a result when each index
+// others. A run ends when its last chunk does: the caller never waits for a
+// helper that has not been scheduled yet (on a loaded machine that wait was
+// longer than the loop). Which thread runs a chunk never changes a result when each index
 // writes only its own output slot, as every caller does.
 
 #include <condition_variable>
@@ -52,8 +54,8 @@ class WorkerPool {
   std::vector<std::thread> workers_;
   bool stopping_ = false;
   unsigned long generation_ = 0;  // one per run(); workers wake when it changes
-  unsigned active_ = 0;           // workers taking part in the current run
-  unsigned finished_ = 0;         // of those, how many have drained
+  unsigned active_ = 0;           // helpers that may take part in the current run (ids 1 .. active_)
+  std::size_t running_ = 0;       // chunks claimed and not yet finished
   // The current loop, valid while a run() is in progress.
   const Body* body_ = nullptr;
   std::size_t n_ = 0;

@@ -52,14 +52,17 @@ inline std::size_t scratchSize(unsigned int k, const NearestNeighborIndex& index
   return std::max<std::size_t>(1, std::min<std::size_t>(k, index.size()));
 }
 
-/// Source points per chunk of the parallel loop: small enough to balance two threads on a loaded machine,
-/// large enough that claiming a chunk costs nothing in comparison.
-constexpr std::size_t kChunk = 256;
+/// Source points per chunk of the parallel loop: small enough that a thread the machine preempts in the
+/// middle of a chunk holds up little of the loop (256 was measured slower at 2 threads on a loaded machine),
+/// large enough that claiming a chunk (a mutex) costs nothing in comparison.
+constexpr std::size_t kChunk = 64;
+/// Loops this short run on one thread: waking a thread costs more than it saves.
+constexpr std::size_t kMinParallel = 512;
 
 /// Threads for a loop of `n` queries: `requested` (0: every hardware thread), one for short loops, where
 /// waking a thread costs more than it saves.
 inline unsigned threadsFor(unsigned int requested, std::size_t n) {
-  if (n <= 2 * kChunk) return 1;
+  if (n <= kMinParallel) return 1;
   if (requested > 0) return requested;
   const unsigned int hardware = std::thread::hardware_concurrency();
   return hardware > 0 ? hardware : 1;
