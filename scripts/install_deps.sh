@@ -9,7 +9,7 @@ packages=(
   libopencv-dev libopencv-contrib-dev opencv-data libceres-dev
   libgtest-dev libbenchmark-dev
   python3-matplotlib python3-numpy
-  libnanoflann-dev pybind11-dev python3-pybind11 python3-pytest python3-mypy python3-open3d
+  pybind11-dev python3-pybind11 python3-pytest python3-mypy python3-open3d
   python3-dev python3-pil
   clang libclang-rt-14-dev libomp-14-dev  # clang-14 and libFuzzer (fuzz/); OpenMP for clang builds
 )
