@@ -1,10 +1,18 @@
 // The Backend on its own, on a hand-made map of three keyframes with noisy
 // observations of known points: inline and background threads agree, flush
-// and the destructor leave no work behind, outliers leave the map, and every
-// request is counted.
+// and the destructor leave no work behind, outliers leave the map, every
+// request is counted, and an optimisation that throws (made to through
+// BackendOptions::solver) reaches tracking and stops the thread cleanly.
 
+#include <atomic>
 #include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <future>
+#include <memory>
 #include <random>
+#include <stdexcept>
+#include <string>
 #include <thread>
 #include <vector>
 
@@ -191,3 +199,146 @@ TEST(Backend, OptionsThatCouldNeverOptimiseAreRefused) {
         << e.what();
   }
 }
+
+namespace {
+
+const std::string kInjectedError = "injected: the solver ran out of memory";
+
+/// Calls `call` in its own thread and aborts the test program, naming the call, if it has not returned after two
+/// minutes: a deadlock would otherwise hang the suite until ctest's timeout without saying where. Not a speed check:
+/// the calls take milliseconds, the bound leaves room for sanitizer builds. Rethrows what `call` threw.
+template <typename Call>
+void returnsWithoutDeadlock(const char* what, Call call) {
+  std::future<void> done = std::async(std::launch::async, call);
+  if (done.wait_for(std::chrono::minutes(2)) == std::future_status::timeout) {
+    std::fprintf(stderr, "%s did not return within two minutes: deadlock\n", what);
+    std::abort();
+  }
+  done.get();
+}
+
+/// What `call` threw as std::runtime_error, or "" when it returned.
+template <typename Call>
+std::string errorOf(const char* what, Call call) {
+  try {
+    returnsWithoutDeadlock(what, call);
+  } catch (const std::runtime_error& error) {
+    return error.what();
+  }
+  return "";
+}
+
+/// A solver that runs the real bundle adjustment `good_calls` times and then throws kInjectedError; counts its calls.
+BundleAdjustmentSolver failingAfter(int good_calls, std::atomic<int>& calls) {
+  return [good_calls, &calls](BundleAdjustmentProblem& problem, const PinholeCamera& camera,
+                              const BundleAdjustmentOptions& options) {
+    if (++calls > good_calls) throw std::runtime_error(kInjectedError);
+    return solveLocalBundleAdjustment(problem, camera, options);
+  };
+}
+
+// The failing optimisation's exception reaches the tracking thread with its message through the next call (inline:
+// keyframeInserted itself; background: flush), is not lost afterwards (every later call reports it, as LoopCloser
+// does), leaves the map as the last good optimisation did, stops all further optimisation, and the destructor
+// returns. Every call runs under a deadlock guard.
+TEST(Backend, AnOptimisationErrorReachesTrackingAndTheBackendStopsCleanly) {
+  const Scene scene = makeScene();
+  for (const bool background : {false, true}) {
+    SCOPED_TRACE(background ? "background thread" : "inline");
+    Map map;
+    fillMap(map, scene);
+    std::atomic<int> calls{0};
+    BackendOptions options;
+    options.background_thread = background;
+    options.solver = failingAfter(1, calls);
+    auto backend = std::make_unique<Backend>(map, scene.camera, options);
+    returnsWithoutDeadlock("the good optimisation", [&] {
+      backend->keyframeInserted();
+      backend->flush();
+    });
+    ASSERT_EQ(backend->optimizationsRun(), 1u);
+    const std::uint64_t revision = map.revision();
+
+    // Inline, the request itself fails; in the background it returns and the error waits for the next call.
+    const std::string from_request = errorOf("keyframeInserted", [&] { backend->keyframeInserted(); });
+    const std::string from_flush = errorOf("flush", [&] { backend->flush(); });
+    EXPECT_EQ(background ? from_flush : from_request, kInjectedError);
+    if (background) EXPECT_EQ(from_request, "") << "nothing had failed yet when it was asked";
+    EXPECT_EQ(calls.load(), 2) << "the failing optimisation ran once";
+
+    // Not lost once reported, and nothing more is optimised.
+    EXPECT_EQ(errorOf("a later keyframeInserted", [&] { backend->keyframeInserted(); }), kInjectedError);
+    EXPECT_EQ(errorOf("a later flush", [&] { backend->flush(); }), kInjectedError);
+    EXPECT_EQ(calls.load(), 2);
+    EXPECT_EQ(backend->optimizationsRun(), 1u);
+    EXPECT_EQ(map.revision(), revision) << "the failed optimisation wrote nothing back";
+    returnsWithoutDeadlock("the destructor", [&] { backend.reset(); });
+  }
+}
+
+// Requests that arrive while the optimisation that will fail is running are dropped, not run on a map the failure
+// may have left half-updated; the error is reported once the request is flushed. The solver blocks until released,
+// so the order is forced, not left to the scheduler.
+TEST(Backend, ARequestArrivingWhileTheFailingOptimisationRunsIsDropped) {
+  const Scene scene = makeScene();
+  Map map;
+  fillMap(map, scene);
+  std::atomic<int> calls{0};
+  std::promise<void> entered, release;
+  std::shared_future<void> released = release.get_future().share();
+  BackendOptions options;
+  options.solver = [&](BundleAdjustmentProblem&, const PinholeCamera&,
+                       const BundleAdjustmentOptions&) -> BundleAdjustmentSummary {
+    if (++calls == 1) entered.set_value();
+    released.wait();
+    throw std::runtime_error(kInjectedError);
+  };
+  auto backend = std::make_unique<Backend>(map, scene.camera, options);
+  backend->keyframeInserted();
+  entered.get_future().wait();
+  EXPECT_EQ(errorOf("keyframeInserted while optimising", [&] { backend->keyframeInserted(); }), "");
+  release.set_value();
+  EXPECT_EQ(errorOf("flush", [&] { backend->flush(); }), kInjectedError);
+  EXPECT_EQ(calls.load(), 1) << "the request pending at the error was run";
+  returnsWithoutDeadlock("the destructor", [&] { backend.reset(); });
+  EXPECT_EQ(calls.load(), 1);
+}
+
+// The destructor of a backend whose error was never reported (no flush, requests still pending) returns without
+// throwing or terminating, and finishes no work after the error (errors are dropped there, as documented).
+TEST(Backend, TheDestructorReturnsWithAnUnreportedError) {
+  const Scene scene = makeScene();
+  Map map;
+  fillMap(map, scene);
+  const std::uint64_t revision = map.revision();
+  std::atomic<int> calls{0};
+  BackendOptions options;
+  options.solver = failingAfter(0, calls);
+  auto backend = std::make_unique<Backend>(map, scene.camera, options);
+  for (int i = 0; i < 3; ++i) errorOf("keyframeInserted", [&] { backend->keyframeInserted(); });
+  returnsWithoutDeadlock("the destructor", [&] { backend.reset(); });
+  EXPECT_EQ(calls.load(), 1) << "pending work is finished before stopping, but none after an error";
+  EXPECT_EQ(map.revision(), revision);
+}
+
+// A replaced solver is checked like any input: reporting success with a solution that does not fit the window
+// (here no covariances and no outlier flags) is an error naming what is missing, and the map is left alone.
+TEST(Backend, ASolverWhoseSolutionDoesNotFitTheWindowIsAnError) {
+  const Scene scene = makeScene();
+  Map map;
+  fillMap(map, scene);
+  const std::uint64_t revision = map.revision();
+  BackendOptions options = inlineOptions();
+  options.solver = [](BundleAdjustmentProblem&, const PinholeCamera&, const BundleAdjustmentOptions&) {
+    BundleAdjustmentSummary summary;
+    summary.ok = true;
+    return summary;
+  };
+  Backend backend(map, scene.camera, options);
+  const std::string error = errorOf("keyframeInserted", [&] { backend.keyframeInserted(); });
+  EXPECT_NE(error.find("0 point covariances for " + std::to_string(scene.true_points.size())), std::string::npos)
+      << error;
+  EXPECT_EQ(map.revision(), revision);
+}
+
+}  // namespace

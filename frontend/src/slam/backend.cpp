@@ -2,9 +2,28 @@
 #include "weighted_icp/frontend/slam/backend.h"
 
 #include <stdexcept>
+#include <string>
 #include <unordered_map>
 
 namespace weighted_icp::frontend {
+
+namespace {
+/// A replaced solver (BackendOptions::solver) is checked like any input: a successful solve must leave one pose per
+/// keyframe and one point, covariance and outlier flag per point and observation of the window, or writing it back
+/// would index past its vectors.
+void requireSolutionFits(const BundleAdjustmentProblem& problem, const BundleAdjustmentSummary& summary,
+                         const MapWindow& window, std::size_t observations) {
+  const auto count = [](std::size_t actual, std::size_t expected, const char* what) {
+    if (actual != expected)
+      throw std::runtime_error(std::string("Backend: the solver reported success with ") + std::to_string(actual) +
+                               " " + what + " for " + std::to_string(expected));
+  };
+  count(problem.poses_wc.size(), window.keyframes.size(), "poses");
+  count(problem.points_world.size(), window.points.size(), "points");
+  count(summary.point_covariances.size(), window.points.size(), "point covariances");
+  count(summary.outlier_observations.size(), observations, "outlier flags");
+}
+}  // namespace
 
 Backend::Backend(Map& map, PinholeCamera camera, BackendOptions options)
     : map_(map), camera_(camera), options_(options) {
@@ -119,8 +138,11 @@ void Backend::optimizeWindow() {
     }
   }
 
-  const BundleAdjustmentSummary summary = solveLocalBundleAdjustment(problem, camera_, options_.bundle_adjustment);
+  const BundleAdjustmentSummary summary =
+      options_.solver ? options_.solver(problem, camera_, options_.bundle_adjustment)
+                      : solveLocalBundleAdjustment(problem, camera_, options_.bundle_adjustment);
   if (!summary.ok) return;
+  requireSolutionFits(problem, summary, window, observation_ids.size());
   for (std::size_t i = 0; i < window.keyframes.size(); ++i) window.keyframes[i].pose_wc = problem.poses_wc[i];
   for (std::size_t j = 0; j < window.points.size(); ++j) {
     window.points[j].position = problem.points_world[j];

@@ -9,10 +9,13 @@
 // An optimisation that throws stops the backend: the exception is kept and
 // rethrown to the tracking thread by the next keyframeInserted() or flush(),
 // so a failure is reported where it can be handled, never std::terminate.
+// The solve itself is replaceable (BackendOptions::solver), as LoopCloser's
+// detector is: that is how the tests make an optimisation throw.
 
 #include <condition_variable>
 #include <cstddef>
 #include <exception>
+#include <functional>
 #include <mutex>
 #include <thread>
 
@@ -22,12 +25,22 @@
 
 namespace weighted_icp::frontend {
 
+/// @brief The backend's optimisation step: solves one window's problem in place (poses not fixed, points) and says
+/// how it went, as solveLocalBundleAdjustment does. Called from the backend's thread (inline mode: from
+/// keyframeInserted()), one window at a time, without the map's lock; the backend writes the result back only
+/// when the summary is ok. An exception it throws stops the backend and reaches tracking (see Backend).
+using BundleAdjustmentSolver = std::function<BundleAdjustmentSummary(
+    BundleAdjustmentProblem& problem, const PinholeCamera& camera, const BundleAdjustmentOptions& options)>;
+
 /// @brief How the backend optimises: the window and bundle adjustment's options, in a thread or inline.
 struct BackendOptions {
   std::size_t window_keyframes = 7;  ///< the latest keyframes optimised together
   BundleAdjustmentOptions bundle_adjustment;
   /// false: optimise inside keyframeInserted(), so runs are reproducible.
   bool background_thread = true;
+  /// Replaces the solve (empty, the default: solveLocalBundleAdjustment with bundle_adjustment). For callers
+  /// that wrap, observe or fail the optimisation, e.g. tests of error hand-off and shutdown.
+  BundleAdjustmentSolver solver;
 };
 
 /// @brief Local bundle adjustment of the map's latest keyframes, in a background thread or inline.
