@@ -22,115 +22,153 @@
 namespace po = boost::program_options;
 using namespace weighted_icp;
 
+namespace {
+
+/// @brief What the command line asks for.
+struct AlignCommand {
+  std::string source_path, target_path, strategy_name = "covariance", displacement_text, plot_path;
+  AlignmentSettings settings;
+  std::size_t min_observations = 2;
+  bool global = false;
+  bool pcl_stopping_only = false;
+  bool json = false;
+  WeightStrategy strategy = WeightStrategy::Covariance;
+};
+
+/// @brief The two maps as aligned: the source already displaced.
+struct AlignInputs {
+  LandmarkMap source, target;
+};
+
+/// @brief Parses the command line; false when only --help was asked for.
+bool parseCommand(int argc, char** argv, AlignCommand& c) {
+  po::options_description options(
+      "wicp_align --source A.txt --target B.txt [options]\n"
+      "Aligns landmark map A onto B (paper map format).\n"
+      "Exit status: 0 converged, 1 error, 2 bad command line, 3 ICP did not converge, 4 degenerate problem\n"
+      "(fewer than 3 landmarks, all identical or collinear, or k at least the target's landmarks: not run).\n"
+      "Options");
+  // One option per line reads as a table: not reflowed.
+  // clang-format off
+  options.add_options()
+      ("help,h", "print this help")
+      ("source", po::value(&c.source_path)->required(), "source map (moved onto the target)")
+      ("target", po::value(&c.target_path)->required(), "target map")
+      ("strategy", po::value(&c.strategy_name)->default_value(c.strategy_name),
+       "weight strategy: base (plain PCL ICP), covariance, observations, mean-distance")
+      ("k", tools::rangedValue(&c.settings.k, 1u, 1000u)->default_value(c.settings.k),
+       "neighbours among which the heaviest is chosen (1-1000)")
+      ("displace", po::value(&c.displacement_text),
+       "move the source first: \"x y z roll pitch yaw\" (metres, degrees; R = Rz(yaw) Ry(pitch) Rx(roll))")
+      ("max-iterations", tools::rangedValue(&c.settings.max_iterations, 1, 1000000)->default_value(c.settings.max_iterations),
+       "ICP iteration limit (per stage)")
+      ("max-correspondence-distance", tools::positiveValue(&c.settings.max_correspondence_distance),
+       "ignore pairs farther apart than this (metres); default: no limit")
+      ("min-observations", tools::rangedValue(&c.min_observations, std::size_t{0}, std::size_t{1000000})
+                               ->default_value(c.min_observations),
+       "drop landmarks observed fewer times (the paper uses 2)")
+      ("refine", po::bool_switch(&c.settings.refine), "finish with nearest-neighbour ICP after the weighted stage")
+      ("no-stop-rule", po::bool_switch(&c.pcl_stopping_only),
+       "stop on PCL's convergence criteria only (by default a stage also stops when its correspondences repeat "
+       "the previous iteration's: same pose to float rounding, fewer iterations; docs/performance.md)")
+      ("global", po::bool_switch(&c.global), "find the start from geometry alone, any yaw and translation, partial "
+                                              "overlap allowed (docs/global_alignment.md); implies --refine")
+      ("threads", tools::rangedValue(&c.settings.threads, 0u, 1024u)->default_value(c.settings.threads),
+       "search threads, 0 = all (at most 1024)")
+      ("json", po::bool_switch(&c.json), "print the result as one JSON object on the last line of stdout")
+      ("plot", po::value(&c.plot_path), "also draw the clouds before and after, top view, target coloured by weight, "
+                                        "into this PNG (needs matplotlib; a warning without it)");
+  // clang-format on
+  po::variables_map vm;
+  if (!tools::parseCommandLine(argc, argv, options, vm)) return false;
+  c.settings.stop_on_repeated_correspondences = !c.pcl_stopping_only;
+  c.strategy = parseWeightStrategy(c.strategy_name);
+  c.settings.k = neighboursFor(c.strategy, c.settings.k);
+  if (c.global) c.settings.refine = true;
+  return true;
+}
+
+/// @brief Reads one map, keeping landmarks with enough observations; refuses a map left empty.
+LandmarkMap readMap(const std::string& path, std::size_t min_observations) {
+  LandmarkMap map = io::readLandmarkMap(path).withMinObservations(min_observations);
+  if (map.landmarks.empty())
+    throw std::runtime_error(path + ": no landmark with at least " + std::to_string(min_observations) +
+                             " observations");
+  return map;
+}
+
+/// @brief Reads both maps and moves the source by --displace.
+AlignInputs readInputs(const AlignCommand& c) {
+  // A bad --displace is a command-line error: reported before any file is read.
+  const Displacement displacement =
+      c.displacement_text.empty() ? Displacement{} : Displacement::parse(c.displacement_text);
+  AlignInputs in{readMap(c.source_path, c.min_observations), readMap(c.target_path, c.min_observations)};
+  in.source.transform(displacement.toIsometry());
+  return in;
+}
+
+/// @brief Runs the weighted ICP, after the global search when --global asks for it.
+AlignmentResult runAlignment(const AlignCommand& c, const AlignInputs& in, const WeightFunction& weight) {
+  if (!c.global) {
+    LandmarkAligner aligner(c.settings);
+    aligner.setTarget(toLandmarkCloud(in.target, weight));
+    return aligner.align(toLandmarkCloud(in.source, weight));
+  }
+  GlobalLandmarkAligner aligner({}, c.settings);
+  aligner.setTarget(toLandmarkCloud(in.target, weight));
+  const GlobalLandmarkAlignmentResult both = aligner.align(toLandmarkCloud(in.source, weight));
+  std::cout << "global search: " << both.global.hypotheses_refined << " hypotheses refined, inlier fraction "
+            << both.global.inlier_fraction << ", distance limit " << both.global.distance_limit << " m\n";
+  return both.alignment;
+}
+
+/// @brief The human-readable summary on stdout.
+void printSummary(const AlignCommand& c, const AlignInputs& in, const AlignmentResult& result) {
+  std::cout << "source " << in.source.landmarks.size() << " landmarks, target " << in.target.landmarks.size()
+            << " landmarks, strategy " << toString(c.strategy) << ", k " << c.settings.k << '\n'
+            << (result.degenerate ? "degenerate: " + result.reason + "; not aligned\n" : std::string()) << "converged "
+            << (result.converged ? "yes" : "no") << " after " << result.iterations << " iterations";
+  if (c.settings.refine) std::cout << " + " << result.refine_iterations << " refinement";
+  std::cout << ", fitness score " << result.fitness_score << ", " << result.correspondences << " correspondences, "
+            << std::fixed << std::setprecision(1) << result.time_ms << " ms\n"
+            << std::defaultfloat << "transformation (source -> target):\n"
+            << result.transformation << '\n';
+}
+
+/// @brief The JSON contract (see the top of this file): one object on the last line of stdout.
+void printJson(const AlignCommand& c, const AlignInputs& in, const AlignmentResult& result) {
+  tools::JsonObject json;
+  json.add("transformation", Eigen::MatrixXd(result.transformation))
+      .add("fitness_score", result.fitness_score)
+      .add("iterations", result.iterations)
+      .add("refine_iterations", result.refine_iterations)
+      .add("converged", result.converged)
+      .add("degenerate", result.degenerate);
+  if (result.degenerate) json.add("reason", result.reason);
+  json.add("correspondences", result.correspondences)
+      .add("time_ms", result.time_ms)
+      .add("strategy", toString(c.strategy))
+      .add("k", static_cast<std::size_t>(c.settings.k))
+      .add("source_landmarks", in.source.landmarks.size())
+      .add("target_landmarks", in.target.landmarks.size());
+  std::cout << json.str() << std::endl;
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
   return tools::runTool("wicp_align", [&] {
-    std::string source_path, target_path, strategy_name = "covariance", displacement_text, plot_path;
-    AlignmentSettings settings;
-    std::size_t min_observations = 2;
-    bool global = false;
-    bool pcl_stopping_only = false;
-    po::options_description options(
-        "wicp_align --source A.txt --target B.txt [options]\n"
-        "Aligns landmark map A onto B (paper map format).\n"
-        "Exit status: 0 converged, 1 error, 2 bad command line, 3 ICP did not converge, 4 degenerate problem\n"
-        "(fewer than 3 landmarks, all identical or collinear, or k at least the target's landmarks: not run).\n"
-        "Options");
-    // One option per line reads as a table: not reflowed.
-    // clang-format off
-    options.add_options()
-        ("help,h", "print this help")
-        ("source", po::value(&source_path)->required(), "source map (moved onto the target)")
-        ("target", po::value(&target_path)->required(), "target map")
-        ("strategy", po::value(&strategy_name)->default_value(strategy_name),
-         "weight strategy: base (plain PCL ICP), covariance, observations, mean-distance")
-        ("k", tools::rangedValue(&settings.k, 1u, 1000u)->default_value(settings.k),
-         "neighbours among which the heaviest is chosen (1-1000)")
-        ("displace", po::value(&displacement_text),
-         "move the source first: \"x y z roll pitch yaw\" (metres, degrees; R = Rz(yaw) Ry(pitch) Rx(roll))")
-        ("max-iterations", tools::rangedValue(&settings.max_iterations, 1, 1000000)->default_value(settings.max_iterations),
-         "ICP iteration limit (per stage)")
-        ("max-correspondence-distance", tools::positiveValue(&settings.max_correspondence_distance),
-         "ignore pairs farther apart than this (metres); default: no limit")
-        ("min-observations", tools::rangedValue(&min_observations, std::size_t{0}, std::size_t{1000000})
-                                 ->default_value(min_observations),
-         "drop landmarks observed fewer times (the paper uses 2)")
-        ("refine", po::bool_switch(&settings.refine), "finish with nearest-neighbour ICP after the weighted stage")
-        ("no-stop-rule", po::bool_switch(&pcl_stopping_only),
-         "stop on PCL's convergence criteria only (by default a stage also stops when its correspondences repeat "
-         "the previous iteration's: same pose to float rounding, fewer iterations; docs/performance.md)")
-        ("global", po::bool_switch(&global), "find the start from geometry alone, any yaw and translation, partial "
-                                              "overlap allowed (docs/global_alignment.md); implies --refine")
-        ("threads", tools::rangedValue(&settings.threads, 0u, 1024u)->default_value(settings.threads),
-         "search threads, 0 = all (at most 1024)")
-        ("json", "print the result as one JSON object on the last line of stdout")
-        ("plot", po::value(&plot_path), "also draw the clouds before and after, top view, target coloured by weight, "
-                                        "into this PNG (needs matplotlib; a warning without it)");
-    // clang-format on
-    po::variables_map vm;
-    if (!tools::parseCommandLine(argc, argv, options, vm)) return 0;
-
-    settings.stop_on_repeated_correspondences = !pcl_stopping_only;
-    const WeightStrategy strategy = parseWeightStrategy(strategy_name);
-    settings.k = neighboursFor(strategy, settings.k);
-    const Displacement displacement =
-        displacement_text.empty() ? Displacement{} : Displacement::parse(displacement_text);
-
-    LandmarkMap source = io::readLandmarkMap(source_path).withMinObservations(min_observations);
-    const LandmarkMap target = io::readLandmarkMap(target_path).withMinObservations(min_observations);
-    if (source.landmarks.empty())
-      throw std::runtime_error(source_path + ": no landmark with at least " + std::to_string(min_observations) +
-                               " observations");
-    if (target.landmarks.empty())
-      throw std::runtime_error(target_path + ": no landmark with at least " + std::to_string(min_observations) +
-                               " observations");
-    source.transform(displacement.toIsometry());
-
-    const WeightFunction weight = weightFunction(strategy);
-    AlignmentResult result;
-    if (global) {
-      settings.refine = true;
-      GlobalLandmarkAligner aligner({}, settings);
-      aligner.setTarget(toLandmarkCloud(target, weight));
-      const GlobalLandmarkAlignmentResult both = aligner.align(toLandmarkCloud(source, weight));
-      result = both.alignment;
-      std::cout << "global search: " << both.global.hypotheses_refined << " hypotheses refined, inlier fraction "
-                << both.global.inlier_fraction << ", distance limit " << both.global.distance_limit << " m\n";
-    } else {
-      LandmarkAligner aligner(settings);
-      aligner.setTarget(toLandmarkCloud(target, weight));
-      result = aligner.align(toLandmarkCloud(source, weight));
-    }
-
-    std::cout << "source " << source.landmarks.size() << " landmarks, target " << target.landmarks.size()
-              << " landmarks, strategy " << toString(strategy) << ", k " << settings.k << '\n'
-              << (result.degenerate ? "degenerate: " + result.reason + "; not aligned\n" : std::string())
-              << "converged " << (result.converged ? "yes" : "no") << " after " << result.iterations << " iterations";
-    if (settings.refine) std::cout << " + " << result.refine_iterations << " refinement";
-    std::cout << ", fitness score " << result.fitness_score << ", " << result.correspondences << " correspondences, "
-              << std::fixed << std::setprecision(1) << result.time_ms << " ms\n"
-              << std::defaultfloat << "transformation (source -> target):\n"
-              << result.transformation << '\n';
-    if (vm.count("json")) {
-      tools::JsonObject json;
-      json.add("transformation", Eigen::MatrixXd(result.transformation))
-          .add("fitness_score", result.fitness_score)
-          .add("iterations", result.iterations)
-          .add("refine_iterations", result.refine_iterations)
-          .add("converged", result.converged)
-          .add("degenerate", result.degenerate);
-      if (result.degenerate) json.add("reason", result.reason);
-      json.add("correspondences", result.correspondences)
-          .add("time_ms", result.time_ms)
-          .add("strategy", toString(strategy))
-          .add("k", static_cast<std::size_t>(settings.k))
-          .add("source_landmarks", source.landmarks.size())
-          .add("target_landmarks", target.landmarks.size());
-      std::cout << json.str() << std::endl;
-    }
-    if (!plot_path.empty())
-      tools::plotAlignment(
-          "wicp_align", source, target, weight, result.transformation, plot_path,
-          source_path + " onto " + target_path + " (" + toString(strategy) + ", k " + std::to_string(settings.k) + ")");
+    AlignCommand command;
+    if (!parseCommand(argc, argv, command)) return 0;
+    const AlignInputs inputs = readInputs(command);
+    const WeightFunction weight = weightFunction(command.strategy);
+    const AlignmentResult result = runAlignment(command, inputs, weight);
+    printSummary(command, inputs, result);
+    if (command.json) printJson(command, inputs, result);
+    if (!command.plot_path.empty())
+      tools::plotAlignment("wicp_align", inputs.source, inputs.target, weight, result.transformation, command.plot_path,
+                           command.source_path + " onto " + command.target_path + " (" + toString(command.strategy) +
+                               ", k " + std::to_string(command.settings.k) + ")");
     if (result.degenerate) return 4;
     return result.converged ? 0 : 3;
   });
