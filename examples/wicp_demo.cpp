@@ -112,150 +112,187 @@ void printSummaryTable(const std::vector<AlignmentRecord>& records, std::size_t 
   std::cout << "errors against the true alignment; iterations of both stages; time of the alignment alone\n";
 }
 
+/// @brief What the command line asks for.
+struct DemoCommand {
+  simulation::SyntheticSessionOptions session_options;
+  // One search thread by default: mini-maps of ~1000 landmarks leave threads
+  // little to share, and on a busy machine a thread waiting to be scheduled
+  // stalls every ICP iteration (measured: 8x slower with 2 threads under load).
+  std::size_t frames_per_minimap = 40, min_observation_count = 2;
+  unsigned int neighbours = 5, thread_count = 1;
+  std::string displacement_text = "0.2 -0.15 0.05 3 -2 15", out_dir = "out/demo";
+  bool overwrite = false;
+};
+
+/// @brief Parses and checks the command line; false when only --help was asked for.
+bool parseCommand(int argc, char** argv, DemoCommand& c) {
+  simulation::SyntheticSessionOptions& session = c.session_options;
+  po::options_description options(
+      "wicp_demo [options]\n"
+      "Aligns consecutive mini-maps of a synthetic RGB-D SLAM session with exact ground truth,\n"
+      "with every weight strategy, and reports the errors. Options");
+  // One option per line reads as a table: not reflowed.
+  // clang-format off
+  options.add_options()
+      ("help,h", "print this help")
+      ("seed", tools::rangedValue(&session.seed, std::uint64_t{0})->default_value(session.seed),
+       "session random seed (>= 0)")
+      ("frames", tools::rangedValue(&session.num_frames, std::size_t{2}, std::size_t{100000})
+                     ->default_value(session.num_frames),
+       "camera frames of the session (2-100000)")
+      ("landmarks", tools::rangedValue(&session.num_landmarks, std::size_t{1}, std::size_t{10000000})
+                        ->default_value(session.num_landmarks),
+       "landmarks placed in the room (only observed ones are kept)")
+      ("frames-per-minimap", tools::rangedValue(&c.frames_per_minimap, std::size_t{1})->default_value(c.frames_per_minimap),
+       "consecutive frames per mini-map (fewer than --frames)")
+      ("displace", po::value(&c.displacement_text)->default_value(c.displacement_text),
+       "motion applied to each source mini-map: \"x y z roll pitch yaw\" (metres, degrees; "
+       "R = Rz(yaw) Ry(pitch) Rx(roll))")
+      ("k", tools::rangedValue(&c.neighbours, 1u, 1000u)->default_value(c.neighbours),
+       "neighbours among which the heaviest is chosen (1-1000; base uses 1)")
+      ("min-observations", tools::rangedValue(&c.min_observation_count, std::size_t{1}, std::size_t{1000000})
+                               ->default_value(c.min_observation_count),
+       "align only landmarks observed this often within the mini-map (the paper uses 2)")
+      ("threads", tools::rangedValue(&c.thread_count, 0u, 1024u)->default_value(c.thread_count),
+       "search threads, 0 = all (at most 1024)")
+      ("out", po::value(&c.out_dir)->default_value(c.out_dir), "output folder (refused if not empty)")
+      ("overwrite", po::bool_switch(&c.overwrite),
+       "replace --out if it is not empty (nothing of an earlier run is left in it)");
+  // clang-format on
+  po::variables_map vm;
+  if (!tools::parseCommandLine(argc, argv, options, vm)) return false;
+  // The one bound that depends on another option.
+  if (c.frames_per_minimap >= session.num_frames)
+    tools::throwOutOfRange("frames-per-minimap", std::to_string(c.frames_per_minimap), 1,
+                           static_cast<long long>(session.num_frames) - 1);
+  if (c.out_dir.empty()) throw std::invalid_argument("--out must name a folder");
+  return true;
+}
+
+/// @brief Generates the session and says what it is: size, generation time, the odometry's final drift.
+simulation::SyntheticSession generateSession(const simulation::SyntheticSessionOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  simulation::SyntheticSession session = simulation::generateSyntheticSession(options);
+  const double generation_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::size_t observations = 0;
+  for (const auto& landmark : session.estimated.landmarks) observations += landmark.observations.size();
+  const FrameId last_frame = session.estimated.frames.rbegin()->first;
+  const Eigen::Isometry3d& last_estimated = session.estimated.frames.at(last_frame);
+  const Eigen::Isometry3d& last_true = session.truth.frames.at(last_frame);
+  std::cout << "session (seed " << options.seed << "): " << session.estimated.frames.size() << " frames, "
+            << session.estimated.landmarks.size() << " landmarks observed of " << options.num_landmarks << " placed, "
+            << observations << " observations; generated in " << std::fixed << std::setprecision(0)
+            << generation_s * 1000.0 << " ms\n"
+            << "odometry drift at the last frame: " << std::setprecision(1)
+            << translationError(last_estimated, last_true) * 100.0 << " cm, " << std::setprecision(2)
+            << rotationErrorDeg(last_estimated, last_true) << " deg\n"
+            << std::defaultfloat;
+  return session;
+}
+
+/// @brief The mini-maps as aligned: landmarks with enough observations; refuses a mini-map left empty.
+std::vector<LandmarkMap> filterMiniMaps(const std::vector<LandmarkMap>& minimaps, std::size_t min_observations) {
+  std::vector<LandmarkMap> filtered;
+  for (std::size_t i = 0; i < minimaps.size(); ++i) {
+    filtered.push_back(minimaps[i].withMinObservations(min_observations));
+    if (filtered.back().landmarks.empty())
+      throw std::runtime_error("mini-map " + std::to_string(i) + " has no landmark with at least " +
+                               std::to_string(min_observations) +
+                               " observations (lower --min-observations or raise --frames-per-minimap)");
+  }
+  return filtered;
+}
+
+/// @brief Aligns one displaced source onto its target with one strategy, with refinement or not.
+AlignmentRecord alignOnce(const DemoCommand& c, std::size_t pair, const LandmarkMap& source, const LandmarkMap& target,
+                          WeightStrategy strategy, bool refine, const Eigen::Isometry3d& true_alignment) {
+  const WeightFunction weight = weightFunction(strategy);
+  AlignmentSettings settings;
+  settings.k = neighboursFor(strategy, c.neighbours);
+  settings.refine = refine;
+  settings.threads = c.thread_count;
+  LandmarkAligner aligner(settings);
+  aligner.setTarget(toLandmarkCloud(target, weight));
+  AlignmentRecord record;
+  record.target_minimap = pair;
+  record.strategy = strategy;
+  record.k = settings.k;
+  record.refine = refine;
+  record.source_landmarks = source.landmarks.size();
+  record.target_landmarks = target.landmarks.size();
+  record.result = aligner.align(toLandmarkCloud(source, weight));
+  const Eigen::Isometry3d estimate(record.result.transformation);
+  record.rotation_error_deg = rotationErrorDeg(estimate, true_alignment);
+  record.translation_error_m = translationError(estimate, true_alignment);
+  return record;
+}
+
+/// @brief Every consecutive pair with every strategy, with and without refinement; stops early on Ctrl-C.
+std::vector<AlignmentRecord> alignAllPairs(const DemoCommand& c, const std::vector<LandmarkMap>& minimaps,
+                                           const Displacement& displacement) {
+  const Eigen::Isometry3d true_alignment = displacement.toIsometry().inverse();
+  const std::size_t pairs = minimaps.size() - 1;
+  const std::vector<WeightStrategy>& strategies = allWeightStrategies();
+  tools::Progress progress("aligning", pairs * strategies.size() * 2);
+  std::vector<AlignmentRecord> records;
+  for (std::size_t pair = 0; pair < pairs && !tools::interrupted(); ++pair) {
+    LandmarkMap source = minimaps[pair + 1];
+    source.transform(displacement.toIsometry());
+    for (const WeightStrategy strategy : strategies) {
+      for (const bool refine : {false, true}) {
+        if (tools::interrupted()) break;
+        records.push_back(alignOnce(c, pair, source, minimaps[pair], strategy, refine, true_alignment));
+        progress.step("pair " + std::to_string(pair) + " " + toString(strategy) + (refine ? " +refine" : ""));
+      }
+    }
+  }
+  progress.finish();
+  return records;
+}
+
+/// @brief Writes the run into the temporary folder and publishes it in one rename.
+void writeOutputs(io::AtomicFolder& folder, const simulation::SyntheticSession& session,
+                  const std::vector<LandmarkMap>& minimaps, const std::vector<AlignmentRecord>& records) {
+  const fs::path out = folder.path();
+  fs::create_directories(out / "minimaps");
+  io::writeLandmarkMap(session.estimated, (out / "session.txt").string());
+  io::writeLandmarkMap(session.truth, (out / "session_truth.txt").string());
+  for (std::size_t i = 0; i < minimaps.size(); ++i)
+    io::writeLandmarkMap(minimaps[i], (out / "minimaps" / minimapFileName(i)).string());
+  tools::writeTextFile((out / "results.csv").string(), resultsCsv(records));
+  folder.publish();
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   tools::installInterruptHandlers();  // Ctrl-C stops between alignments, writing nothing
   return tools::runTool("wicp_demo", [&] {
     const auto start = std::chrono::steady_clock::now();
-    simulation::SyntheticSessionOptions session_options;
-    // One search thread by default: mini-maps of ~1000 landmarks leave threads
-    // little to share, and on a busy machine a thread waiting to be scheduled
-    // stalls every ICP iteration (measured: 8x slower with 2 threads under load).
-    std::size_t frames_per_minimap = 40, min_observation_count = 2;
-    unsigned int neighbours = 5, thread_count = 1;
-    std::string displacement_text = "0.2 -0.15 0.05 3 -2 15", out_dir = "out/demo";
-    po::options_description options(
-        "wicp_demo [options]\n"
-        "Aligns consecutive mini-maps of a synthetic RGB-D SLAM session with exact ground truth,\n"
-        "with every weight strategy, and reports the errors. Options");
-    // One option per line reads as a table: not reflowed.
-    // clang-format off
-    options.add_options()
-        ("help,h", "print this help")
-        ("seed", tools::rangedValue(&session_options.seed, std::uint64_t{0})->default_value(session_options.seed),
-         "session random seed (>= 0)")
-        ("frames", tools::rangedValue(&session_options.num_frames, std::size_t{2}, std::size_t{100000})
-                       ->default_value(session_options.num_frames),
-         "camera frames of the session (2-100000)")
-        ("landmarks", tools::rangedValue(&session_options.num_landmarks, std::size_t{1}, std::size_t{10000000})
-                          ->default_value(session_options.num_landmarks),
-         "landmarks placed in the room (only observed ones are kept)")
-        ("frames-per-minimap", tools::rangedValue(&frames_per_minimap, std::size_t{1})->default_value(frames_per_minimap),
-         "consecutive frames per mini-map (fewer than --frames)")
-        ("displace", po::value(&displacement_text)->default_value(displacement_text),
-         "motion applied to each source mini-map: \"x y z roll pitch yaw\" (metres, degrees; "
-         "R = Rz(yaw) Ry(pitch) Rx(roll))")
-        ("k", tools::rangedValue(&neighbours, 1u, 1000u)->default_value(neighbours),
-         "neighbours among which the heaviest is chosen (1-1000; base uses 1)")
-        ("min-observations", tools::rangedValue(&min_observation_count, std::size_t{1}, std::size_t{1000000})
-                                 ->default_value(min_observation_count),
-         "align only landmarks observed this often within the mini-map (the paper uses 2)")
-        ("threads", tools::rangedValue(&thread_count, 0u, 1024u)->default_value(thread_count),
-         "search threads, 0 = all (at most 1024)")
-        ("out", po::value(&out_dir)->default_value(out_dir), "output folder (refused if not empty)")
-        ("overwrite", "replace --out if it is not empty (nothing of an earlier run is left in it)");
-    // clang-format on
-    po::variables_map vm;
-    if (!tools::parseCommandLine(argc, argv, options, vm)) return 0;
-
-    // The one bound that depends on another option.
-    if (frames_per_minimap >= session_options.num_frames)
-      tools::throwOutOfRange("frames-per-minimap", std::to_string(frames_per_minimap), 1,
-                             static_cast<long long>(session_options.num_frames) - 1);
-    const std::size_t minimap_frames = frames_per_minimap;
-    if (out_dir.empty()) throw std::invalid_argument("--out must name a folder");
-    const Displacement displacement = Displacement::parse(displacement_text);
+    DemoCommand command;
+    if (!parseCommand(argc, argv, command)) return 0;
+    const Displacement displacement = Displacement::parse(command.displacement_text);
     // Opened before the long run, so a refused --out costs nothing.
-    io::AtomicFolder folder = tools::openOutputFolder(out_dir, vm.count("overwrite") > 0);
-    const Eigen::Isometry3d true_alignment = displacement.toIsometry().inverse();
+    io::AtomicFolder folder = tools::openOutputFolder(command.out_dir, command.overwrite);
 
-    const auto generation_start = std::chrono::steady_clock::now();
-    const simulation::SyntheticSession session = simulation::generateSyntheticSession(session_options);
-    const double generation_s =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - generation_start).count();
-    std::size_t observations = 0;
-    for (const auto& landmark : session.estimated.landmarks) observations += landmark.observations.size();
-    const FrameId last_frame = session.estimated.frames.rbegin()->first;
-    const Eigen::Isometry3d& last_estimated = session.estimated.frames.at(last_frame);
-    const Eigen::Isometry3d& last_true = session.truth.frames.at(last_frame);
-    std::cout << "session (seed " << session_options.seed << "): " << session.estimated.frames.size() << " frames, "
-              << session.estimated.landmarks.size() << " landmarks observed of " << session_options.num_landmarks
-              << " placed, " << observations << " observations; generated in " << std::fixed << std::setprecision(0)
-              << generation_s * 1000.0 << " ms\n"
-              << "odometry drift at the last frame: " << std::setprecision(1)
-              << translationError(last_estimated, last_true) * 100.0 << " cm, " << std::setprecision(2)
-              << rotationErrorDeg(last_estimated, last_true) << " deg\n"
-              << std::defaultfloat;
-
-    const std::vector<LandmarkMap> minimaps = session.estimated.splitIntoMiniMaps(minimap_frames);
-    std::vector<LandmarkMap> aligned_minimaps;
-    for (std::size_t i = 0; i < minimaps.size(); ++i) {
-      aligned_minimaps.push_back(minimaps[i].withMinObservations(min_observation_count));
-      if (aligned_minimaps.back().landmarks.empty())
-        throw std::runtime_error("mini-map " + std::to_string(i) + " has no landmark with at least " +
-                                 std::to_string(min_observation_count) +
-                                 " observations (lower --min-observations or raise --frames-per-minimap)");
-    }
-    std::cout << minimaps.size() << " mini-maps of " << minimap_frames
-              << " frames (landmarks with >= " << min_observation_count << " observations:";
+    const simulation::SyntheticSession session = generateSession(command.session_options);
+    const std::vector<LandmarkMap> minimaps = session.estimated.splitIntoMiniMaps(command.frames_per_minimap);
+    const std::vector<LandmarkMap> aligned_minimaps = filterMiniMaps(minimaps, command.min_observation_count);
+    std::cout << minimaps.size() << " mini-maps of " << command.frames_per_minimap
+              << " frames (landmarks with >= " << command.min_observation_count << " observations:";
     for (const auto& minimap : aligned_minimaps) std::cout << ' ' << minimap.landmarks.size();
     std::cout << ")\naligning mini-map i+1 onto mini-map i, source displaced by " << displacement.toString()
               << "; truth: its inverse\n";
 
     const std::size_t pairs = minimaps.size() - 1;
-    const std::vector<WeightStrategy>& strategies = allWeightStrategies();
-    tools::Progress progress("aligning", pairs * strategies.size() * 2);
-    std::vector<AlignmentRecord> records;
-    for (std::size_t pair = 0; pair < pairs && !tools::interrupted(); ++pair) {
-      LandmarkMap source = aligned_minimaps[pair + 1];
-      source.transform(displacement.toIsometry());
-      const LandmarkMap& target = aligned_minimaps[pair];
-      for (const WeightStrategy strategy : strategies) {
-        const WeightFunction weight = weightFunction(strategy);
-        const LandmarkCloud::ConstPtr source_cloud = toLandmarkCloud(source, weight);
-        const LandmarkCloud::ConstPtr target_cloud = toLandmarkCloud(target, weight);
-        for (const bool refine : {false, true}) {
-          if (tools::interrupted()) break;
-          AlignmentSettings settings;
-          settings.k = neighboursFor(strategy, neighbours);
-          settings.refine = refine;
-          settings.threads = thread_count;
-          LandmarkAligner aligner(settings);
-          aligner.setTarget(target_cloud);
-          AlignmentRecord record;
-          record.target_minimap = pair;
-          record.strategy = strategy;
-          record.k = settings.k;
-          record.refine = refine;
-          record.source_landmarks = source.landmarks.size();
-          record.target_landmarks = target.landmarks.size();
-          record.result = aligner.align(source_cloud);
-          const Eigen::Isometry3d estimate(record.result.transformation);
-          record.rotation_error_deg = rotationErrorDeg(estimate, true_alignment);
-          record.translation_error_m = translationError(estimate, true_alignment);
-          records.push_back(record);
-          progress.step("pair " + std::to_string(pair) + " " + toString(strategy) + (refine ? " +refine" : ""));
-        }
-      }
-    }
-    progress.finish();
+    const std::vector<AlignmentRecord> records = alignAllPairs(command, aligned_minimaps, displacement);
     if (const int signal = tools::interruptSignal()) {
       std::cerr << "wicp_demo: interrupted by " << tools::signalName(signal) << " after " << records.size() << " of "
-                << pairs * strategies.size() * 2 << " alignments; no outputs written, " << out_dir
+                << pairs * allWeightStrategies().size() * 2 << " alignments; no outputs written, " << command.out_dir
                 << " left as it was\n";
       return tools::interruptExitCode(signal);
     }
-
-    // Written into the temporary folder, published in one rename.
-    const fs::path out = folder.path();
-    fs::create_directories(out / "minimaps");
-    io::writeLandmarkMap(session.estimated, (out / "session.txt").string());
-    io::writeLandmarkMap(session.truth, (out / "session_truth.txt").string());
-    for (std::size_t i = 0; i < minimaps.size(); ++i)
-      io::writeLandmarkMap(minimaps[i], (out / "minimaps" / minimapFileName(i)).string());
-    tools::writeTextFile((out / "results.csv").string(), resultsCsv(records));
-    folder.publish();
+    writeOutputs(folder, session, minimaps, records);
     printSummaryTable(records, pairs);
     const double total_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     std::cout << "\nwrote " << (folder.target() / "session.txt").string() << ", session_truth.txt, " << minimaps.size()
