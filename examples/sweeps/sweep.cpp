@@ -433,127 +433,160 @@ void extendUntilFailure(const SweepDefinition& sweep, unsigned int k, const MapP
   }
 }
 
+namespace {
+
+/// @brief What a sweep tool's command line asks for.
+struct SweepCommand {
+  std::string out_dir;
+  std::string preset = "ours";
+  MapSelection selection;
+  unsigned int k = 5;
+  AlignmentSettings settings;
+  bool overwrite = false;
+  bool plot = true;
+};
+
+/// @brief The sweep tools' options; the k option only where the sweep does not vary k itself.
+po::options_description sweepOptions(const std::string& tool, const SweepDefinition& sweep, SweepCommand& c,
+                                     std::string& source_frames, std::string& target_frames) {
+  po::options_description options(
+      tool + " [--map SESSION.txt | --source A.txt --target B.txt] [options]\n" + sweep.description +
+      "\nAligns the source onto the target with base (plain ICP, k = 1), covariance, observations\n"
+      "and mean-distance at each case; writes DIR/results.csv, DIR/run.json and DIR/violin.png.\n"
+      "Exit status: 0 ok, 1 error, 2 bad command line, 4 results written but plotting failed.\nOptions");
+  // One option per line reads as a table: not reflowed.
+  // clang-format off
+  options.add_options()
+      ("help,h", "print this help")
+      ("map", po::value(&c.selection.session_path),
+       "session map to cut the two mini-maps from (default, when no map is given: "
+       "../shared/data/map_fr1_desk.txt relative to the current folder)")
+      ("source-frames", po::value(&source_frames),
+       "cut the source mini-map from these frames of --map, e.g. 0-119 (with --target-frames); default: "
+       "the session's odd landmarks onto its even ones, the same scene with disjoint points")
+      ("target-frames", po::value(&target_frames), "cut the target mini-map from these frames, e.g. 120-239")
+      ("source", po::value(&c.selection.source_path), "source map file (with --target, instead of --map)")
+      ("target", po::value(&c.selection.target_path), "target map file")
+      ("min-observations", tools::rangedValue(&c.selection.min_observations, std::size_t{0})
+                               ->default_value(c.selection.min_observations),
+       "drop landmarks observed fewer times");
+  // clang-format on
+  if (!sweep.sweeps_k)
+    options.add_options()("k", tools::rangedValue(&c.k, 1u, 1000u)->default_value(c.k),
+                          "neighbours among which the heaviest is chosen (weighted strategies; 1-1000)");
+  // One option per line reads as a table: not reflowed.
+  // clang-format off
+  options.add_options()
+      ("max-iterations", tools::rangedValue(&c.settings.max_iterations, 1, 1000000)->default_value(c.settings.max_iterations),
+       "ICP iteration limit (per stage)")
+      ("refine", po::bool_switch(&c.settings.refine), "finish each run with nearest-neighbour ICP (k = 1)")
+      ("threads", tools::rangedValue(&c.settings.threads, 0u, 1024u)->default_value(c.settings.threads),
+       "search threads, 0 = all (at most 1024); results do not depend on it")
+      ("out", po::value(&c.out_dir)->default_value(c.out_dir), "output folder (refused if not empty)")
+      ("overwrite", po::bool_switch(&c.overwrite),
+       "replace --out if it is not empty (nothing of an earlier sweep is left in it)")
+      ("no-plot", "write the CSV only")
+      ("preset", po::value(&c.preset)->default_value(c.preset),
+       "grid: 'ours' (this project's, see docs/experiments.md) or 'paper' (the paper's Section 4 grid and "
+       "stopping rule; the XY sweep then grows beyond 0.5 m in steps of 0.25 m until a strategy fails by "
+       "fitness >= 0.0037)");
+  // clang-format on
+  return options;
+}
+
+/// @brief Parses and checks a sweep tool's command line; false when only --help was asked for.
+bool parseSweepCommand(const std::string& tool, const SweepDefinition& sweep, int argc, const char* const argv[],
+                       SweepCommand& c) {
+  c.out_dir = "out/sweep_" + sweep.name;
+  std::string source_frames, target_frames;
+  const po::options_description options = sweepOptions(tool, sweep, c, source_frames, target_frames);
+  po::variables_map vm;
+  if (!tools::parseCommandLine(argc, argv, options, vm)) return false;
+
+  const bool files = vm.count("source") || vm.count("target");
+  if (files && vm.count("map")) throw std::invalid_argument("give either --map or --source/--target, not both");
+  if (vm.count("source-frames") != vm.count("target-frames"))
+    throw std::invalid_argument("give both --source-frames and --target-frames, or neither");
+  if (files && vm.count("source-frames"))
+    throw std::invalid_argument("--source-frames/--target-frames cut a --map; they do not apply to --source/--target");
+  if (!files && !vm.count("map")) {
+    if (!fs::exists(kDefaultSessionMap))
+      throw std::runtime_error(std::string("no map given and the default --map ") + kDefaultSessionMap +
+                               " does not exist in " + fs::current_path().string() +
+                               "; pass --map SESSION.txt or --source A.txt --target B.txt");
+    c.selection.session_path = kDefaultSessionMap;
+  }
+  if (vm.count("source-frames"))
+    c.selection.frame_ranges.emplace(FrameRange::parse(source_frames, "--source-frames"),
+                                     FrameRange::parse(target_frames, "--target-frames"));
+  if (sweep.sweeps_k) c.k = 0;
+  c.settings.refine_max_iterations = c.settings.max_iterations;
+  c.plot = vm.count("no-plot") == 0;
+  return true;
+}
+
+/// @brief run.json: what was run, on what, and how long it took.
+std::string runInfoJson(const std::string& tool, const SweepDefinition& sweep, const SweepCommand& c,
+                        const MapPair& maps, std::size_t runs, double seconds) {
+  tools::JsonObject run_info;
+  run_info.add("tool", tool)
+      .add("sweep", sweep.name)
+      .add("preset", c.preset)
+      .add("maps", maps.description)
+      .add("source_landmarks", maps.source.landmarks.size())
+      .add("target_landmarks", maps.target.landmarks.size())
+      .add("truth_known", maps.truth_known)
+      .add("min_observations", c.selection.min_observations)
+      .add("max_iterations", c.settings.max_iterations)
+      .add("refine", c.settings.refine)
+      .add("runs", runs)
+      .add("sweep_time_s", seconds);
+  if (!sweep.sweeps_k) run_info.add("k", static_cast<std::size_t>(c.k));
+  return run_info.str() + "\n";
+}
+
+}  // namespace
+
 int runSweepTool(const std::string& tool, const SweepDefinition& sweep, int argc, const char* const argv[]) {
   tools::installInterruptHandlers();
   return tools::runTool(tool, [&] {
-    std::string out_dir = "out/sweep_" + sweep.name;
-    std::string preset = "ours";
-    MapSelection selection;
-    std::string source_frames, target_frames;
-    std::size_t min_observations = 2;
-    unsigned int k = 5;
-    AlignmentSettings settings;
-    po::options_description options(
-        tool + " [--map SESSION.txt | --source A.txt --target B.txt] [options]\n" + sweep.description +
-        "\nAligns the source onto the target with base (plain ICP, k = 1), covariance, observations\n"
-        "and mean-distance at each case; writes DIR/results.csv, DIR/run.json and DIR/violin.png.\n"
-        "Exit status: 0 ok, 1 error, 2 bad command line, 4 results written but plotting failed.\nOptions");
-    // One option per line reads as a table: not reflowed.
-    // clang-format off
-    options.add_options()
-        ("help,h", "print this help")
-        ("map", po::value(&selection.session_path),
-         "session map to cut the two mini-maps from (default, when no map is given: "
-         "../shared/data/map_fr1_desk.txt relative to the current folder)")
-        ("source-frames", po::value(&source_frames),
-         "cut the source mini-map from these frames of --map, e.g. 0-119 (with --target-frames); default: "
-         "the session's odd landmarks onto its even ones, the same scene with disjoint points")
-        ("target-frames", po::value(&target_frames), "cut the target mini-map from these frames, e.g. 120-239")
-        ("source", po::value(&selection.source_path), "source map file (with --target, instead of --map)")
-        ("target", po::value(&selection.target_path), "target map file")
-        ("min-observations", tools::rangedValue(&min_observations, std::size_t{0})->default_value(min_observations),
-         "drop landmarks observed fewer times");
-    // clang-format on
-    if (!sweep.sweeps_k)
-      options.add_options()("k", tools::rangedValue(&k, 1u, 1000u)->default_value(k),
-                            "neighbours among which the heaviest is chosen (weighted strategies; 1-1000)");
-    // One option per line reads as a table: not reflowed.
-    // clang-format off
-    options.add_options()
-        ("max-iterations", tools::rangedValue(&settings.max_iterations, 1, 1000000)->default_value(settings.max_iterations),
-         "ICP iteration limit (per stage)")
-        ("refine", "finish each run with nearest-neighbour ICP (k = 1)")
-        ("threads", tools::rangedValue(&settings.threads, 0u, 1024u)->default_value(settings.threads),
-         "search threads, 0 = all (at most 1024); results do not depend on it")
-        ("out", po::value(&out_dir)->default_value(out_dir), "output folder (refused if not empty)")
-        ("overwrite", "replace --out if it is not empty (nothing of an earlier sweep is left in it)")
-        ("no-plot", "write the CSV only")
-        ("preset", po::value(&preset)->default_value(preset),
-         "grid: 'ours' (this project's, see docs/experiments.md) or 'paper' (the paper's Section 4 grid and "
-         "stopping rule; the XY sweep then grows beyond 0.5 m in steps of 0.25 m until a strategy fails by "
-         "fitness >= 0.0037)");
-    // clang-format on
-    po::variables_map vm;
-    if (!tools::parseCommandLine(argc, argv, options, vm)) return 0;
+    SweepCommand c;
+    if (!parseSweepCommand(tool, sweep, argc, argv, c)) return 0;
 
-    const bool files = vm.count("source") || vm.count("target");
-    if (files && vm.count("map")) throw std::invalid_argument("give either --map or --source/--target, not both");
-    if (vm.count("source-frames") != vm.count("target-frames"))
-      throw std::invalid_argument("give both --source-frames and --target-frames, or neither");
-    if (files && vm.count("source-frames"))
-      throw std::invalid_argument(
-          "--source-frames/--target-frames cut a --map; they do not apply to --source/--target");
-    if (!files && !vm.count("map")) {
-      if (!fs::exists(kDefaultSessionMap))
-        throw std::runtime_error(std::string("no map given and the default --map ") + kDefaultSessionMap +
-                                 " does not exist in " + fs::current_path().string() +
-                                 "; pass --map SESSION.txt or --source A.txt --target B.txt");
-      selection.session_path = kDefaultSessionMap;
-    }
-    if (vm.count("source-frames"))
-      selection.frame_ranges.emplace(FrameRange::parse(source_frames, "--source-frames"),
-                                     FrameRange::parse(target_frames, "--target-frames"));
-    selection.min_observations = min_observations;
-    if (sweep.sweeps_k) k = 0;
-    settings.refine_max_iterations = settings.max_iterations;
-    settings.refine = vm.count("refine") > 0;
-    const bool plot = vm.count("no-plot") == 0;
-
-    const MapPair maps = loadMapPair(selection);
-    if (preset != "ours" && preset != "paper") throw po::error("--preset must be ours or paper (got " + preset + ")");
-    const bool paper = preset == "paper";
-    const std::vector<SweepCase> cases = paper ? sweep.paper_cases(k) : sweep.cases(k);
+    const MapPair maps = loadMapPair(c.selection);
+    if (c.preset != "ours" && c.preset != "paper")
+      throw po::error("--preset must be ours or paper (got " + c.preset + ")");
+    const bool paper = c.preset == "paper";
+    const std::vector<SweepCase> cases = paper ? sweep.paper_cases(c.k) : sweep.cases(c.k);
     std::cout << tool << ": " << maps.description << " (" << maps.source.landmarks.size() << " onto "
               << maps.target.landmarks.size() << " landmarks), " << cases.size() << " cases, " << countRuns(cases)
-              << " runs" << (settings.refine ? ", with refinement" : "") << std::endl;
+              << " runs" << (c.settings.refine ? ", with refinement" : "") << std::endl;
     // Opened early, so a refused --out fails before the runs; published whole at the end.
-    io::AtomicFolder folder = tools::openOutputFolder(out_dir, vm.count("overwrite") > 0);
+    io::AtomicFolder folder = tools::openOutputFolder(c.out_dir, c.overwrite);
 
     const auto start = std::chrono::steady_clock::now();
     // With the paper's XY rule the run count is an upper bound: the sweep stops at the first failing step.
     std::size_t planned = countRuns(cases);
     if (paper && sweep.paper_extension)
-      for (int step = 1; step <= kPaperMaxExtensionSteps; ++step) planned += countRuns(sweep.paper_extension(k, step));
+      for (int step = 1; step <= kPaperMaxExtensionSteps; ++step)
+        planned += countRuns(sweep.paper_extension(c.k, step));
     tools::Progress progress(tool, planned);
     const auto on_run = [&](const SweepRun& run) {
       progress.step(toString(run.strategy) + " k " + std::to_string(run.k) + " (" + run.displacement.toString() + ")");
     };
-    std::vector<SweepRun> runs = runSweep(cases, maps, settings, on_run, tools::interrupted);
-    if (paper && sweep.paper_extension) extendUntilFailure(sweep, k, maps, settings, on_run, runs);
+    std::vector<SweepRun> runs = runSweep(cases, maps, c.settings, on_run, tools::interrupted);
+    if (paper && sweep.paper_extension) extendUntilFailure(sweep, c.k, maps, c.settings, on_run, runs);
     progress.finish();
     if (tools::interrupted()) return discardInterrupted(tool, folder, runs.size(), countRuns(cases));
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
     tools::writeTextFile((folder.path() / "results.csv").string(), formatResultsCsv(sweep.name, runs));
-    tools::JsonObject run_info;
-    run_info.add("tool", tool)
-        .add("sweep", sweep.name)
-        .add("preset", preset)
-        .add("maps", maps.description)
-        .add("source_landmarks", maps.source.landmarks.size())
-        .add("target_landmarks", maps.target.landmarks.size())
-        .add("truth_known", maps.truth_known)
-        .add("min_observations", selection.min_observations)
-        .add("max_iterations", settings.max_iterations)
-        .add("refine", settings.refine)
-        .add("runs", runs.size())
-        .add("sweep_time_s", seconds);
-    if (!sweep.sweeps_k) run_info.add("k", static_cast<std::size_t>(k));
-    tools::writeTextFile((folder.path() / "run.json").string(), run_info.str() + "\n");
+    tools::writeTextFile((folder.path() / "run.json").string(),
+                         runInfoJson(tool, sweep, c, maps, runs.size(), seconds));
     const std::string csv_path = (folder.target() / "results.csv").string();
     std::cout << tool << ": " << runs.size() << " runs in " << std::lround(seconds) << " s; wrote " << csv_path
               << std::endl;
-    if (plot) return plotAndPublish(tool, folder);
+    if (c.plot) return plotAndPublish(tool, folder);
     folder.publish();
     return 0;
   });
