@@ -35,12 +35,42 @@ struct Pair {
   LandmarkMap source, target;
 };
 
-std::vector<double> parseList(const std::string& text) {
+/// @brief Reads one finite number of a list option; a command-line error (exit 2) naming the option otherwise.
+double parseNumber(const std::string& item, const std::string& option) {
+  std::size_t used = 0;
+  double value = 0.0;
+  try {
+    value = std::stod(item, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != item.size() || !std::isfinite(value))
+    throw po::error("--" + option + ": '" + item + "' is not a finite number");
+  return value;
+}
+
+/// @brief A comma-separated list of numbers, e.g. --yaws 0,30,60.
+std::vector<double> parseList(const std::string& text, const std::string& option) {
   std::vector<double> values;
   std::stringstream in(text);
   std::string item;
-  while (std::getline(in, item, ',')) values.push_back(std::stod(item));
+  while (std::getline(in, item, ',')) values.push_back(parseNumber(item, option));
+  if (values.empty()) throw po::error("--" + option + " must list at least one number");
   return values;
+}
+
+/// @brief A comma-separated list of x:y pairs, e.g. --xy 0:0,2:-1.
+std::vector<std::pair<double, double>> parseXyList(const std::string& text) {
+  std::vector<std::pair<double, double>> xys;
+  std::stringstream in(text);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    const auto colon = item.find(':');
+    if (colon == std::string::npos) throw po::error("--xy: '" + item + "' is not x:y");
+    xys.emplace_back(parseNumber(item.substr(0, colon), "xy"), parseNumber(item.substr(colon + 1), "xy"));
+  }
+  if (xys.empty()) throw po::error("--xy must list at least one x:y");
+  return xys;
 }
 
 /// Landmarks seen by both maps go to one of them only, by id parity.
@@ -79,123 +109,194 @@ std::vector<Pair> makePairs(const LandmarkMap& map, const std::vector<double>& o
   return pairs;
 }
 
+/// @brief What the command line asks for.
+struct GlobalSweepCommand {
+  std::string map_path, method = "global", perturb_text;
+  bool synthetic = false, disjoint = false, halves = false, verbose = false;
+  std::uint64_t seed = 1;
+  std::size_t landmarks = 8000, min_observations = 2;
+  std::vector<double> overlaps, yaws;
+  std::vector<std::pair<double, double>> xys;
+  GlobalAlignmentSettings settings;
+};
+
+/// @brief Success means within these of the truth (the 2 degrees and 5 cm).
+constexpr double kMaxRotationDeg = 2.0, kMaxTranslationM = 0.05;
+
+/// @brief Parses and checks the command line; false when only --help was asked for.
+bool parseCommand(int argc, char** argv, GlobalSweepCommand& c) {
+  std::string overlaps_text = "0.33,0.5,0.67", yaws_text = "0,30,60,90,120,150,180";
+  std::string xy_text = "0:0,2:2,-2:1,1:-2,-2:-2";
+  GlobalAlignmentSettings& g = c.settings;
+  po::options_description options("wicp_global_sweep (--map FILE | --synthetic) [options]\nOptions");
+  // One option per line reads as a table: not reflowed.
+  // clang-format off
+  options.add_options()
+      ("help,h", "print this help")
+      ("map", po::value(&c.map_path), "landmark map (paper format)")
+      ("synthetic", po::bool_switch(&c.synthetic), "use a synthetic session's estimated map (simulation/session.h)")
+      ("seed", tools::rangedValue(&c.seed, std::uint64_t{0})->default_value(c.seed), "synthetic session seed")
+      ("landmarks", tools::rangedValue(&c.landmarks, std::size_t{1}, std::size_t{10000000})->default_value(c.landmarks),
+       "synthetic landmarks placed (1-10000000)")
+      ("overlaps", po::value(&overlaps_text)->default_value(overlaps_text), "overlap fractions, each in (0, 1]")
+      ("disjoint", po::bool_switch(&c.disjoint), "deal out landmarks both mini-maps saw")
+      ("halves", po::bool_switch(&c.halves), "add the alternate-landmark halves of the whole map")
+      ("yaws", po::value(&yaws_text)->default_value(yaws_text), "yaw displacements, degrees")
+      ("xy", po::value(&xy_text)->default_value(xy_text), "XY displacements x:y, comma separated")
+      ("method", po::value(&c.method)->default_value(c.method),
+       "global | coarse (the global search alone) | icp (today's, from the identity) | truth (trimmed ICP from the truth)")
+      ("min-observations", tools::rangedValue(&c.min_observations, std::size_t{0}, std::size_t{1000000})
+                               ->default_value(c.min_observations), "as wicp_align")
+      ("shrink", tools::positiveValue(&g.shrink_factor, 100.0)->default_value(g.shrink_factor), "trimmed ICP shrink factor")
+      ("min-distance", tools::rangedValue(&g.min_distance, 0.0)->default_value(g.min_distance), "trimmed ICP floor (m; 0: derived)")
+      ("inlier-distance", tools::rangedValue(&g.inlier_distance, 0.0)->default_value(g.inlier_distance), "inlier radius (m; 0: 2 target spacings)")
+      ("yaw-hypotheses", tools::rangedValue(&g.yaw_hypotheses, 1u, 3600u)->default_value(g.yaw_hypotheses),
+       "rotations (1-3600)")
+      ("vote-cell", tools::positiveValue(&g.vote_cell)->default_value(g.vote_cell), "vote cell (m)")
+      ("perturb", po::value(&c.perturb_text), "method truth: start this far from the truth")
+      ("verbose,v", po::bool_switch(&c.verbose), "one line per case");
+  // clang-format on
+  po::variables_map vm;
+  if (!tools::parseCommandLine(argc, argv, options, vm)) return false;
+  if (c.synthetic == !c.map_path.empty()) throw po::error("give exactly one of --map FILE and --synthetic");
+  if (c.method != "global" && c.method != "coarse" && c.method != "icp" && c.method != "truth")
+    throw po::error("--method must be global, coarse, icp or truth (got " + c.method + ")");
+  c.overlaps = parseList(overlaps_text, "overlaps");
+  for (const double o : c.overlaps)
+    if (!(o > 0.0 && o <= 1.0)) throw po::error("--overlaps: each must be in (0, 1] (got " + std::to_string(o) + ")");
+  c.yaws = parseList(yaws_text, "yaws");
+  c.xys = parseXyList(xy_text);
+  if (!c.perturb_text.empty()) Displacement::parse(c.perturb_text);  // refused now, not after the first pair
+  return true;
+}
+
+/// @brief The map pairs are cut from: the file, or a synthetic session's estimated map.
+LandmarkMap loadMap(const GlobalSweepCommand& c) {
+  if (!c.synthetic) {
+    LandmarkMap map = io::readLandmarkMap(c.map_path);
+    if (map.frames.empty()) throw std::runtime_error(c.map_path + ": no frames to cut mini-maps from");
+    return map;
+  }
+  simulation::SyntheticSessionOptions session;
+  session.seed = c.seed;
+  session.num_landmarks = c.landmarks;
+  return simulation::generateSyntheticSession(session).estimated;
+}
+
+/// @brief The aligners of one pair, each given the pair's target once.
+struct PairAligners {
+  GlobalLandmarkAligner global;
+  LandmarkAligner icp;
+  GlobalAlignment trimmed;
+
+  PairAligners(const GlobalAlignmentSettings& settings, const LandmarkCloud::Ptr& target)
+      : global(settings), icp(refinedIcp()), trimmed(settings) {
+    global.setTarget(target);
+    icp.setTarget(target);
+    GlobalAlignment::Cloud target_xyz;
+    pcl::copyPointCloud(*target, target_xyz);
+    trimmed.setTarget(target_xyz);
+  }
+
+  static AlignmentSettings refinedIcp() {
+    AlignmentSettings plain;
+    plain.refine = true;
+    return plain;
+  }
+};
+
+/// @brief One case's outcome against the truth.
+struct CaseOutcome {
+  double rotation_error_deg = 0.0, translation_error_m = 0.0, time_ms = 0.0, inlier_fraction = 0.0;
+  bool good = false;
+};
+
+/// @brief Displaces the pair's source by d and aligns it back by the chosen method.
+CaseOutcome alignCase(const GlobalSweepCommand& c, PairAligners& aligners, const Pair& pair, const Displacement& d) {
+  LandmarkMap source = pair.source;
+  source.transform(d.toIsometry());
+  const LandmarkCloud::Ptr cloud = toLandmarkCloud(source, CovarianceWeight{});
+  AlignmentResult result;
+  CaseOutcome outcome;
+  if (c.method == "global" || c.method == "coarse") {
+    const auto r = aligners.global.align(cloud);
+    result = r.alignment;
+    outcome.inlier_fraction = r.global.inlier_fraction;
+    if (c.method == "coarse") result.transformation = r.global.transformation, result.time_ms = r.global.time_ms;
+  } else if (c.method == "truth") {  // the trimmed ICP alone, started at the truth
+    GlobalAlignment::Cloud xyz;
+    pcl::copyPointCloud(*cloud, xyz);
+    const Eigen::Isometry3d off =
+        c.perturb_text.empty() ? Eigen::Isometry3d::Identity() : Displacement::parse(c.perturb_text).toIsometry();
+    const auto r = aligners.trimmed.refine(xyz, (off * d.toIsometry().inverse()).matrix());
+    result.transformation = r.transformation, result.time_ms = r.time_ms;
+    outcome.inlier_fraction = r.inlier_fraction;
+    std::cout << "spacing " << r.target_spacing << " limit " << r.distance_limit << " median " << r.median_residual
+              << '\n';
+  } else {
+    result = aligners.icp.align(cloud);
+  }
+  const Eigen::Isometry3d truth = d.toIsometry().inverse();
+  const Eigen::Isometry3d estimate(result.transformation);
+  outcome.rotation_error_deg = rotationErrorDeg(estimate, truth);
+  outcome.translation_error_m = translationError(estimate, truth);
+  outcome.time_ms = result.time_ms;
+  outcome.good = outcome.rotation_error_deg <= kMaxRotationDeg && outcome.translation_error_m <= kMaxTranslationM;
+  return outcome;
+}
+
+/// @brief Every displacement of the grid on one pair; prints the pair's line and returns its outcomes.
+std::vector<CaseOutcome> sweepPair(const GlobalSweepCommand& c, const Pair& pair) {
+  PairAligners aligners(c.settings, toLandmarkCloud(pair.target, CovarianceWeight{}));
+  std::vector<CaseOutcome> outcomes;
+  for (const double yaw : c.yaws)
+    for (const auto& [x, y] : c.xys) {
+      Displacement d;
+      d.x = x, d.y = y, d.yaw_deg = yaw;
+      const CaseOutcome o = alignCase(c, aligners, pair, d);
+      outcomes.push_back(o);
+      if (c.verbose)
+        std::cout << pair.name << " yaw " << yaw << " xy " << x << "," << y << ": " << std::fixed
+                  << std::setprecision(3) << o.rotation_error_deg << " deg " << o.translation_error_m * 100 << " cm "
+                  << o.time_ms << " ms inl " << o.inlier_fraction << (o.good ? "" : "  FAIL") << std::defaultfloat
+                  << '\n';
+    }
+  std::vector<double> rot, trans, times, overlap;
+  std::size_t ok = 0;
+  for (const CaseOutcome& o : outcomes) {
+    rot.push_back(o.rotation_error_deg), trans.push_back(o.translation_error_m), times.push_back(o.time_ms);
+    overlap.push_back(o.inlier_fraction), ok += o.good ? 1 : 0;
+  }
+  std::cout << std::fixed << std::setprecision(2) << pair.name << ": source " << pair.source.landmarks.size()
+            << " target " << pair.target.landmarks.size() << " | " << ok << "/" << outcomes.size()
+            << " within 2 deg 5 cm | rot median " << median(rot) << " max " << quantile(rot, 1.0)
+            << " deg | trans median " << median(trans) * 100 << " max " << quantile(trans, 1.0) * 100
+            << " cm | time median " << median(times) << " max " << quantile(times, 1.0) << " ms | inliers "
+            << median(overlap) << std::defaultfloat << '\n';
+  return outcomes;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   return tools::runTool("wicp_global_sweep", [&] {
-    std::string map_path, overlaps_text = "0.33,0.5,0.67", yaws_text = "0,30,60,90,120,150,180", method = "global";
-    std::string xy_text = "0:0,2:2,-2:1,1:-2,-2:-2";
-    std::uint64_t seed = 1;
-    std::size_t landmarks = 8000, min_observations = 2;
-    double max_rotation = 2.0, max_translation = 0.05;
-    GlobalAlignmentSettings settings;
-    std::string perturb_text;
-    po::options_description options("wicp_global_sweep (--map FILE | --synthetic) [options]\nOptions");
-    // clang-format off
-    options.add_options()
-        ("help,h", "print this help")
-        ("map", po::value(&map_path), "landmark map (paper format)")
-        ("synthetic", "use a synthetic session's estimated map (simulation/session.h)")
-        ("seed", po::value(&seed)->default_value(seed), "synthetic session seed")
-        ("landmarks", po::value(&landmarks)->default_value(landmarks), "synthetic landmarks placed")
-        ("overlaps", po::value(&overlaps_text)->default_value(overlaps_text), "overlap fractions")
-        ("disjoint", "deal out landmarks both mini-maps saw")
-        ("halves", "add the alternate-landmark halves of the whole map")
-        ("yaws", po::value(&yaws_text)->default_value(yaws_text), "yaw displacements, degrees")
-        ("xy", po::value(&xy_text)->default_value(xy_text), "XY displacements x:y, comma separated")
-        ("method", po::value(&method)->default_value(method), "global | icp (today's, from the identity)")
-        ("min-observations", po::value(&min_observations)->default_value(min_observations), "as wicp_align")
-        ("shrink", po::value(&settings.shrink_factor)->default_value(settings.shrink_factor), "trimmed ICP shrink factor")
-        ("min-distance", po::value(&settings.min_distance)->default_value(settings.min_distance), "trimmed ICP floor")
-        ("inlier-distance", po::value(&settings.inlier_distance)->default_value(settings.inlier_distance), "inlier radius")
-        ("yaw-hypotheses", po::value(&settings.yaw_hypotheses)->default_value(settings.yaw_hypotheses), "rotations")
-        ("vote-cell", po::value(&settings.vote_cell)->default_value(settings.vote_cell), "vote cell")
-        ("perturb", po::value(&perturb_text), "method truth: start this far from the truth")
-        ("verbose,v", "one line per case");
-    // clang-format on
-    po::variables_map vm;
-    if (!tools::parseCommandLine(argc, argv, options, vm)) return 0;
-    LandmarkMap map;
-    if (vm.count("synthetic")) {
-      simulation::SyntheticSessionOptions session;
-      session.seed = seed;
-      session.num_landmarks = landmarks;
-      map = simulation::generateSyntheticSession(session).estimated;
-    } else {
-      map = io::readLandmarkMap(map_path);
-    }
-    std::vector<std::pair<double, double>> xys;
-    for (std::stringstream in(xy_text); in.good();) {
-      std::string item;
-      std::getline(in, item, ',');
-      const auto colon = item.find(':');
-      xys.emplace_back(std::stod(item.substr(0, colon)), std::stod(item.substr(colon + 1)));
-    }
-    const auto pairs =
-        makePairs(map, parseList(overlaps_text), vm.count("disjoint") > 0, vm.count("halves") > 0, min_observations);
+    GlobalSweepCommand command;
+    if (!parseCommand(argc, argv, command)) return 0;
+    const LandmarkMap map = loadMap(command);
+    const auto pairs = makePairs(map, command.overlaps, command.disjoint, command.halves, command.min_observations);
     std::size_t total = 0, passed = 0;
     std::vector<double> all_times;
     for (const auto& pair : pairs) {
-      const LandmarkCloud::Ptr target = toLandmarkCloud(pair.target, CovarianceWeight{});
-      GlobalLandmarkAligner global(settings);
-      global.setTarget(target);
-      AlignmentSettings plain;
-      plain.refine = true;
-      LandmarkAligner icp(plain);
-      GlobalAlignment trimmed(settings);
-      GlobalAlignment::Cloud target_xyz;
-      pcl::copyPointCloud(*target, target_xyz);
-      trimmed.setTarget(target_xyz);
-      icp.setTarget(target);
-      std::size_t ok = 0, n = 0;
-      std::vector<double> rot, trans, times, overlap;
-      for (double yaw : parseList(yaws_text))
-        for (const auto& [x, y] : xys) {
-          Displacement d;
-          d.x = x, d.y = y, d.yaw_deg = yaw;
-          LandmarkMap source = pair.source;
-          source.transform(d.toIsometry());
-          const LandmarkCloud::Ptr cloud = toLandmarkCloud(source, CovarianceWeight{});
-          AlignmentResult result;
-          double inlier_fraction = 0.0;
-          if (method == "global" || method == "coarse") {
-            const auto r = global.align(cloud);
-            result = r.alignment;
-            inlier_fraction = r.global.inlier_fraction;
-            if (method == "coarse") result.transformation = r.global.transformation, result.time_ms = r.global.time_ms;
-          } else if (method == "truth") {  // the trimmed ICP alone, started at the truth
-            GlobalAlignment::Cloud xyz;
-            pcl::copyPointCloud(*cloud, xyz);
-            const Eigen::Isometry3d off =
-                perturb_text.empty() ? Eigen::Isometry3d::Identity() : Displacement::parse(perturb_text).toIsometry();
-            const auto r = trimmed.refine(xyz, (off * d.toIsometry().inverse()).matrix());
-            result.transformation = r.transformation, result.time_ms = r.time_ms;
-            inlier_fraction = r.inlier_fraction;
-            std::cout << "spacing " << r.target_spacing << " limit " << r.distance_limit << " median "
-                      << r.median_residual << '\n';
-          } else {
-            result = icp.align(cloud);
-          }
-          const Eigen::Isometry3d truth = d.toIsometry().inverse();
-          const Eigen::Isometry3d estimate(result.transformation);
-          const double re = rotationErrorDeg(estimate, truth), te = translationError(estimate, truth);
-          const bool good = re <= max_rotation && te <= max_translation;
-          ok += good, ++n;
-          rot.push_back(re), trans.push_back(te), times.push_back(result.time_ms), overlap.push_back(inlier_fraction);
-          if (vm.count("verbose"))
-            std::cout << pair.name << " yaw " << yaw << " xy " << x << "," << y << ": " << std::fixed
-                      << std::setprecision(3) << re << " deg " << te * 100 << " cm " << result.time_ms << " ms inl "
-                      << inlier_fraction << (good ? "" : "  FAIL") << std::defaultfloat << '\n';
-        }
-      total += n, passed += ok;
-      all_times.insert(all_times.end(), times.begin(), times.end());
-      std::cout << std::fixed << std::setprecision(2) << pair.name << ": source " << pair.source.landmarks.size()
-                << " target " << pair.target.landmarks.size() << " | " << ok << "/" << n
-                << " within 2 deg 5 cm | rot median " << median(rot) << " max " << quantile(rot, 1.0)
-                << " deg | trans median " << median(trans) * 100 << " max " << quantile(trans, 1.0) * 100
-                << " cm | time median " << median(times) << " max " << quantile(times, 1.0) << " ms | inliers "
-                << median(overlap) << std::defaultfloat << '\n';
+      if (pair.source.landmarks.size() < 3 || pair.target.landmarks.size() < 3) {
+        std::cout << pair.name << ": fewer than 3 landmarks on one side, skipped\n";
+        continue;
+      }
+      for (const CaseOutcome& o : sweepPair(command, pair)) {
+        ++total, passed += o.good ? 1 : 0;
+        all_times.push_back(o.time_ms);
+      }
     }
+    if (total == 0) throw std::runtime_error("no pair with at least 3 landmarks on each side: nothing measured");
     std::cout << "total " << passed << "/" << total << " within 2 deg 5 cm, median time " << median(all_times)
               << " ms\n";
     return 0;

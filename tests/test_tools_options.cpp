@@ -69,6 +69,14 @@ TEST(ToolOptions, OutOfRangeNumbersAreCommandLineErrorsNamingTheOption) {
       {"wicp_sweep_yaw", "--k -1", "--k must be between 1 and 1000 (got -1)"},
       {"wicp_sweep_xy", "--max-iterations -5", "--max-iterations must be between 1 and 1000000 (got -5)"},
       {"wicp_sweep_xy_yaw", "--min-observations -1", "--min-observations must be at least 0 (got -1)"},
+      {"wicp_global_sweep", "--synthetic --landmarks -1", "--landmarks must be between 1 and 10000000 (got -1)"},
+      {"wicp_global_sweep", "--synthetic --seed -1", "--seed must be at least 0 (got -1)"},
+      {"wicp_global_sweep", "--synthetic --yaw-hypotheses 0", "--yaw-hypotheses must be between 1 and 3600 (got 0)"},
+      {"wicp_global_sweep", "--synthetic --yaws 0,x", "--yaws: 'x' is not a finite number"},
+      {"wicp_global_sweep", "--synthetic --xy 1", "--xy: '1' is not x:y"},
+      {"wicp_global_sweep", "--synthetic --overlaps 0", "--overlaps: each must be in (0, 1]"},
+      {"wicp_global_sweep", "--synthetic --method foo", "--method must be global, coarse, icp or truth (got foo)"},
+      {"wicp_global_sweep", "", "give exactly one of --map FILE and --synthetic"},
   };
   for (const auto& c : cases) {
     SCOPED_TRACE(std::string(c.tool) + " " + c.args);
