@@ -140,11 +140,23 @@ struct Ranked {
   bool correct = false;
 };
 
-int evaluate(int argc, const char* const argv[]) {
+/// @brief What the evaluation counts over every query keyframe.
+struct EvaluationTally {
+  std::vector<Ranked> ranked;
+  std::size_t queries = 0, revisits = 0, accepted = 0, accepted_true = 0, queries_closed = 0;
+};
+
+/// @brief evaluate's command line.
+struct EvaluateCommand {
   Sources sources;
   std::string vocabulary_path;
+  bool self_trained = false;
   double min_overlap = 0.3;
   mapping::PlaceRecognitionOptions place;
+};
+
+/// @brief Parses evaluate's command line; false when only --help was asked for.
+bool parseEvaluate(int argc, const char* const argv[], EvaluateCommand& c) {
   po::options_description description(
       "wicp_vocabulary evaluate (--vocabulary FILE | --self-trained) (--dataset DIR | --synthetic SEED)\n"
       "Precision and recall of place recognition on sequences with ground truth: a query's true revisits are\n"
@@ -155,83 +167,110 @@ int evaluate(int argc, const char* const argv[]) {
   // clang-format off
   description.add_options()
       ("help,h", "print this help")
-      ("vocabulary", po::value(&vocabulary_path), "vocabulary file (trained on other data)")
-      ("self-trained", "train the vocabulary on the evaluated keyframes themselves (what an online vocabulary "
-                       "could at best learn; overfits by construction)")
-      ("min-overlap", tools::rangedValue(&min_overlap, 0.0, 1.0)->default_value(min_overlap),
+      ("vocabulary", po::value(&c.vocabulary_path), "vocabulary file (trained on other data)")
+      ("self-trained", po::bool_switch(&c.self_trained),
+       "train the vocabulary on the evaluated keyframes themselves (what an online vocabulary "
+       "could at best learn; overfits by construction)")
+      ("min-overlap", tools::rangedValue(&c.min_overlap, 0.0, 1.0)->default_value(c.min_overlap),
        "viewing overlap of a true revisit (0-1)")
-      ("exclude-recent", tools::rangedValue(&place.exclude_recent, std::size_t{0})->default_value(place.exclude_recent),
+      ("exclude-recent", tools::rangedValue(&c.place.exclude_recent, std::size_t{0})->default_value(c.place.exclude_recent),
        "keyframes next to the query never proposed");
   // clang-format on
-  addSourceOptions(description, sources);
+  addSourceOptions(description, c.sources);
   po::variables_map vm;
-  if (!tools::parseCommandLine(argc, argv, description, vm)) return 0;
-  if (vocabulary_path.empty() == !vm.count("self-trained"))
+  if (!tools::parseCommandLine(argc, argv, description, vm)) return false;
+  if (c.vocabulary_path.empty() == !c.self_trained)
     throw po::error("give exactly one of --vocabulary and --self-trained");
-  // A bad vocabulary file fails before any frame is read.
-  mapping::BinaryVocabulary::ConstPtr vocabulary;
-  if (!vocabulary_path.empty())
-    vocabulary = std::make_shared<const mapping::BinaryVocabulary>(mapping::BinaryVocabulary::load(vocabulary_path));
-  const std::vector<Keyframes> all = loadSources(sources);
-  if (!vocabulary)
-    vocabulary =
-        std::make_shared<const mapping::BinaryVocabulary>(mapping::BinaryVocabulary::train(descriptorsOf(all)));
+  return true;
+}
 
-  std::vector<Ranked> ranked;
-  std::size_t queries = 0, revisits = 0, accepted = 0, accepted_true = 0, queries_closed = 0;
-  for (const Keyframes& k : all) {
-    mapping::PlaceRecognizer recognizer(vocabulary, place);
-    const mapping::LoopVerifier verifier(k.camera);
-    for (const auto& [id, keyframe] : k.snapshot.keyframes) {
-      const mapping::BowVector bow = vocabulary->transform(keyframe.descriptors);
-      const std::set<frontend::KeyframeId> covisible = k.snapshot.covisible(id);
-      bool has_revisit = false;
-      for (const auto& [other, unused] : k.snapshot.keyframes)
-        if (other + place.exclude_recent < id && !covisible.count(other) &&
-            mapping::viewOverlap(k.snapshot, id, other, k.camera) >= min_overlap)
-          has_revisit = true;
-      ++queries;
-      revisits += has_revisit;
-      const auto candidates = recognizer.rank(id, bow, covisible);
-      const double reference = recognizer.referenceScore(id, bow);
-      if (!candidates.empty() && reference > 0.0)
-        ranked.push_back({std::min(1.0, candidates.front().score / reference),
-                          mapping::viewOverlap(k.snapshot, id, candidates.front().keyframe, k.camera) >= min_overlap});
-      bool closed = false;
-      for (const mapping::PlaceCandidate& c : recognizer.detect(id, bow, covisible)) {
-        const auto result =
-            verifier.verify(k.snapshot, id, k.snapshot, c.keyframe, mapping::odometryPrior(k.snapshot, id, c.keyframe));
-        if (!result.accepted) continue;
-        ++accepted;
-        // A false loop is one whose relative pose is wrong: the poses are true, so the truth is known.
-        const Eigen::Isometry3d error =
-            (k.snapshot.keyframes.at(c.keyframe).pose_wc.inverse() * keyframe.pose_wc).inverse() *
-            result.constraint.query_in_match;
-        const bool true_loop = error.translation().norm() <= kTrueLoopMetres &&
-                               Eigen::AngleAxisd(error.linear()).angle() <= kTrueLoopDegrees * kDegree;
-        accepted_true += true_loop;
-        closed = closed || true_loop;
-      }
-      queries_closed += closed;
-      recognizer.add(id, bow);
+/// @brief True when an older keyframe, not covisible and beyond the excluded recent ones, sees enough of the query.
+bool hasTrueRevisit(const Keyframes& k, frontend::KeyframeId id, const std::set<frontend::KeyframeId>& covisible,
+                    const EvaluateCommand& c) {
+  for (const auto& [other, unused] : k.snapshot.keyframes)
+    if (other + c.place.exclude_recent < id && !covisible.count(other) &&
+        mapping::viewOverlap(k.snapshot, id, other, k.camera) >= c.min_overlap)
+      return true;
+  return false;
+}
+
+/// @brief A loop is true when its relative pose is within kTrueLoopMetres and kTrueLoopDegrees of the truth (the
+/// keyframes' poses are the truth here).
+bool isTrueLoop(const Keyframes& k, frontend::KeyframeId query, frontend::KeyframeId match,
+                const Eigen::Isometry3d& query_in_match) {
+  const Eigen::Isometry3d error =
+      (k.snapshot.keyframes.at(match).pose_wc.inverse() * k.snapshot.keyframes.at(query).pose_wc).inverse() *
+      query_in_match;
+  return error.translation().norm() <= kTrueLoopMetres &&
+         Eigen::AngleAxisd(error.linear()).angle() <= kTrueLoopDegrees * kDegree;
+}
+
+/// @brief Every keyframe of one sequence as a query, in order: appearance ranking and the whole pipeline.
+void evaluateSequence(const Keyframes& k, const mapping::BinaryVocabulary::ConstPtr& vocabulary,
+                      const EvaluateCommand& c, EvaluationTally& tally) {
+  mapping::PlaceRecognizer recognizer(vocabulary, c.place);
+  const mapping::LoopVerifier verifier(k.camera);
+  for (const auto& [id, keyframe] : k.snapshot.keyframes) {
+    const mapping::BowVector bow = vocabulary->transform(keyframe.descriptors);
+    const std::set<frontend::KeyframeId> covisible = k.snapshot.covisible(id);
+    ++tally.queries;
+    tally.revisits += hasTrueRevisit(k, id, covisible, c) ? 1 : 0;
+    const auto candidates = recognizer.rank(id, bow, covisible);
+    const double reference = recognizer.referenceScore(id, bow);
+    if (!candidates.empty() && reference > 0.0)
+      tally.ranked.push_back(
+          {std::min(1.0, candidates.front().score / reference),
+           mapping::viewOverlap(k.snapshot, id, candidates.front().keyframe, k.camera) >= c.min_overlap});
+    bool closed = false;
+    for (const mapping::PlaceCandidate& candidate : recognizer.detect(id, bow, covisible)) {
+      const auto result = verifier.verify(k.snapshot, id, k.snapshot, candidate.keyframe,
+                                          mapping::odometryPrior(k.snapshot, id, candidate.keyframe));
+      if (!result.accepted) continue;
+      ++tally.accepted;
+      const bool true_loop = isTrueLoop(k, id, candidate.keyframe, result.constraint.query_in_match);
+      tally.accepted_true += true_loop ? 1 : 0;
+      closed = closed || true_loop;
     }
+    tally.queries_closed += closed ? 1 : 0;
+    recognizer.add(id, bow);
   }
+}
+
+/// @brief The JSON line: precision and recall of the top candidate over score thresholds, and of the pipeline.
+std::string evaluationJson(const EvaluationTally& t, std::size_t words) {
   tools::JsonObject json;
-  json.add("keyframes", queries).add("queries_with_revisit", revisits).add("words", vocabulary->wordCount());
+  json.add("keyframes", t.queries).add("queries_with_revisit", t.revisits).add("words", words);
   for (double threshold : {0.0, 0.5, 0.7, 0.8, 0.9, 0.95}) {
     std::size_t proposed = 0, correct = 0;
-    for (const Ranked& r : ranked)
+    for (const Ranked& r : t.ranked)
       if (r.normalised >= threshold) ++proposed, correct += r.correct;
     std::ostringstream key;
     key << "top1_at_" << threshold;
     json.add(key.str() + "_precision", proposed ? static_cast<double>(correct) / proposed : 1.0);
-    json.add(key.str() + "_recall", revisits ? static_cast<double>(correct) / revisits : 0.0);
+    json.add(key.str() + "_recall", t.revisits ? static_cast<double>(correct) / t.revisits : 0.0);
   }
-  json.add("pipeline_loops_accepted", accepted)
-      .add("pipeline_loops_false", accepted - accepted_true)
-      .add("pipeline_precision", accepted ? static_cast<double>(accepted_true) / accepted : 1.0)
-      .add("pipeline_recall", revisits ? static_cast<double>(queries_closed) / revisits : 0.0);
-  std::cout << json.str() << "\n";
+  json.add("pipeline_loops_accepted", t.accepted)
+      .add("pipeline_loops_false", t.accepted - t.accepted_true)
+      .add("pipeline_precision", t.accepted ? static_cast<double>(t.accepted_true) / t.accepted : 1.0)
+      .add("pipeline_recall", t.revisits ? static_cast<double>(t.queries_closed) / t.revisits : 0.0);
+  return json.str();
+}
+
+int evaluate(int argc, const char* const argv[]) {
+  EvaluateCommand command;
+  if (!parseEvaluate(argc, argv, command)) return 0;
+  // A bad vocabulary file fails before any frame is read.
+  mapping::BinaryVocabulary::ConstPtr vocabulary;
+  if (!command.vocabulary_path.empty())
+    vocabulary =
+        std::make_shared<const mapping::BinaryVocabulary>(mapping::BinaryVocabulary::load(command.vocabulary_path));
+  const std::vector<Keyframes> all = loadSources(command.sources);
+  if (!vocabulary)
+    vocabulary =
+        std::make_shared<const mapping::BinaryVocabulary>(mapping::BinaryVocabulary::train(descriptorsOf(all)));
+  EvaluationTally tally;
+  for (const Keyframes& k : all) evaluateSequence(k, vocabulary, command, tally);
+  std::cout << evaluationJson(tally, vocabulary->wordCount()) << "\n";
   return 0;
 }
 
