@@ -105,3 +105,47 @@ TEST(ToolsPlots, WithoutPythonTheToolWarnsAndSucceeds) {
   EXPECT_FALSE(fs::exists(dir / "ate.png"));
   EXPECT_NE(run.out.find("\"ate_rmse_m\""), std::string::npos);  // the numbers are still there
 }
+
+// A plotting script that fails: the warning ends with what it said last (a traceback's last line), and the
+// traceback itself does not reach the tool's stderr.
+TEST(ToolsPlots, AFailingPlotterIsOneWarningLineNotATraceback) {
+  const fs::path dir = weighted_icp::testing::scratchDir("failing_plotter");
+  writeTrajectories(dir);
+  const fs::path fake = dir / "failing_python";
+  {
+    std::ofstream script(fake);
+    script << "#!/bin/sh\n"
+              "echo 'Traceback (most recent call last):' >&2\n"
+              "echo '  File \"plot_results.py\", line 1, in <module>' >&2\n"
+              "echo 'ValueError: the plotter broke' >&2\n"
+              "exit 1\n";
+  }
+  fs::permissions(fake, fs::perms::owner_all);
+  ::setenv("WEIGHTED_ICP_PLOT_PYTHON", fake.c_str(), 1);
+  const auto run = runBuiltTool(
+      "wicp_evaluate",
+      (dir / "gt.txt").string() + " " + (dir / "est.txt").string() + " --plot " + (dir / "ate.png").string(), dir, 120);
+  ::unsetenv("WEIGHTED_ICP_PLOT_PYTHON");
+  EXPECT_EQ(run.status, 0) << run.err;
+  EXPECT_NE(run.err.find("wicp_evaluate: warning: no plot"), std::string::npos) << run.err;
+  EXPECT_NE(run.err.find("ValueError: the plotter broke"), std::string::npos) << run.err;
+  EXPECT_EQ(run.err.find("most recent call last"), std::string::npos) << run.err;
+  EXPECT_FALSE(fs::exists(dir / "ate.png"));
+}
+
+// A picture asked for in a folder that does not exist: a warning naming the folder, the numbers still printed.
+TEST(ToolsPlots, APictureInAMissingFolderIsAWarningNamingIt) {
+  const fs::path dir = weighted_icp::testing::scratchDir("missing_folder");
+  writeMaps(dir);
+  const fs::path png = dir / "no" / "such" / "align.png";
+  const auto run = runBuiltTool("wicp_align",
+                                "--source " + (dir / "a.txt").string() + " --target " + (dir / "b.txt").string() +
+                                    " --plot " + png.string() + " --json",
+                                dir, 120);
+  EXPECT_EQ(run.status, 0) << run.err;
+  EXPECT_NE(run.err.find("wicp_align: warning: no plot"), std::string::npos) << run.err;
+  EXPECT_NE(run.err.find((dir / "no" / "such").string() + " does not exist"), std::string::npos) << run.err;
+  EXPECT_EQ(run.err.find("most recent call last"), std::string::npos) << run.err;
+  EXPECT_FALSE(fs::exists(png));
+  EXPECT_NE(run.out.find("\"fitness_score\""), std::string::npos);
+}

@@ -3,6 +3,7 @@
 
 #include <spawn.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <cerrno>
 #include <cstdlib>
@@ -70,6 +71,8 @@ bool draw(const std::string& tool, const std::string& kind, const fs::path& data
   try {
     if (!fs::exists(python)) throw std::runtime_error(python + " not found (Debian: python3 with python3-matplotlib)");
     if (!fs::exists(script)) throw std::runtime_error(script + " not found (it is in the source tree's scripts/)");
+    const fs::path folder = fs::absolute(png).parent_path();
+    if (!fs::is_directory(folder)) throw std::runtime_error("the folder " + folder.string() + " does not exist");
     io::writeAtomically(png, [&](const std::string& temporary) {
       runProcess({python, script, kind, "--data", data.string(), "--out", temporary, "--title", title});
     });
@@ -82,22 +85,55 @@ bool draw(const std::string& tool, const std::string& kind, const fs::path& data
 
 }  // namespace
 
+namespace {
+
+/// The last non-empty line of a file (a Python traceback's last line says what went wrong), clipped; "" if none.
+std::string lastLineOf(const fs::path& path) {
+  std::ifstream in(path);
+  std::string line, last;
+  while (std::getline(in, line))
+    if (line.find_first_not_of(" \t\r") != std::string::npos) last = line;
+  const std::size_t start = last.find_first_not_of(" \t");
+  last = start == std::string::npos ? std::string() : last.substr(start);
+  return last.size() > 200 ? last.substr(0, 200) + "..." : last;
+}
+
+}  // namespace
+
 void runProcess(const std::vector<std::string>& argv) {
   std::vector<char*> args;
   for (const std::string& a : argv) args.push_back(const_cast<char*>(a.c_str()));
   args.push_back(nullptr);
+  // The child's stderr goes to a file: on failure its last line is the message, not a whole traceback on ours.
+  std::string log = (fs::temp_directory_path() / "wicp_process_XXXXXX").string();
+  const int log_fd = ::mkstemp(log.data());
+  if (log_fd < 0) throw std::runtime_error("cannot create a log file for " + argv[0] + ": " + std::strerror(errno));
+  struct Cleanup {
+    int fd;
+    std::string path;
+    ~Cleanup() {
+      ::close(fd);
+      ::unlink(path.c_str());
+    }
+  } cleanup{log_fd, log};
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_adddup2(&actions, log_fd, STDERR_FILENO);
   pid_t pid = 0;
-  if (const int error = posix_spawn(&pid, args[0], nullptr, nullptr, args.data(), environ))
-    throw std::runtime_error("cannot start " + argv[0] + ": " + std::strerror(error));
+  const int error = posix_spawn(&pid, args[0], &actions, nullptr, args.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  if (error) throw std::runtime_error("cannot start " + argv[0] + ": " + std::strerror(error));
   int status = 0;
   if (waitpid(pid, &status, 0) < 0) throw std::runtime_error("lost " + argv[0] + ": " + std::strerror(errno));
   if (WIFEXITED(status) && WEXITSTATUS(status) == kNoMatplotlib && argv.size() > 1)
     throw std::runtime_error("matplotlib is not installed for " + argv[0] + " (Debian: python3-matplotlib)");
-  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+    const std::string said = lastLineOf(log);
     throw std::runtime_error(
         (argv.size() > 1 ? argv[1] : argv[0]) + " failed (" +
         (WIFEXITED(status) ? "exit status " + std::to_string(WEXITSTATUS(status)) : std::string("killed by a signal")) +
-        ")");
+        ")" + (said.empty() ? std::string() : ": " + said));
+  }
 }
 
 bool plotTrajectory(const std::string& tool, const Trajectory& groundtruth, const Trajectory& estimate,

@@ -15,9 +15,11 @@
 
 namespace weighted_icp::tools {
 
-/// @brief Runs a program and waits for it.
+/// @brief Runs a program and waits for it. Its standard error is kept in a temporary file, not shown: a failure's
+/// message ends with its last line (a Python traceback's last line says what went wrong).
 /// @param argv  the program (an absolute path: no PATH lookup) and its arguments
-/// @throws std::runtime_error when it cannot start, is killed or exits non-zero, naming argv[1] (the script);
+/// @throws std::runtime_error when it cannot start, is killed or exits non-zero, naming argv[1] (the script) and
+///         the last line it wrote to standard error;
 ///         exit status 3 reads "matplotlib is not installed", scripts/plot_results.py's way of saying so
 void runProcess(const std::vector<std::string>& argv);
 
