@@ -45,7 +45,11 @@ tools::JsonObject makeReport(const std::vector<std::string>& folders, const mapp
     const mapping::SessionLink& link = merge.sessions[s];
     const std::string key = "session_" + std::to_string(s);
     report.add(key + "_folder", folders[s]).add(key + "_merged", link.merged);
-    if (s > 0) report.add(key + "_loops_found", link.loops_found).add(key + "_loops_agreeing", link.loops_agreeing);
+    if (s > 0)
+      report.add(key + "_loops_found", link.loops_found)
+          .add(key + "_loops_agreeing", link.loops_agreeing)
+          .add(key + "_free_space_judged", link.free_space_judged)
+          .add(key + "_free_space_violation", link.free_space_violation);
     if (link.merged) {
       ++merged;
       report.add(key + "_linked_to", link.linked_to)
@@ -90,6 +94,10 @@ int main(int argc, char** argv) {
         ("min-loops", tools::rangedValue(&options.min_agreeing_loops, std::size_t{1}, std::size_t{1000})
                           ->default_value(options.min_agreeing_loops),
          "verified loops that must agree on a session's transform (1-1000)")
+        ("max-free-space-violation", tools::rangedValue(&options.max_free_space_violation, 0.0, 1.0)
+                                         ->default_value(options.max_free_space_violation),
+         "largest fraction of landmark sightings that may lie in space the other session saw through (0-1; "
+         "1 turns the check off; docs/mapping.md)")
         ("minimap-keyframes", tools::rangedValue(&options.keyframes_per_minimap, std::size_t{1}, std::size_t{100000})
                                   ->default_value(options.keyframes_per_minimap),
          "keyframes per mini-map of graph.txt (1-100000)");

@@ -148,5 +148,46 @@ TEST(WicpMerge, ARunOfAnotherPlaceIsReportedAsNoOverlapAndBadSessionsAreRefused)
   EXPECT_EQ(run.status, 2);
 }
 
+// Perceptual aliasing across sessions: in a room whose every surface shows the same texture, runs of places that
+// do not overlap look alike to the bag of words but must not be merged (no verified loop, or too few agreeing);
+// two runs that do overlap in that room are still merged, so the guard is not refusing everything.
+TEST(WicpMerge, RepeatedTextureElsewhereIsNoOverlapWhileARealOverlapStillMerges) {
+  const fs::path scratch = scratchDir("merge_aliased");
+  const std::string aliased = "--no-loop-closure --repeated-texture";
+  const fs::path a = slamRun(scratch, "a", 0, 35, aliased);
+  const fs::path overlapping = slamRun(scratch, "overlapping", 20, 55, aliased);
+  for (const std::size_t first : {200u, 400u, 600u}) {  // a quarter, half and three quarters round the room
+    const std::string name = "elsewhere_" + std::to_string(first);
+    const fs::path elsewhere = slamRun(scratch, name, first, first + 35, aliased);
+    const ToolRun run =
+        runBuiltTool("wicp_merge",
+                     "--session " + (a / "session").string() + " --session " + (elsewhere / "session").string() +
+                         " --out " + (scratch / ("m_" + name)).string(),
+                     scratch);
+    ASSERT_EQ(run.status, 0) << run.err;
+    const std::string report = readAll(scratch / ("m_" + name) / "report.json");
+    EXPECT_NE(report.find("\"session_1_merged\":false"), std::string::npos) << name << ": " << report;
+    EXPECT_NE(report.find("no overlap"), std::string::npos) << name << ": " << report;
+  }
+  const ToolRun run =
+      runBuiltTool("wicp_merge",
+                   "--session " + (a / "session").string() + " --session " + (overlapping / "session").string() +
+                       " --out " + (scratch / "m_overlap").string(),
+                   scratch);
+  ASSERT_EQ(run.status, 0) << run.err;
+  const std::string report = readAll(scratch / "m_overlap" / "report.json");
+  EXPECT_NE(report.find("\"session_1_merged\":true"), std::string::npos) << report;
+  const simulation::SyntheticRgbdOptions options = [] {
+    simulation::SyntheticRgbdOptions o;
+    o.repeated_texture = true;
+    return o;
+  }();
+  const simulation::SyntheticRgbdSequence truth(options);
+  const Eigen::Isometry3d expected = truth.cameraToWorld(0).inverse() * truth.cameraToWorld(20);
+  const Trajectory merged = io::readTrajectory((scratch / "m_overlap" / "trajectory_session_1.txt").string());
+  ASSERT_FALSE(merged.empty());
+  EXPECT_LT((merged[0].pose.translation() - expected.translation()).norm(), 0.02);
+}
+
 }  // namespace
 }  // namespace weighted_icp::testing

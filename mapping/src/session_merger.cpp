@@ -88,6 +88,22 @@ std::vector<LoopConstraint> agreeingLoops(const std::vector<LoopConstraint>& loo
   return best;
 }
 
+/// The free-space check both ways (each map's landmarks against the other's keyframes), recorded in `link`; true
+/// when the violations stay within the options' bound.
+bool consistent(const Prepared& query, const PinholeCamera& query_camera, const Prepared& match,
+                const PinholeCamera& match_camera, const Eigen::Isometry3d& query_in_match,
+                const SessionMergeOptions& options, SessionLink& link) {
+  const FreeSpaceCheck into_match =
+      checkFreeSpace(match.snapshot, match_camera, query.snapshot, query_in_match, options.free_space);
+  const FreeSpaceCheck into_query =
+      checkFreeSpace(query.snapshot, query_camera, match.snapshot, query_in_match.inverse(), options.free_space);
+  FreeSpaceCheck both = into_match;
+  both += into_query;
+  link.free_space_judged = both.landmarks_judged;
+  link.free_space_violation = both.violationRatio();
+  return both.violationRatio() <= options.max_free_space_violation;
+}
+
 /// Links every session it can to the merged ones (the first, then those linked to it), until none is left.
 void linkSessions(const std::vector<Prepared>& prepared, const BinaryVocabulary::ConstPtr& vocabulary,
                   const SessionMergeOptions& options, const std::vector<Session>& sessions, SessionMerge& merge) {
@@ -105,6 +121,8 @@ void linkSessions(const std::vector<Prepared>& prepared, const BinaryVocabulary:
         link.loops_found += loops.size();
         link.loops_agreeing = std::max(link.loops_agreeing, agreeing.size());
         if (agreeing.size() < options.min_agreeing_loops) continue;
+        if (!consistent(prepared[s], sessions[s].camera, prepared[m], sessions[m].camera, s_in_m, options, link))
+          continue;
         link.merged = progress = true;
         link.linked_to = m;
         link.world_in_first = merge.sessions[m].world_in_first * s_in_m;
