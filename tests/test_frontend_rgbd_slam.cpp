@@ -137,7 +137,11 @@ TEST(RgbdSlam, AnUntrackableFrameStartsANewSegmentAndKeepsTheMap) {
       keyframes_before = slam.map().keyframeCount();
       image.color.setTo(cv::Scalar::all(0));  // no features: cannot be tracked
       image.depth.setTo(0.0f);
-      EXPECT_EQ(slam.process(image).result.status, frontend::TrackingStatus::Lost);
+      const frontend::TrackingResult& lost = slam.process(image).result;
+      EXPECT_EQ(lost.status, frontend::TrackingStatus::Lost);
+      // The segment ends, but the frame keeps a pose: the motion model's prediction.
+      EXPECT_TRUE(lost.pose_predicted);
+      EXPECT_FALSE(lost.measuredPose());
       continue;
     }
     slam.process(image);
@@ -154,7 +158,45 @@ TEST(RgbdSlam, AnUntrackableFrameStartsANewSegmentAndKeepsTheMap) {
     for (const auto& [id, pose] : minimap.frames) segments.insert(keyframes.at(id).segment);
     EXPECT_EQ(segments.size(), 1u);
   }
-  EXPECT_EQ(slam.trajectory().size(), sequence.size() - 1);
+  EXPECT_EQ(slam.trajectory().size(), sequence.size());  // every frame, the lost one predicted
+}
+
+// A frame the quality gate refuses and tracking cannot pose (here black) is skipped: the segment goes on, nothing
+// of it is mapped, and it keeps the motion model's pose, close to the truth on a smooth path; the next frames are
+// predicted for their own time and track as before.
+TEST(RgbdSlam, ASkippedFrameKeepsAPredictedPoseAndTheSegmentGoesOn) {
+  simulation::SyntheticRgbdOptions options = syntheticOptions(false);
+  options.frames = 45;
+  const simulation::SyntheticRgbdSequence sequence(options);
+  frontend::RgbdSlam slam(sequence.options().camera, deterministic());
+  std::size_t landmarks_before = 0;
+  for (std::size_t i = 0; i < sequence.size(); ++i) {
+    RgbdFrame image = sequence.frame(i).rgbd;
+    if (i == 30) {
+      image.color.setTo(cv::Scalar::all(0));
+      landmarks_before = slam.map().mapPointCount();
+      const frontend::TrackingResult& skipped = slam.process(image).result;
+      EXPECT_EQ(skipped.status, frontend::TrackingStatus::SkippedLowQuality) << skipped.reason;
+      EXPECT_TRUE(skipped.refused_by_quality_gate);
+      EXPECT_TRUE(skipped.pose_predicted);
+      EXPECT_EQ(slam.map().mapPointCount(), landmarks_before);  // nothing of it mapped
+      continue;
+    }
+    const frontend::TrackingResult& result = slam.process(image).result;
+    EXPECT_TRUE(result.measuredPose()) << "frame " << i << ": " << result.reason;
+  }
+  slam.finish();
+  for (const auto& keyframe : slam.map().keyframes()) EXPECT_EQ(keyframe.segment, 0u);
+  const Trajectory trajectory = slam.trajectory();
+  ASSERT_EQ(trajectory.size(), sequence.size());
+  // The predicted step 29 -> 30 against the true one (each run's world is its first camera).
+  const Eigen::Isometry3d estimated = trajectory[29].pose.inverse() * trajectory[30].pose;
+  const Eigen::Isometry3d true_step = sequence.cameraToWorld(29).inverse() * sequence.cameraToWorld(30);
+  EXPECT_LT((estimated.translation() - true_step.translation()).norm(), 0.01);
+  EXPECT_LT(Eigen::AngleAxisd(estimated.rotation().transpose() * true_step.rotation()).angle() * 180.0 / M_PI, 0.5);
+  Trajectory truth;
+  for (std::size_t i = 0; i < sequence.size(); ++i) truth.push_back({sequence.timestamp(i), sequence.cameraToWorld(i)});
+  EXPECT_LT(metrics::computeAte(truth, trajectory).translation.rmse, 0.01);
 }
 
 TEST(RgbdSlam, FramesWithoutDepthAreTrackedTwoDimensionally) {

@@ -31,6 +31,7 @@ struct TrackResult {
   std::string status;
   std::string reason;
   bool has_pose = false;
+  bool pose_predicted = false;
   Eigen::Matrix4d pose = Eigen::Matrix4d::Identity();
   bool keyframe = false;
   bool refused_by_quality_gate = false;
@@ -43,6 +44,7 @@ TrackResult toTrackResult(const frontend::FrameRecord& record) {
   out.status = frontend::toString(record.result.status);
   out.reason = record.result.reason;
   out.has_pose = record.result.hasPose();
+  out.pose_predicted = record.result.pose_predicted;
   out.pose = record.result.pose_wc.matrix();
   out.keyframe = record.result.keyframe;
   out.refused_by_quality_gate = record.result.refused_by_quality_gate;
@@ -244,7 +246,9 @@ void bindTrackResult(py::module_& m) {
   py::class_<TrackResult>(m, "TrackResult", "What track() did with one frame.")
       .def_readonly("status", &TrackResult::status, "'initialized', 'tracked', ... as wicp_rgbd_slam prints it.")
       .def_readonly("reason", &TrackResult::reason, "Why, when lost or skipped.")
-      .def_readonly("has_pose", &TrackResult::has_pose, "Whether the frame got a pose.")
+      .def_readonly("has_pose", &TrackResult::has_pose, "Whether the frame got a pose (measured or predicted).")
+      .def_readonly("pose_predicted", &TrackResult::pose_predicted,
+                    "The frame could not be tracked (skipped or lost): its pose is the motion model's prediction.")
       .def_property_readonly(
           "pose",
           [](const TrackResult& r) -> py::object { return r.has_pose ? py::object(toArray(r.pose)) : py::none(); },

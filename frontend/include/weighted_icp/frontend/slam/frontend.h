@@ -117,7 +117,14 @@ struct TrackingResult {
   bool used_clahe = false;
   double quality_score = std::numeric_limits<double>::quiet_NaN();
 
-  bool hasPose() const {
+  /// @brief A frame that could not be tracked (SkippedLowQuality or Lost) while a motion was known still has a pose:
+  /// the constant-velocity model's prediction, so that the trajectory has every frame. Nothing of it is mapped.
+  bool pose_predicted = false;
+
+  /// @brief The frame has a pose in the trajectory: measured, or predicted (pose_predicted).
+  bool hasPose() const { return measuredPose() || pose_predicted; }
+  /// @brief The pose was measured from this frame's image (not predicted).
+  bool measuredPose() const {
     return status == TrackingStatus::Initialized || status == TrackingStatus::Tracked ||
            status == TrackingStatus::TrackedRelative || status == TrackingStatus::TrackedDense;
   }
@@ -202,8 +209,12 @@ class Frontend {
   /// Pixel pairs (last keyframe, frame) of the descriptor matches between the two.
   void matchLastKeyframe(const Frame& frame, std::vector<Eigen::Vector2d>& keyframe_pixels,
                          std::vector<Eigen::Vector2d>& frame_pixels) const;
-  /// No pose for this frame: skipped if the quality gate refuses the image, else tracking is lost.
+  /// No measured pose for this frame: skipped if the quality gate refuses the image (the segment goes on), else
+  /// tracking is lost (the segment ends). Either way, while a motion is known, the frame gets the predicted pose.
   TrackingResult lose(TrackingResult result, const std::string& reason);
+  /// While tracking, with a motion known: the constant-velocity model's pose for this frame (pose_predicted), the
+  /// model advanced by it, so the next frame is predicted for its own time.
+  void predictPoseOf(TrackingResult& result);
   /// Sets the pose and its expression relative to the latest keyframe.
   void setPose(TrackingResult& result, const Eigen::Isometry3d& pose_wc) const;
   /// Scores `color` with the gate; true when it is refused (never when `must_keep`, in relative mode).
