@@ -295,6 +295,25 @@ TEST(MapFormatWrite, AFailedWriteKeepsTheExistingFile) {
 }
 
 /// The writer must not produce a file its own reader refuses.
+// Poses composed over a long run are rigid only up to rounding: written as their nearest rotation (a unit
+// quaternion), not refused; a real scaling still is (RefusesMapsTheReaderWouldRefuse).
+TEST(MapFormatWrite, ARotationOffOrthonormalByRoundingIsWrittenAsTheNearestRotation) {
+  LandmarkMap map;
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.linear() = Eigen::AngleAxisd(1.0, Eigen::Vector3d(0, 1, 1).normalized()).toRotationMatrix();
+  const Eigen::Matrix3d rigid = pose.linear();
+  pose.linear()(2, 0) += 5e-8;
+  pose.translation() = Eigen::Vector3d(1, 2, 3);
+  map.frames[7] = pose;
+  std::stringstream text;
+  io::writeLandmarkMap(map, text);
+  const LandmarkMap back = io::parseLandmarkMap(text, "memory");
+  const Eigen::Matrix3d R = back.frames.at(7).linear();
+  EXPECT_LT((R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_LT((R - rigid).cwiseAbs().maxCoeff(), 1e-7);
+  EXPECT_TRUE(back.frames.at(7).translation().isApprox(pose.translation()));
+}
+
 TEST(MapFormatWrite, RefusesMapsTheReaderWouldRefuse) {
   const auto refused = [](const LandmarkMap& map, const std::string& what) {
     std::ostringstream out;

@@ -174,8 +174,10 @@ void requireWritable(const LandmarkMap& map) {
   const auto finite = [](const auto& matrix) { return matrix.allFinite(); };
   for (const auto& [id, pose] : map.frames) {
     const Eigen::Matrix3d rotation = pose.linear();
-    // The format stores a unit quaternion: anything else would be written as some other pose.
-    if (!finite(pose.matrix()) || !rotation.isUnitary(1e-9) || rotation.determinant() < 0.0)
+    // The format stores a unit quaternion: a scaling or a reflection would be written as some other pose. Rounding
+    // is not (poses composed over a long run drift from orthonormal by ~1e-8): the nearest rotation is written, as
+    // io::writeTrajectory accepts the same tolerance.
+    if (!finite(pose.matrix()) || !rotation.isUnitary(1e-6) || rotation.determinant() < 0.0)
       throw std::invalid_argument("frame " + std::to_string(id) + " has a pose that is not a finite rigid motion");
   }
   std::set<LandmarkId> ids;
@@ -200,7 +202,7 @@ void requireWritable(const LandmarkMap& map) {
 void writeLandmarkMap(const LandmarkMap& map, std::ostream& out) {
   requireWritable(map);
   for (const auto& [id, pose] : map.frames) {
-    const Eigen::Quaterniond q(pose.linear());
+    const Eigen::Quaterniond q = Eigen::Quaterniond(Eigen::Matrix3d(pose.linear())).normalized();
     const Eigen::Vector3d& t = pose.translation();
     out << "FRAME " << id << ' ' << exact(t.x()) << ' ' << exact(t.y()) << ' ' << exact(t.z()) << ' ' << exact(q.w())
         << ' ' << exact(q.x()) << ' ' << exact(q.y()) << ' ' << exact(q.z()) << '\n';

@@ -111,7 +111,7 @@ void writeTrajectory(const Trajectory& trajectory, const std::string& path) {
     if (!out) throw std::runtime_error("cannot create " + temporary);
     out << "# timestamp tx ty tz qx qy qz qw\n";
     for (const auto& [timestamp, pose] : trajectory) {
-      const Eigen::Quaterniond q(pose.linear());
+      const Eigen::Quaterniond q = Eigen::Quaterniond(Eigen::Matrix3d(pose.linear())).normalized();
       const Eigen::Vector3d& t = pose.translation();
       out << exact(timestamp) << ' ' << exact(t.x()) << ' ' << exact(t.y()) << ' ' << exact(t.z()) << ' '
           << exact(q.x()) << ' ' << exact(q.y()) << ' ' << exact(q.z()) << ' ' << exact(q.w()) << '\n';
