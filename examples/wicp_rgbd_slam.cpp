@@ -274,6 +274,7 @@ tools::JsonObject makeReport(const FrameSource& source, std::size_t frames, cons
       .add("loops_detected", loops.loops_detected)
       .add("loops_accepted", loops.loops_accepted)
       .add("pose_graph_optimisations", loops.pose_graph_optimisations)
+      .add("global_bundle_adjustment", closing.globalBundleAdjusted())
       .add("dense_fallback_frames", counts.dense);  // Issue #11: --dense-odometry fallback
   return report;
 }
@@ -414,6 +415,10 @@ int main(int argc, char** argv) {
         ("odometry-information", tools::namedValue(&closing_options.odometry_from_tracking, parseOdometryInformation,
                                                    odometryInformationName),
          "the pose graph's odometry edges: information from tracking (reprojection Hessians) or the fixed noise model")
+        ("global-ba", tools::rangedValue(&closing_options.global_bundle_adjustment_iterations, 0, 1000)
+                          ->default_value(closing_options.global_bundle_adjustment_iterations),
+         "after the last frame and loop correction, a global bundle adjustment of every keyframe of the last segment "
+         "with this many iterations (0: none; docs/mapping.md)")
         ("synthetic-frames", tools::rangedValue(&synthetic.frames, std::size_t{1}, std::size_t{100000})
                                  ->default_value(synthetic.frames),
          "synthetic: frames (1-100000)")

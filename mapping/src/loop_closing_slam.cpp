@@ -21,7 +21,7 @@ LoopClosingOptions loopClosingOptions(const PinholeCamera& camera, const LoopClo
 
 LoopClosingSlam::LoopClosingSlam(const PinholeCamera& camera, LoopDetector detector,
                                  const LoopClosingSlamOptions& options)
-    : slam_(camera, options.slam) {
+    : slam_(camera, options.slam), global_bundle_adjustment_iterations_(options.global_bundle_adjustment_iterations) {
   if (options.loop_closure)
     loop_closer_ = std::make_unique<LoopCloser>(slam_.map(), std::move(detector), loopClosingOptions(camera, options));
 }
@@ -35,9 +35,12 @@ const frontend::FrameRecord& LoopClosingSlam::process(const RgbdFrame& image) {
 
 void LoopClosingSlam::finish() {
   slam_.finish();
-  if (!loop_closer_) return;
-  loop_closer_->flush();
-  slam_.applyPendingCorrection();
+  if (loop_closer_) {
+    loop_closer_->flush();
+    slam_.applyPendingCorrection();
+  }
+  if (global_bundle_adjustment_iterations_ > 0 && !global_bundle_adjusted_)
+    global_bundle_adjusted_ = slam_.bundleAdjustWholeSegment(global_bundle_adjustment_iterations_);
 }
 
 LoopClosingStats LoopClosingSlam::loopStats() const {

@@ -115,9 +115,12 @@ void Backend::run() {
   idle_.notify_all();
 }
 
-void Backend::optimizeWindow() {
-  MapWindow window = map_.window(options_.window_keyframes);
-  if (window.keyframes.size() < 2) return;
+void Backend::optimizeWindow() { optimizeLatestKeyframes(map_, camera_, options_, options_.window_keyframes); }
+
+bool optimizeLatestKeyframes(Map& map, const PinholeCamera& camera, const BackendOptions& options,
+                             std::size_t keyframes) {
+  MapWindow window = map.window(keyframes);
+  if (window.keyframes.size() < 2) return false;
 
   BundleAdjustmentProblem problem;
   std::unordered_map<KeyframeId, int> pose_index;
@@ -138,10 +141,10 @@ void Backend::optimizeWindow() {
     }
   }
 
-  const BundleAdjustmentSummary summary =
-      options_.solver ? options_.solver(problem, camera_, options_.bundle_adjustment)
-                      : solveLocalBundleAdjustment(problem, camera_, options_.bundle_adjustment);
-  if (!summary.ok) return;
+  const BundleAdjustmentSummary summary = options.solver
+                                              ? options.solver(problem, camera, options.bundle_adjustment)
+                                              : solveLocalBundleAdjustment(problem, camera, options.bundle_adjustment);
+  if (!summary.ok) return false;
   requireSolutionFits(problem, summary, window, observation_ids.size());
   for (std::size_t i = 0; i < window.keyframes.size(); ++i) window.keyframes[i].pose_wc = problem.poses_wc[i];
   for (std::size_t j = 0; j < window.points.size(); ++j) {
@@ -151,7 +154,8 @@ void Backend::optimizeWindow() {
   std::vector<std::pair<MapPointId, KeyframeId>> rejected;
   for (std::size_t k = 0; k < summary.outlier_observations.size(); ++k)
     if (summary.outlier_observations[k]) rejected.push_back(observation_ids[k]);
-  map_.applyOptimization(window, rejected);
+  map.applyOptimization(window, rejected);
+  return true;
 }
 
 }  // namespace weighted_icp::frontend

@@ -23,7 +23,9 @@ BackendOptions withFrontendNoise(BackendOptions backend, const FrontendOptions& 
 }  // namespace
 
 RgbdSlam::RgbdSlam(const PinholeCamera& camera, const RgbdSlamOptions& options)
-    : backend_(map_, camera, withFrontendNoise(options.backend, options.frontend)),
+    : camera_(camera),
+      backend_options_(withFrontendNoise(options.backend, options.frontend)),
+      backend_(map_, camera, backend_options_),
       frontend_(map_, backend_, camera, options.frontend),
       minimap_builder_(options.minimap_keyframes) {}
 
@@ -40,6 +42,13 @@ const FrameRecord& RgbdSlam::process(const RgbdFrame& image) {
 }
 
 void RgbdSlam::finish() { backend_.flush(); }
+
+bool RgbdSlam::bundleAdjustWholeSegment(int max_iterations) {
+  backend_.flush();  // no local window is written back over it
+  BackendOptions options = backend_options_;
+  options.bundle_adjustment.max_iterations = max_iterations;
+  return optimizeLatestKeyframes(map_, camera_, options, map_.keyframeCount());
+}
 
 LandmarkMap RgbdSlam::sessionMap() const { return toLandmarkMap(map_); }
 

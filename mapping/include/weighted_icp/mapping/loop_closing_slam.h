@@ -25,6 +25,9 @@ struct LoopClosingSlamOptions {
   /// @brief true: the pose graph's odometry edges take their information from tracking (the camera is given to
   /// loop_closing.tracking_camera unless one is set there); false: the noise model for every edge.
   bool odometry_from_tracking = true;
+  /// @brief Levenberg-Marquardt iterations of a global bundle adjustment run by finish(), after the last loop
+  /// correction (every keyframe of the current segment and its points at once); 0: none.
+  int global_bundle_adjustment_iterations = 0;
 };
 
 /// @brief frontend::RgbdSlam plus loop closing. Every keyframe goes to the loop closer; the corrections it posts
@@ -41,8 +44,11 @@ class LoopClosingSlam {
   /// @brief Tracks one frame (RgbdSlam::process) and hands a new keyframe to the loop closer.
   /// @param image The frame. Rethrows an error of the loop-closing thread.
   const frontend::FrameRecord& process(const RgbdFrame& image);
-  /// @brief Waits for bundle adjustment and loop closing, then applies a correction still pending.
+  /// @brief Waits for bundle adjustment and loop closing, then applies a correction still pending, then runs the
+  /// global bundle adjustment when the options ask for one.
   void finish();
+  /// @brief Whether finish() ran a global bundle adjustment that was written back.
+  bool globalBundleAdjusted() const { return global_bundle_adjusted_; }
 
   /// @brief The SLAM inside (frames, map, mini-maps).
   const frontend::RgbdSlam& slam() const { return slam_; }
@@ -56,6 +62,8 @@ class LoopClosingSlam {
  private:
   frontend::RgbdSlam slam_;
   std::unique_ptr<LoopCloser> loop_closer_;  // after slam_: built on its map, destroyed first
+  int global_bundle_adjustment_iterations_ = 0;
+  bool global_bundle_adjusted_ = false;
 };
 
 }  // namespace weighted_icp::mapping

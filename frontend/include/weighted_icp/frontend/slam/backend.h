@@ -43,6 +43,18 @@ struct BackendOptions {
   BundleAdjustmentSolver solver;
 };
 
+/// @brief One bundle adjustment of the latest `keyframes` keyframes of the map's current segment (the oldest of them
+/// held fixed) and the points they observe, written back to the map: what the backend runs after each keyframe,
+/// and, with `keyframes` at least the map's keyframe count, a global bundle adjustment of the whole segment.
+/// @param map the map; written under its lock (Map::applyOptimization), skipped if a loop correction came between
+/// @param camera the camera the observations were made with
+/// @param options bundle-adjustment options and the solver (BackendOptions::solver, when set)
+/// @param keyframes how many of the latest keyframes (fewer than 2: nothing is done)
+/// @return true when a solution was written back
+/// @throws std::runtime_error when a replaced solver reports success with a solution that does not fit the window
+bool optimizeLatestKeyframes(Map& map, const PinholeCamera& camera, const BackendOptions& options,
+                             std::size_t keyframes);
+
 /// @brief Local bundle adjustment of the map's latest keyframes, in a background thread or inline.
 class Backend {
  public:

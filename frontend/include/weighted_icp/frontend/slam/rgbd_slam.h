@@ -47,6 +47,12 @@ class RgbdSlam {
   /// next frame would have); returns true if there was one.
   bool applyPendingCorrection() { return frontend_.followMapCorrection(); }
   std::size_t optimizationsRun() const { return backend_.optimizationsRun(); }
+  /// @brief A global bundle adjustment: every keyframe of the current segment and the points they observe at once
+  /// (the oldest keyframe fixed), with the backend's noise model and solver, after finish(). Frames follow their
+  /// reference keyframes, so the trajectory moves with it.
+  /// @param max_iterations Levenberg-Marquardt iterations (the local windows use the backend's setting)
+  /// @return true when a solution was written back
+  bool bundleAdjustWholeSegment(int max_iterations);
   /// One pose per frame that got one (camera-to-world), expressed through its
   /// reference keyframe as the backend left it.
   Trajectory trajectory() const;
@@ -56,6 +62,8 @@ class RgbdSlam {
 
  private:
   Map map_;  // first: the backend and frontend hold references to it
+  PinholeCamera camera_;
+  BackendOptions backend_options_;
   Backend backend_;
   Frontend frontend_;
   MiniMapBuilder minimap_builder_;
