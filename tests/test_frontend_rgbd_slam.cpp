@@ -36,6 +36,13 @@ double syntheticAte(const simulation::SyntheticRgbdSequence& sequence, frontend:
   return metrics::computeAte(truth, slam.trajectory()).translation.rmse;
 }
 
+/// The sequence's true camera poses, as a trajectory the ATE compares with.
+Trajectory truthOf(const simulation::SyntheticRgbdSequence& sequence) {
+  Trajectory truth;
+  for (std::size_t i = 0; i < sequence.size(); ++i) truth.push_back({sequence.timestamp(i), sequence.cameraToWorld(i)});
+  return truth;
+}
+
 simulation::SyntheticRgbdOptions syntheticOptions(bool moving_object) {
   simulation::SyntheticRgbdOptions options;
   options.frames = 90;
@@ -194,9 +201,7 @@ TEST(RgbdSlam, ASkippedFrameKeepsAPredictedPoseAndTheSegmentGoesOn) {
   const Eigen::Isometry3d true_step = sequence.cameraToWorld(29).inverse() * sequence.cameraToWorld(30);
   EXPECT_LT((estimated.translation() - true_step.translation()).norm(), 0.01);
   EXPECT_LT(Eigen::AngleAxisd(estimated.rotation().transpose() * true_step.rotation()).angle() * 180.0 / M_PI, 0.5);
-  Trajectory truth;
-  for (std::size_t i = 0; i < sequence.size(); ++i) truth.push_back({sequence.timestamp(i), sequence.cameraToWorld(i)});
-  EXPECT_LT(metrics::computeAte(truth, trajectory).translation.rmse, 0.01);
+  EXPECT_LT(metrics::computeAte(truthOf(sequence), trajectory).translation.rmse, 0.01);
 }
 
 TEST(RgbdSlam, FramesWithoutDepthAreTrackedTwoDimensionally) {
@@ -277,12 +282,9 @@ TEST(RgbdSlam, AGlobalBundleAdjustmentStraightensABentMap) {
   options.frames = 60;
   const simulation::SyntheticRgbdSequence sequence(options);
   frontend::RgbdSlam slam(sequence.options().camera, deterministic());
-  Trajectory truth;
-  for (std::size_t i = 0; i < sequence.size(); ++i) {
-    slam.process(sequence.frame(i).rgbd);
-    truth.push_back({sequence.timestamp(i), sequence.cameraToWorld(i)});
-  }
+  for (std::size_t i = 0; i < sequence.size(); ++i) slam.process(sequence.frame(i).rgbd);
   slam.finish();
+  const Trajectory truth = truthOf(sequence);
   const double straight = metrics::computeAte(truth, slam.trajectory()).translation.rmse;
   const std::size_t keyframes = slam.map().keyframeCount();
   ASSERT_GE(keyframes, 4u);
