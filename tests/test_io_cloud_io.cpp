@@ -3,6 +3,7 @@
 // crashed on, not read as zeros).
 
 #include <cstdint>
+#include <cstring>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -296,6 +297,37 @@ TEST(CloudIo, DataThatPclWouldReadAsMoreHeaderIsRefused) {
   writeFile(loads, std::string(kLandmarkHeader) + "# not data\n" + points);
   EXPECT_EQ(io::loadLandmarkCloud(loads.string())->size(), 2u);
   // The fuzzer's own input is replayed by ctest's fuzz.cloud_pcd (fuzz/regressions/cloud_pcd/).
+}
+
+// Our own binary file can hit the same trap: when the first point's bytes spell a header keyword ("SIZE" as the
+// float x = 3492.58...), PCL would misread the binary data. The writer then writes ASCII data (never keyword-like)
+// with every digit, and the cloud loads back exactly (found by the PCD fuzzer's round trip).
+TEST(CloudIo, ACloudWhoseBinaryDataSpellsAKeywordIsWrittenAsAscii) {
+  LandmarkCloud cloud;
+  LandmarkPoint point;
+  std::memcpy(&point.x, "SIZE", 4);
+  point.y = 1.0f;
+  point.z = 2.0f;
+  point.weight = 0.1;  // a double that 8 digits would not give back
+  point.covariance_norm = 0.25f;
+  point.mean_observation_distance = 1.5f;
+  point.num_observations = 3;
+  cloud.push_back(point);
+  point.x = -1.0f;
+  point.weight = 1.0 / 3.0;
+  cloud.push_back(point);
+  const fs::path path = scratchDir("cloud_keyword_bytes") / "cloud.pcd";
+  io::saveLandmarkCloud(cloud, path.string());
+  std::ifstream in(path);
+  const std::string text((std::istreambuf_iterator<char>(in)), {});
+  EXPECT_NE(text.find("DATA ascii\n"), std::string::npos) << text.substr(0, 400);
+  const LandmarkCloud::Ptr back = io::loadLandmarkCloud(path.string());
+  ASSERT_EQ(back->size(), 2u);
+  for (std::size_t i = 0; i < 2; ++i) {
+    EXPECT_EQ((*back)[i].getVector3fMap(), cloud[i].getVector3fMap()) << i;
+    EXPECT_EQ((*back)[i].weight, cloud[i].weight) << i;
+    EXPECT_EQ((*back)[i].num_observations, cloud[i].num_observations) << i;
+  }
 }
 
 TEST(CloudIo, OnlyAWellFormedPcdHeaderReachesPcl) {

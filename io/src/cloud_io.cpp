@@ -202,6 +202,28 @@ void requireCompleteFile(const std::string& temporary, const std::string& ext, c
                              std::to_string(*expected) + " (disk full?)");
 }
 
+/// True when a binary PCD we wrote has data whose first bytes PCL's header reader would take as more header (the
+/// float bytes happen to spell a keyword line): PCL would misread it, and our loader refuses it.
+bool pclMisreadsBinaryData(const std::string& file) {
+  std::ifstream in(file, std::ios::binary);
+  try {
+    if (detail::readPcdHeaderToData(in, file).data != detail::PcdHeader::Data::binary) return false;
+  } catch (const std::runtime_error&) {
+    return false;  // an incomplete header: requireCompleteFile says so
+  }
+  return detail::dataPclReadsAsHeader(in).has_value();
+}
+
+/// The cloud as an ASCII PCD, every value with enough digits to read back exactly (17 significant digits: the
+/// weight is a double), checked by loading it back, since PCL's writer reports no write error.
+void writeAsciiPcd(const LandmarkCloud& cloud, const std::string& temporary, const std::string& path) {
+  pcl::PCDWriter writer;
+  if (writer.writeASCII(temporary, cloud, 17) != 0) throw std::runtime_error("cannot write " + path);
+  std::error_code error;
+  if (std::filesystem::file_size(temporary, error) == 0 || error)
+    throw std::runtime_error("cannot write " + path + " (disk full?)");
+}
+
 /// A point that would not load back (loadLandmarkCloud refuses it) is refused
 /// before writing: a position beyond float's range is stored as infinity.
 void requireWritablePoints(const LandmarkCloud& cloud, const std::string& path) {
@@ -236,6 +258,17 @@ void saveLandmarkCloud(const LandmarkCloud& cloud, const std::string& path) {
       throw std::runtime_error("cannot write " + path + " (" + pclMessage(e) + ")");
     }
     if (status != 0) throw std::runtime_error("cannot write " + path);
+    if (ext == ".pcd" && pclMisreadsBinaryData(temporary)) {
+      // Rare (the data's first bytes spell a header keyword), but then PCL would misread the binary file: ASCII
+      // data never begins with a keyword. Verified by loading it back: PCL's ASCII writer reports no write error.
+      writeAsciiPcd(cloud, temporary, path);
+      const pcl::PCLPointCloud2 blob = readPcd(temporary);
+      const std::size_t loaded = static_cast<std::size_t>(blob.width) * blob.height;
+      if (loaded != cloud.size() || blob.data.size() != loaded * blob.point_step)
+        throw std::runtime_error("cannot write " + path + ": " + std::to_string(loaded) + " of " +
+                                 std::to_string(cloud.size()) + " points written (disk full?)");
+      return;
+    }
     requireCompleteFile(temporary, ext, path);
   });
 }

@@ -216,14 +216,10 @@ std::uint64_t PcdHeader::pointValues() const {
   return values;
 }
 
-/// PCL's header reader does not stop at the DATA line: it reads on, line after line, skipping empty lines and
-/// those starting with '#', and takes any line whose first word merely *begins* with a keyword (or COLUMNS, its
-/// old FIELDS) as more header, until a line that does not; so data bytes after DATA that read "COLUMNS ...",
-/// "POINTS 2100000000" become its header (a fuzzer found a 580-byte file that made it allocate 67 GB). The data
-/// is refused when PCL would read any of it as header. Whitespace as its tokenizer takes it (classic locale).
-void requireNoHeaderPclReadsAfterData(std::istream& in, const HeaderLines& lines) {
+std::optional<std::string> dataPclReadsAsHeader(std::istream& in) {
   static constexpr std::array<const char*, 11> kPclPrefixes = {
       "VERSION", "FIELDS", "COLUMNS", "SIZE", "TYPE", "COUNT", "WIDTH", "HEIGHT", "VIEWPOINT", "POINTS", "DATA"};
+  // Whitespace as PCL's tokenizer takes it (the classic locale's).
   const auto space = [](char c) { return c == ' ' || c == '\t' || c == '\n' || c == '\v' || c == '\f' || c == '\r'; };
   std::string line;
   while (std::getline(in, line)) {
@@ -232,14 +228,29 @@ void requireNoHeaderPclReadsAfterData(std::istream& in, const HeaderLines& lines
     const std::string first(begin, std::find_if(begin, line.end(), space));
     if (!first.empty() && first[0] == '#') continue;  // a comment to PCL: it reads on
     for (const char* prefix : kPclPrefixes)
-      if (first.rfind(prefix, 0) == 0)
-        lines.fail("the data after DATA begins like a header line ('" + first.substr(0, 32) +
-                   "'), which PCL would read as one; not a PCD file");
-    return;  // PCL stops here
+      if (first.rfind(prefix, 0) == 0) return first.substr(0, 32);
+    return std::nullopt;  // PCL stops here
   }
+  return std::nullopt;
 }
 
+namespace {
+/// Refuses data PCL's header reader would read as more header (dataPclReadsAsHeader): a fuzzer found a 580-byte
+/// file whose binary data held a second header ("COLUMNS ...", "POINTS 2100000000") that made PCL allocate 67 GB.
+void requireNoHeaderPclReadsAfterData(std::istream& in, const std::string& path) {
+  if (const auto word = dataPclReadsAsHeader(in))
+    throw std::runtime_error(path + ": the data after DATA begins like a header line ('" + *word +
+                             "'), which PCL would read as one; not a PCD file");
+}
+}  // namespace
+
 PcdHeader readPcdHeader(std::istream& in, const std::string& path) {
+  PcdHeader header = readPcdHeaderToData(in, path);
+  requireNoHeaderPclReadsAfterData(in, path);
+  return header;
+}
+
+PcdHeader readPcdHeaderToData(std::istream& in, const std::string& path) {
   HeaderLines lines(in, path);
   Reading reading;
   std::string line;
@@ -254,7 +265,6 @@ PcdHeader readPcdHeader(std::istream& in, const std::string& path) {
       requireComplete(reading, lines);
       const auto position = in.tellg();
       reading.header.data_offset = position == std::streampos(-1) ? kLargest : static_cast<std::uint64_t>(position);
-      requireNoHeaderPclReadsAfterData(in, lines);
       return reading.header;
     }
     const auto found =

@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <istream>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -37,7 +38,21 @@ struct PcdHeader {
   std::uint64_t pointValues() const;
 };
 
-/// @brief Reads and checks a PCD header, from the start of `in` to its DATA line.
+/// @brief What PCL's header reader would take as more header after the DATA line, if anything. PCL does not stop
+/// at DATA: it reads on, skipping empty lines and those starting with '#', and takes any line whose first word
+/// begins with a keyword (or COLUMNS, its old FIELDS) as header, until a line that does not.
+/// @param in the file, positioned just after its DATA line
+/// @return that line's first word (clipped to 32 bytes), or nothing when PCL would stop at the data
+std::optional<std::string> dataPclReadsAsHeader(std::istream& in);
+
+/// @brief Reads and checks a PCD header from the start of `in` to its DATA line only, leaving `in` just after it.
+/// @param in   the file, opened in binary mode, at its first byte
+/// @param path the file's name, for messages
+/// @throws std::runtime_error "<path>: line <n>: <what is wrong>" for anything but a well-formed header
+PcdHeader readPcdHeaderToData(std::istream& in, const std::string& path);
+
+/// @brief Reads and checks a PCD header, from the start of `in` to its DATA line, and the data after it as far as
+/// PCL's header reader would look (dataPclReadsAsHeader: data it would read as more header is refused).
 /// @param in   the file, opened in binary mode, at its first byte
 /// @param path the file's name, for messages
 /// @throws std::runtime_error "<path>: line <n>: <what is wrong>" for anything but a well-formed header
