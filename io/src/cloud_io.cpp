@@ -23,6 +23,7 @@
 #include <pcl/io/ply_io.h>
 
 #include "pcd_header.h"
+#include "ply_header.h"
 #include "weighted_icp/io/atomic_file.h"
 
 namespace weighted_icp::io {
@@ -286,6 +287,11 @@ LandmarkCloud::Ptr loadLandmarkCloud(const std::string& path) {
     if (ext == ".pcd") {
       blob = readPcd(path);
     } else {
+      {
+        // PCL's PLY parser reads every element as often as its header says, before we could check anything.
+        std::ifstream in(path, std::ios::binary);
+        detail::requireWellFormedPlyHeader(in, path, std::filesystem::file_size(path));
+      }
       const auto vertices = plyVertexCount(path);
       if (!vertices) throw std::runtime_error(path + ": not a PLY file with a vertex element");
       // PCL's PLY reader crashes on a file without vertices; it is an empty cloud.
