@@ -343,15 +343,17 @@ TEST(CloudIo, OnlyAWellFormedPlyHeaderReachesPcl) {
       {"unknown_type", start + "property float128 y\nend_header\n", "line 5: expected 'property TYPE NAME'"},
       {"format", "ply\nformat binary_middle_endian 1.0\nend_header\n", "line 2: expected 'format"},
       {"orphan_property", "ply\nformat ascii 1.0\nproperty float x\nend_header\n", "line 3: a property before"},
-      {"no_end", start, "the header ends without end_header"},
-      {"many_elements", start + "element a 60\nproperty uchar v\nelement b 60\nproperty uchar v\nend_header\n",
-       "element instances in all"},
+      {"many_elements", start + "element a 100\nproperty uchar v\nelement b 100\nproperty uchar v\nend_header\n",
+       "element instances in all"},  // each within the file's size, together beyond it
   };
   for (const auto& [name, text, error] : cases) {
     const fs::path path = scratch / (name + ".ply");
     writeFile(path, text + std::string(8, '\0'));
     expectError([&] { io::loadLandmarkCloud(path.string()); }, path, error);
   }
+  const fs::path no_end = scratch / "no_end.ply";
+  writeFile(no_end, start);
+  expectError([&] { io::loadLandmarkCloud(no_end.string()); }, no_end, "the header ends without end_header");
   // The fuzzer's hanging input is replayed by ctest's fuzz.cloud_ply (fuzz/regressions/cloud_ply/).
 }
 
