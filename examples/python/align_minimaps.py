@@ -63,24 +63,29 @@ def plot(source: wi.LandmarkMap, target: wi.LandmarkMap, results: List[Tuple[str
     except ImportError:
         print("warning: matplotlib is not installed (Debian: python3-matplotlib); no plot", file=sys.stderr)
         return
-    figure, panels = plt.subplots(1, len(results) + 1, figsize=(4.2 * (len(results) + 1), 4.6),
-                                  sharex=True, sharey=True, constrained_layout=True)
     xyz = source.positions
+    # Panels as tall as the maps' top view is (equal axes), so the figure has no empty bands above and below.
+    both = np.vstack([xyz[:, :2], target.positions[:, :2]])
+    extent = np.ptp(both, axis=0)
+    height = float(np.clip(4.2 * extent[1] / max(extent[0], 1e-9), 2.0, 8.0)) + 1.2
+    figure, panels = plt.subplots(1, len(results) + 1, figsize=(4.2 * (len(results) + 1), height),
+                                  sharex=True, sharey=True, constrained_layout=True)
     panels[0].scatter(target.positions[:, 0], target.positions[:, 1], s=3, c="0.6", label="target")
     panels[0].scatter(xyz[:, 0], xyz[:, 1], s=3, c="#d62728", label="source")
     panels[0].set_title("before")
     panels[0].legend(loc="best", fontsize="small")
     for panel, (strategy, result) in zip(panels[1:], results):
         moved = xyz @ result.transformation[:3, :3].T + result.transformation[:3, 3]
-        panel.scatter(target.positions[:, 0], target.positions[:, 1], s=3, c=wi.weights(target, strategy),
-                      cmap="viridis")
+        weighted = panel.scatter(target.positions[:, 0], target.positions[:, 1], s=3,
+                                 c=wi.weights(target, strategy), cmap="viridis")
         panel.scatter(moved[:, 0], moved[:, 1], s=3, c="#d62728")
+        figure.colorbar(weighted, ax=panel, location="bottom", shrink=0.8, label=f"target weight ({strategy})")
         panel.set_title(f"after: {strategy} ({result.iterations} it.)")
     for panel in panels:
         panel.set_aspect("equal", adjustable="box")  # shared axes: the box adapts, not the limits
         panel.set_xlabel("x (m)")
     panels[0].set_ylabel("y (m)")
-    figure.savefig(out, dpi=100)
+    figure.savefig(out, dpi=100, bbox_inches="tight")
     print(f"wrote {out}")
 
 
