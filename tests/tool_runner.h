@@ -19,7 +19,7 @@
 
 namespace weighted_icp::testing {
 
-/// What a tool run gave: its exit status, stdout and stderr.
+/// What a tool run gave: its exit status (128 + the signal when killed by one), stdout and stderr.
 struct ToolRun {
   int status = -1;
   std::string out;
@@ -38,9 +38,15 @@ inline ToolRun runBuiltTool(const std::string& tool, const std::string& args, co
       limit + (binaryDir() / "examples" / tool).string() + " " + args + " 2>" + err_file.string();
   ToolRun result;
   FILE* pipe = popen(command.c_str(), "r");
+  if (!pipe) {
+    result.err = "cannot run " + command;
+    return result;
+  }
   std::array<char, 4096> buffer{};
   while (std::fgets(buffer.data(), buffer.size(), pipe)) result.out += buffer.data();
-  result.status = WEXITSTATUS(pclose(pipe));
+  // A tool killed by a signal reports 128 + the signal, as a shell does: WEXITSTATUS alone would read 0.
+  const int status = pclose(pipe);
+  result.status = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + (WIFSIGNALED(status) ? WTERMSIG(status) : 0);
   std::ifstream err(err_file);
   result.err.assign(std::istreambuf_iterator<char>(err), {});
   return result;
