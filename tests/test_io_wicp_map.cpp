@@ -15,6 +15,7 @@
 #include <gtest/gtest.h>
 
 #include "test_support.h"
+#include "tool_runner.h"
 #include "weighted_icp/io/cloud_io.h"
 #include "weighted_icp/io/map_format.h"
 
@@ -27,30 +28,11 @@ using weighted_icp::testing::readFile;
 using weighted_icp::testing::scratchDir;
 using weighted_icp::testing::writeFile;
 
-struct ToolRun {
-  int exit_code = -1;
-  std::string out;
-  std::string err;
-};
+using weighted_icp::testing::ToolRun;
 
-/// Runs wicp_map with `arguments` (shell syntax); stderr goes through a file in `scratch`.
+/// Runs wicp_map with `arguments` (shell syntax).
 ToolRun wicpMap(const std::string& arguments, const fs::path& scratch) {
-  const fs::path tool = binaryDir() / "examples" / "wicp_map";
-  const fs::path err = scratch / "stderr.txt";
-  const std::string command = "'" + tool.string() + "' " + arguments + " 2>'" + err.string() + "'";
-  ToolRun run;
-  FILE* pipe = ::popen(command.c_str(), "r");
-  if (!pipe) {
-    ADD_FAILURE() << "cannot run " << command;
-    return run;
-  }
-  char buffer[4096];
-  for (std::size_t n; (n = std::fread(buffer, 1, sizeof(buffer), pipe)) > 0;) run.out.append(buffer, n);
-  const int status = ::pclose(pipe);
-  run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  run.err = readFile(err);
-  fs::remove(err);
-  return run;
+  return weighted_icp::testing::runBuiltTool("wicp_map", arguments, scratch);
 }
 
 std::string quoted(const fs::path& path) { return "'" + path.string() + "'"; }
@@ -101,7 +83,7 @@ TEST(WicpMapCut, ByFrameCount) {
   const fs::path out = scratch / "minis";  // does not exist yet
   const ToolRun run =
       wicpMap("cut " + quoted(smallMap(scratch)) + " --out " + quoted(out) + " --frames-per-minimap 2", scratch);
-  ASSERT_EQ(run.exit_code, 0) << run.err;
+  ASSERT_EQ(run.status, 0) << run.err;
 
   const LandmarkMap first = io::readLandmarkMap((out / "minimap_000.txt").string());
   const LandmarkMap second = io::readLandmarkMap((out / "minimap_001.txt").string());
@@ -133,7 +115,7 @@ TEST(WicpMapCut, ByRangesWithMinObservations) {
   const fs::path out = scratch / "minis";
   const ToolRun run = wicpMap(
       "cut " + quoted(smallMap(scratch)) + " --out " + quoted(out) + " --ranges 0-2,2-4 --min-observations 2", scratch);
-  ASSERT_EQ(run.exit_code, 0) << run.err;
+  ASSERT_EQ(run.status, 0) << run.err;
   const LandmarkMap first = io::readLandmarkMap((out / "minimap_000.txt").string());
   const LandmarkMap second = io::readLandmarkMap((out / "minimap_001.txt").string());
   EXPECT_FALSE(fs::exists(out / "minimap_002.txt"));
@@ -159,7 +141,7 @@ TEST(WicpMapCut, ANonEmptyOutIsRefusedWithoutOverwrite) {
   writeFile(out / "minimap_007.txt", "FRAME 0  0 0 0  1 0 0 0\n");
   const ToolRun run =
       wicpMap("cut " + quoted(smallMap(scratch)) + " --out " + quoted(out) + " --frames-per-minimap 2", scratch);
-  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_EQ(run.status, 1);
   EXPECT_TRUE(contains(run.err, "not empty") && contains(run.err, "--overwrite")) << run.err;
   EXPECT_EQ(entries(out), std::vector<std::string>{"minimap_007.txt"});
   EXPECT_EQ(entries(scratch), (std::vector<std::string>{"minis", "small.txt"})) << "temporary left";
@@ -170,10 +152,10 @@ TEST(WicpMapCut, ARerunWithOverwriteLeavesNoStaleMiniMap) {
   const fs::path scratch = scratchDir("wicp_map_cut_rerun");
   const fs::path out = scratch / "minis";
   const std::string cut = "cut " + quoted(smallMap(scratch)) + " --out " + quoted(out);
-  ASSERT_EQ(wicpMap(cut + " --frames-per-minimap 1", scratch).exit_code, 0);
+  ASSERT_EQ(wicpMap(cut + " --frames-per-minimap 1", scratch).status, 0);
   ASSERT_EQ(entries(out).size(), 5u);
   const ToolRun rerun = wicpMap(cut + " --frames-per-minimap 2 --overwrite", scratch);
-  ASSERT_EQ(rerun.exit_code, 0) << rerun.err;
+  ASSERT_EQ(rerun.status, 0) << rerun.err;
   EXPECT_EQ(entries(out), (std::vector<std::string>{"minimap_000.txt", "minimap_001.txt", "minimap_002.txt"}));
   EXPECT_EQ(frameIds(io::readLandmarkMap((out / "minimap_001.txt").string())), (std::vector<FrameId>{2, 3}));
 }
@@ -183,10 +165,10 @@ TEST(WicpMapCut, AFailedCutLeavesTheEarlierOneWhole) {
   const fs::path scratch = scratchDir("wicp_map_cut_failed");
   const fs::path out = scratch / "minis";
   const std::string cut = "cut " + quoted(smallMap(scratch)) + " --out " + quoted(out);
-  ASSERT_EQ(wicpMap(cut + " --frames-per-minimap 2", scratch).exit_code, 0);
+  ASSERT_EQ(wicpMap(cut + " --frames-per-minimap 2", scratch).status, 0);
   const std::string before = readFile(out / "minimap_000.txt");
   const ToolRun failed = wicpMap(cut + " --ranges 0-1,7-9 --overwrite", scratch);
-  EXPECT_EQ(failed.exit_code, 1);
+  EXPECT_EQ(failed.status, 1);
   EXPECT_EQ(entries(out), (std::vector<std::string>{"minimap_000.txt", "minimap_001.txt", "minimap_002.txt"}));
   EXPECT_EQ(readFile(out / "minimap_000.txt"), before);
   EXPECT_EQ(entries(scratch), (std::vector<std::string>{"minis", "small.txt"})) << "temporary left";
@@ -196,7 +178,7 @@ TEST(WicpMapCut, RangeWithoutFramesIsAnError) {
   const fs::path scratch = scratchDir("wicp_map_cut_empty_range");
   const ToolRun run =
       wicpMap("cut " + quoted(smallMap(scratch)) + " --out " + quoted(scratch) + " --ranges 0-1,7-9", scratch);
-  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_EQ(run.status, 1);
   EXPECT_TRUE(contains(run.err, "7-9")) << run.err;
   EXPECT_FALSE(fs::exists(scratch / "minimap_000.txt"));
 }
@@ -205,7 +187,7 @@ TEST(WicpMapConvert, WritesALoadableWeightedPcd) {
   const fs::path scratch = scratchDir("wicp_map_convert_pcd");
   const fs::path cloud_path = scratch / "cloud.pcd";
   const ToolRun run = wicpMap("convert " + quoted(smallMap(scratch)) + " " + quoted(cloud_path), scratch);
-  ASSERT_EQ(run.exit_code, 0) << run.err;
+  ASSERT_EQ(run.status, 0) << run.err;
   // Defaults: landmarks with >= 2 observations (10, 11, 14), covariance weights 1 / (1 + ||C||_F).
   const LandmarkCloud::Ptr cloud = io::loadLandmarkCloud(cloud_path.string());
   ASSERT_EQ(cloud->size(), 3u);
@@ -226,7 +208,7 @@ TEST(WicpMapConvert, PlyWithAnotherStrategyAndThreshold) {
   const ToolRun run = wicpMap("convert " + quoted(smallMap(scratch)) + " " + quoted(cloud_path) +
                                   " --strategy observations --min-observations 0",
                               scratch);
-  ASSERT_EQ(run.exit_code, 0) << run.err;
+  ASSERT_EQ(run.status, 0) << run.err;
   const LandmarkCloud::Ptr cloud = io::loadLandmarkCloud(cloud_path.string());
   ASSERT_EQ(cloud->size(), 5u);
   const double counts[] = {2, 3, 1, 0, 2};
@@ -244,7 +226,7 @@ TEST(WicpMapConvert, RefusesCoordinatesBeyondFloatNamingTheLandmark) {
   writeFile(scratch / "huge.txt", map);
   const fs::path cloud_path = scratch / "cloud.ply";
   const ToolRun run = wicpMap("convert " + quoted(scratch / "huge.txt") + " " + quoted(cloud_path), scratch);
-  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_EQ(run.status, 1);
   EXPECT_TRUE(contains(run.err, "wicp_map: error: ")) << run.err;
   EXPECT_TRUE(contains(run.err, "huge.txt:")) << run.err;
   EXPECT_TRUE(contains(run.err, "landmark 11")) << run.err;
@@ -263,7 +245,7 @@ TEST(WicpMapConvert, AFullDiskFailsAndLeavesNoTruncatedFile) {
   const fs::path cloud_path = scratch / "cloud.ply";
   // 64 kB: the map is read in full, the cloud (about 150 kB) cannot be written.
   const ToolRun run = wicpMap("convert " + quoted(scratch / "big.txt") + " " + quoted(cloud_path), scratch);
-  ASSERT_EQ(run.exit_code, 0) << "without the limit the conversion works: " << run.err;
+  ASSERT_EQ(run.status, 0) << "without the limit the conversion works: " << run.err;
   fs::remove(cloud_path);
   const fs::path tool = binaryDir() / "examples" / "wicp_map";
   const std::string command = "ulimit -f 64; trap '' XFSZ; exec '" + tool.string() + "' convert " +
@@ -292,7 +274,7 @@ std::vector<double> statsRow(const std::string& output, const std::string& label
 TEST(WicpMapStats, CountsHistogramAndDistributions) {
   const fs::path scratch = scratchDir("wicp_map_stats");
   const ToolRun run = wicpMap("stats " + quoted(smallMap(scratch)), scratch);
-  ASSERT_EQ(run.exit_code, 0) << run.err;
+  ASSERT_EQ(run.status, 0) << run.err;
   EXPECT_TRUE(contains(run.out, "frames      5 (ids 0-4)")) << run.out;
   EXPECT_TRUE(contains(run.out, "landmarks   5\n")) << run.out;
   EXPECT_TRUE(contains(run.out, "0: 1  1: 1  2: 2  3: 1  4: 0  5-9: 0  10+: 0")) << run.out;
@@ -311,7 +293,7 @@ TEST(WicpMapStats, CountsHistogramAndDistributions) {
   EXPECT_EQ(statsRow(run.out, "weight base"), (std::vector<double>{1, 1, 1, 1}));
 
   const ToolRun all = wicpMap("stats " + quoted(smallMap(scratch)) + " --min-observations 0", scratch);
-  ASSERT_EQ(all.exit_code, 0) << all.err;
+  ASSERT_EQ(all.status, 0) << all.err;
   // Counts 0, 1, 2, 2, 3: the 90th percentile lies at 3.6 of 4 gaps, 2 + 0.6 (3 - 2).
   EXPECT_EQ(statsRow(all.out, "weight observations"), (std::vector<double>{0, 2, 2.6, 3}));
 }
@@ -322,13 +304,13 @@ TEST(WicpMapEmptyMaps, FramesWithoutLandmarks) {
   const std::string map = quoted(scratch / "frames_only.txt");
 
   const ToolRun stats = wicpMap("stats " + map, scratch);
-  EXPECT_EQ(stats.exit_code, 0) << stats.err;
+  EXPECT_EQ(stats.status, 0) << stats.err;
   EXPECT_TRUE(contains(stats.out, "landmarks   0\n")) << stats.out;
   EXPECT_TRUE(contains(stats.out, "landmarks with >= 2 observations: 0")) << stats.out;
 
   const ToolRun cut =
       wicpMap("cut " + map + " --out " + quoted(scratch / "minis") + " --frames-per-minimap 1", scratch);
-  ASSERT_EQ(cut.exit_code, 0) << cut.err;
+  ASSERT_EQ(cut.status, 0) << cut.err;
   for (const char* name : {"minimap_000.txt", "minimap_001.txt"}) {
     const LandmarkMap mini = io::readLandmarkMap((scratch / "minis" / name).string());
     EXPECT_EQ(mini.frames.size(), 1u) << name;
@@ -336,11 +318,11 @@ TEST(WicpMapEmptyMaps, FramesWithoutLandmarks) {
   }
 
   const ToolRun pcd = wicpMap("convert " + map + " " + quoted(scratch / "empty.pcd"), scratch);
-  ASSERT_EQ(pcd.exit_code, 0) << pcd.err;
+  ASSERT_EQ(pcd.status, 0) << pcd.err;
   EXPECT_TRUE(io::loadLandmarkCloud((scratch / "empty.pcd").string())->empty());
   // PCL cannot write a PLY without points: a clear error, no file.
   const ToolRun ply = wicpMap("convert " + map + " " + quoted(scratch / "empty.ply"), scratch);
-  EXPECT_EQ(ply.exit_code, 1);
+  EXPECT_EQ(ply.status, 1);
   EXPECT_TRUE(contains(ply.err, "empty.ply")) << ply.err;
   EXPECT_FALSE(fs::exists(scratch / "empty.ply"));
 }
@@ -350,11 +332,11 @@ TEST(WicpMapEmptyMaps, NoFramesAtAll) {
   writeFile(scratch / "empty.txt", "");
   const std::string map = quoted(scratch / "empty.txt");
   const ToolRun stats = wicpMap("stats " + map, scratch);
-  EXPECT_EQ(stats.exit_code, 0) << stats.err;
+  EXPECT_EQ(stats.status, 0) << stats.err;
   EXPECT_TRUE(contains(stats.out, "frames      0\n")) << stats.out;
   const ToolRun cut =
       wicpMap("cut " + map + " --out " + quoted(scratch / "minis") + " --frames-per-minimap 3", scratch);
-  EXPECT_EQ(cut.exit_code, 0) << cut.err;
+  EXPECT_EQ(cut.status, 0) << cut.err;
   EXPECT_FALSE(fs::exists(scratch / "minis" / "minimap_000.txt"));
 }
 
@@ -367,14 +349,14 @@ TEST(WicpMapErrors, MalformedMapNamesFileAndLine) {
         "cut " + quoted(bad) + " --out " + quoted(scratch / "minis") + " --frames-per-minimap 1",
         "convert " + quoted(bad) + " " + quoted(scratch / "cloud.pcd")}) {
     const ToolRun run = wicpMap(command, scratch);
-    EXPECT_EQ(run.exit_code, 1) << command;
+    EXPECT_EQ(run.status, 1) << command;
     EXPECT_TRUE(contains(run.err, bad.string() + ":3:")) << command << ": " << run.err;
   }
   EXPECT_FALSE(fs::exists(scratch / "minis"));
   EXPECT_FALSE(fs::exists(scratch / "cloud.pcd"));
 
   const ToolRun missing = wicpMap("stats " + quoted(scratch / "absent.txt"), scratch);
-  EXPECT_EQ(missing.exit_code, 1);
+  EXPECT_EQ(missing.status, 1);
   EXPECT_TRUE(contains(missing.err, (scratch / "absent.txt").string())) << missing.err;
 }
 
@@ -400,7 +382,7 @@ TEST(WicpMapErrors, BadCommandLinesExitWithTwo) {
            "convert " + map + " " + quoted(scratch / "c.pcd") + " --no-such-option",
        }) {
     const ToolRun run = wicpMap(arguments, scratch);
-    EXPECT_EQ(run.exit_code, 2) << "wicp_map " << arguments << "\n" << run.err;
+    EXPECT_EQ(run.status, 2) << "wicp_map " << arguments << "\n" << run.err;
     EXPECT_TRUE(contains(run.err, "wicp_map: error: ")) << "wicp_map " << arguments << "\n" << run.err;
   }
   EXPECT_FALSE(fs::exists(scratch / "minis"));
@@ -411,12 +393,12 @@ TEST(WicpMapHelp, EachCommandHasHelp) {
   const fs::path scratch = scratchDir("wicp_map_help");
   for (const std::string command : {"stats", "cut", "convert"}) {
     const ToolRun run = wicpMap(command + " --help", scratch);
-    EXPECT_EQ(run.exit_code, 0) << command;
+    EXPECT_EQ(run.status, 0) << command;
     EXPECT_TRUE(contains(run.out, "wicp_map " + command + " MAP")) << run.out;
     EXPECT_TRUE(contains(run.out, "--min-observations")) << run.out;
   }
   const ToolRun run = wicpMap("--help", scratch);
-  EXPECT_EQ(run.exit_code, 0);
+  EXPECT_EQ(run.status, 0);
   EXPECT_TRUE(contains(run.out, "stats|cut|convert")) << run.out;
 }
 

@@ -15,6 +15,7 @@
 #include <gtest/gtest.h>
 
 #include "test_support.h"
+#include "tool_runner.h"
 #include "weighted_icp/io/trajectory.h"
 
 using namespace weighted_icp;
@@ -22,38 +23,11 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct ToolRun {
-  int exit_code = -1;
-  std::string out, err;
-
-  /// The last line of stdout.
-  std::string lastLine() const {
-    std::istringstream lines(out);
-    std::string line, last;
-    while (std::getline(lines, line))
-      if (!line.empty()) last = line;
-    return last;
-  }
-};
-
-std::string readAll(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
+using weighted_icp::testing::lastLine;
+using weighted_icp::testing::ToolRun;
 
 ToolRun runEvaluate(const std::string& arguments, const fs::path& scratch) {
-  const fs::path tool = weighted_icp::testing::binaryDir() / "examples" / "wicp_evaluate";
-  const fs::path out = scratch / "stdout.txt", err = scratch / "stderr.txt";
-  const std::string command =
-      "'" + tool.string() + "' " + arguments + " > '" + out.string() + "' 2> '" + err.string() + "'";
-  const int status = std::system(command.c_str());
-  ToolRun run;
-  run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  run.out = readAll(out);
-  run.err = readAll(err);
-  return run;
+  return weighted_icp::testing::runBuiltTool("wicp_evaluate", arguments, scratch);
 }
 
 /// The number `key` holds in a flat JSON object.
@@ -103,8 +77,8 @@ TEST(WicpEvaluate, RigidlyMovedGroundTruthHasNoError) {
   const Trajectory groundtruth = io::readTrajectory(kGroundTruth.string());
   writePerturbedCopy(groundtruth, 0.0, dir / "estimate.txt");
   const ToolRun run = runEvaluate(quoted(kGroundTruth) + " " + quoted(dir / "estimate.txt") + " --json", dir);
-  ASSERT_EQ(run.exit_code, 0) << run.err;
-  const std::string json = run.lastLine();
+  ASSERT_EQ(run.status, 0) << run.err;
+  const std::string json = lastLine(run.out);
   ASSERT_EQ(json.front(), '{') << run.out;
   ASSERT_EQ(json.back(), '}') << run.out;
   const std::size_t estimated_poses = (groundtruth.size() + 2) / 3;
@@ -134,8 +108,8 @@ TEST(WicpEvaluate, NoisyCopyHasTheNoiseAsError) {
   const Trajectory groundtruth = io::readTrajectory(kGroundTruth.string());
   const double noise_rms = writePerturbedCopy(groundtruth, 0.01, dir / "estimate.txt");
   const ToolRun run = runEvaluate(quoted(kGroundTruth) + " " + quoted(dir / "estimate.txt") + " --json", dir);
-  ASSERT_EQ(run.exit_code, 0) << run.err;
-  const std::string json = run.lastLine();
+  ASSERT_EQ(run.status, 0) << run.err;
+  const std::string json = lastLine(run.out);
   // The identity alignment would leave exactly the noise; the best one no more.
   const double rmse = jsonNumber(json, "ate_rmse_m");
   EXPECT_LE(rmse, noise_rms * (1.0 + 1e-9));
@@ -155,9 +129,9 @@ TEST(WicpEvaluate, RpeDeltaInFramesIsAccepted) {
   writePerturbedCopy(groundtruth, 0.0, dir / "estimate.txt");
   const ToolRun run = runEvaluate(
       quoted(kGroundTruth) + " " + quoted(dir / "estimate.txt") + " --rpe-delta 5 --rpe-unit f --json", dir);
-  ASSERT_EQ(run.exit_code, 0) << run.err;
+  ASSERT_EQ(run.status, 0) << run.err;
   // Pairs (i, i + 5) whose partner is not the last pose.
-  EXPECT_EQ(jsonNumber(run.lastLine(), "rpe_pairs"), static_cast<double>((groundtruth.size() + 2) / 3 - 6));
+  EXPECT_EQ(jsonNumber(lastLine(run.out), "rpe_pairs"), static_cast<double>((groundtruth.size() + 2) / 3 - 6));
 }
 
 TEST(WicpEvaluate, BadInputGivesNonZeroExitAndNamesTheProblem) {
@@ -166,23 +140,23 @@ TEST(WicpEvaluate, BadInputGivesNonZeroExitAndNamesTheProblem) {
 
   const fs::path missing = dir / "absent.txt";
   ToolRun run = runEvaluate(quoted(kGroundTruth) + " " + quoted(missing), dir);
-  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_EQ(run.status, 1);
   EXPECT_NE(run.err.find(missing.string()), std::string::npos) << run.err;
 
   const fs::path malformed = dir / "malformed.txt";
   std::ofstream(malformed) << "# estimate\n1305031102.1759 1 2 3 0 0 0 1\n1305031102.2 1 2 x 0 0 0 1\n";
   run = runEvaluate(quoted(kGroundTruth) + " " + quoted(malformed), dir);
-  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_EQ(run.status, 1);
   EXPECT_NE(run.err.find(malformed.string() + ":3:"), std::string::npos) << run.err;
 
   const fs::path elsewhere = dir / "elsewhere.txt";  // no timestamp near the ground truth
   std::ofstream(elsewhere) << "1.0 0 0 0 0 0 0 1\n2.0 0 0 0 0 0 0 1\n3.0 0 0 0 0 0 0 1\n4.0 0 0 0 0 0 0 1\n";
   run = runEvaluate(quoted(kGroundTruth) + " " + quoted(elsewhere), dir);
-  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_EQ(run.status, 1);
   EXPECT_NE(run.err.find("at least 3"), std::string::npos) << run.err;
 
   // Command-line errors: exit code 2.
-  EXPECT_EQ(runEvaluate(quoted(kGroundTruth), dir).exit_code, 2);
-  EXPECT_EQ(runEvaluate(quoted(kGroundTruth) + " " + quoted(kGroundTruth) + " --rpe-unit m", dir).exit_code, 2);
-  EXPECT_EQ(runEvaluate(quoted(kGroundTruth) + " " + quoted(kGroundTruth) + " --max-difference abc", dir).exit_code, 2);
+  EXPECT_EQ(runEvaluate(quoted(kGroundTruth), dir).status, 2);
+  EXPECT_EQ(runEvaluate(quoted(kGroundTruth) + " " + quoted(kGroundTruth) + " --rpe-unit m", dir).status, 2);
+  EXPECT_EQ(runEvaluate(quoted(kGroundTruth) + " " + quoted(kGroundTruth) + " --max-difference abc", dir).status, 2);
 }

@@ -22,6 +22,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "test_support.h"
+#include "tool_runner.h"
 #include "weighted_icp/io/tum_sequence.h"
 #include "weighted_icp/simulation/rgbd_sequence.h"
 #include "weighted_icp/simulation/tum_export.h"
@@ -511,23 +512,10 @@ TEST(SyntheticRgbd, RefusesANonEmptyFolderUnlessToldToOverwrite) {
 
 // --- The tool, run as a user would.
 
-struct ToolRun {
-  int exit_code = -1;
-  std::string err;
-};
+using weighted_icp::testing::ToolRun;
 
 ToolRun runTool(const std::string& arguments, const fs::path& scratch) {
-  const fs::path tool = binaryDir() / "examples" / "wicp_synthetic_rgbd";
-  const fs::path err = scratch / "stderr.txt";
-  const std::string command = "'" + tool.string() + "' " + arguments + " >/dev/null 2>'" + err.string() + "'";
-  const int status = std::system(command.c_str());
-  ToolRun run;
-  run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  std::ifstream in(err);
-  std::ostringstream text;
-  text << in.rdbuf();
-  run.err = text.str();
-  return run;
+  return weighted_icp::testing::runBuiltTool("wicp_synthetic_rgbd", arguments, scratch);
 }
 
 TEST(SyntheticRgbdTool, WritesASequenceAndRejectsBadOptions) {
@@ -537,29 +525,29 @@ TEST(SyntheticRgbdTool, WritesASequenceAndRejectsBadOptions) {
   const std::string out = "'" + (scratch / "sequence").string() + "'";
 
   ToolRun run = runTool("--out " + out + " --frames 3 --seed 5 --moving-object --dim --no-depth-noise", scratch);
-  EXPECT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_EQ(run.status, 0) << run.err;
   EXPECT_EQ(readListFile(scratch / "sequence" / "rgb.txt").size(), 3u);
 
   run = runTool("--out " + out + " --frames 2", scratch);  // exists: refused
-  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_EQ(run.status, 1);
   EXPECT_NE(run.err.find("not empty"), std::string::npos) << run.err;
   EXPECT_EQ(readListFile(scratch / "sequence" / "rgb.txt").size(), 3u);
   run = runTool("--out " + out + " --frames 2 --overwrite", scratch);
-  EXPECT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_EQ(run.status, 0) << run.err;
   EXPECT_EQ(readListFile(scratch / "sequence" / "rgb.txt").size(), 2u);
 
   const std::string fresh = "'" + (scratch / "fresh").string() + "'";
   for (const std::string& bad :
        {std::string("--frames 0"), std::string("--frames=-3"), std::string("--depth-noise-coefficient -0.01")}) {
     run = runTool("--out " + fresh + ' ' + bad, scratch);
-    EXPECT_EQ(run.exit_code, 2) << bad;  // a bad command line, refused while parsing
+    EXPECT_EQ(run.status, 2) << bad;  // a bad command line, refused while parsing
     EXPECT_NE(run.err.find(bad.substr(0, bad.find_first_of(" ="))), std::string::npos) << bad << ": " << run.err;
     EXPECT_FALSE(fs::exists(scratch / "fresh")) << bad;
   }
   run = runTool("--frames 2", scratch);  // no --out
-  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_EQ(run.status, 2);
   run = runTool("--out /proc/synthetic_rgbd --frames 1", scratch);  // not writable
-  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_EQ(run.status, 1);
   EXPECT_NE(run.err.find("/proc"), std::string::npos) << run.err;
 }
 

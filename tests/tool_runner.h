@@ -27,7 +27,7 @@ struct ToolRun {
 };
 
 /// Runs build/examples/<tool> with `args` (shell syntax). stderr goes through
-/// a file in `scratch`. With `timeout_seconds` > 0 the run is killed after
+/// a file in `scratch`, removed afterwards. With `timeout_seconds` > 0 the run is killed after
 /// that long (status 124), so an option that makes a tool run forever fails
 /// the test instead of hanging it.
 inline ToolRun runBuiltTool(const std::string& tool, const std::string& args, const std::filesystem::path& scratch,
@@ -35,20 +35,25 @@ inline ToolRun runBuiltTool(const std::string& tool, const std::string& args, co
   const std::filesystem::path err_file = scratch / "stderr.txt";
   const std::string limit = timeout_seconds > 0 ? "timeout " + std::to_string(timeout_seconds) + " " : "";
   const std::string command =
-      limit + (binaryDir() / "examples" / tool).string() + " " + args + " 2>" + err_file.string();
+      limit + "'" + (binaryDir() / "examples" / tool).string() + "' " + args + " 2>'" + err_file.string() + "'";
   ToolRun result;
   FILE* pipe = popen(command.c_str(), "r");
   if (!pipe) {
     result.err = "cannot run " + command;
     return result;
   }
-  std::array<char, 4096> buffer{};
-  while (std::fgets(buffer.data(), buffer.size(), pipe)) result.out += buffer.data();
+  std::array<char, 4096> buffer{};  // fread, not fgets: a NUL byte in the output must not cut it
+  for (std::size_t n; (n = std::fread(buffer.data(), 1, buffer.size(), pipe)) > 0;) result.out.append(buffer.data(), n);
   // A tool killed by a signal reports 128 + the signal, as a shell does: WEXITSTATUS alone would read 0.
   const int status = pclose(pipe);
   result.status = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + (WIFSIGNALED(status) ? WTERMSIG(status) : 0);
-  std::ifstream err(err_file);
-  result.err.assign(std::istreambuf_iterator<char>(err), {});
+  {
+    std::ifstream err(err_file);
+    result.err.assign(std::istreambuf_iterator<char>(err), {});
+  }
+  // The scratch folder then holds only what the tool wrote.
+  std::error_code ignored;
+  std::filesystem::remove(err_file, ignored);
   return result;
 }
 
