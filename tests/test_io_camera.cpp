@@ -124,6 +124,13 @@ TEST(Camera, TextOpenCvCannotParseIsRefusedByLine) {
   const std::string error = errorOf(hang.string());
   EXPECT_NE(error.find(hang.string() + ":2: not a camera file"), std::string::npos) << error;
   EXPECT_NE(error.find("'---<:p'"), std::string::npos) << error;
+  // An indented line not below a key (fuzz/fuzz_camera, 2026-11-25: OpenCV looped forever on it).
+  const fs::path orphan = dir / "orphan.yaml";
+  writeFile(orphan, "%YAML:1.0\n\n yyyyyyyyyyyyyyyyyy0.9:3104\np1: -0.005358\n");
+  const std::string orphan_error = errorOf(orphan.string());
+  EXPECT_NE(orphan_error.find(orphan.string() + ":3: not a camera file: an indented line not below a key"),
+            std::string::npos)
+      << orphan_error;
   // What OpenCV writes is of the plain layout, indented matrices of other keys included.
   const fs::path opencv = dir / "opencv.yaml";
   writeFile(opencv,

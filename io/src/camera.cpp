@@ -83,7 +83,8 @@ std::string describe(const std::vector<KeyProblem>& problems) {
 /// @brief Refuses a YAML camera file whose lines are not the plain layout camera files have: directives
 /// ("%YAML:1.0"), document markers ("---"), comments, "key: value" lines with a name for key, and indented
 /// lines below a key (an OpenCV matrix of another key). OpenCV's YAML parser can loop forever on malformed text
-/// (found by fuzz/fuzz_camera: "%YAML:1.0\n---<:p\na: -\n"), so it is given only text of this layout. XML and
+/// (found by fuzz/fuzz_camera: "%YAML:1.0\n---<:p\na: -\n", and an indented line right after the directive), so it
+/// is given only text of this layout. XML and
 /// JSON files (first character '<' or '{') are left to FileStorage.
 /// @param path the camera file
 void requirePlainYamlLayout(const std::string& path) {
@@ -91,6 +92,7 @@ void requirePlainYamlLayout(const std::string& path) {
   std::string line;
   std::size_t number = 0;
   bool first = true;
+  bool below_key = false;  // an indented line belongs to the key line above it
   while (std::getline(in, line)) {
     ++number;
     if (!line.empty() && line.back() == '\r') line.pop_back();
@@ -100,9 +102,18 @@ void requirePlainYamlLayout(const std::string& path) {
       if (line[start] == '<' || line[start] == '{') return;
       first = false;
     }
-    if (line.empty() || line[0] == ' ' || line[0] == '\t' || line[0] == '#' || line[0] == '%' || line == "---" ||
-        line == "...")
+    if (line.empty() || line[0] == '#') continue;
+    if (line[0] == '%' || line == "---" || line == "...") {
+      below_key = false;
       continue;
+    }
+    if (line[0] == ' ' || line[0] == '\t') {
+      // An indented line not below a key: OpenCV's parser looped forever on one (fuzz/fuzz_camera, 2026-11-25).
+      if (!below_key)
+        throw std::runtime_error(path + ":" + std::to_string(number) +
+                                 ": not a camera file: an indented line not below a key, " + detail::quoteToken(line));
+      continue;
+    }
     const std::size_t colon = line.find(':');
     const bool named = colon != std::string::npos && colon > 0 &&
                        std::all_of(line.begin(), line.begin() + static_cast<std::ptrdiff_t>(colon),
@@ -110,6 +121,7 @@ void requirePlainYamlLayout(const std::string& path) {
     if (!named || (colon + 1 < line.size() && line[colon + 1] != ' ' && line[colon + 1] != '\t'))
       throw std::runtime_error(path + ":" + std::to_string(number) +
                                ": not a camera file: expected \"key: value\", found " + detail::quoteToken(line));
+    below_key = true;
   }
 }
 
