@@ -21,16 +21,16 @@ using weighted_icp::testing::pointsInView;
 using weighted_icp::testing::projectWorld;
 using weighted_icp::testing::syntheticCamera;
 
-const Eigen::Isometry3d kTruthWc = makePose({-4, 8, 2}, {0.1, 0.3, -0.4});
+const Eigen::Isometry3d kMethodTruthWc = makePose({-4, 8, 2}, {0.1, 0.3, -0.4});
 
 /// 300 matches with 1 px noise, the first 20 % replaced by random pixels.
 void makeScene(std::vector<Eigen::Vector3d>& points, std::vector<Eigen::Vector2d>& pixels) {
   const auto camera = syntheticCamera();
   std::mt19937 rng(11);
-  points = pointsInView(camera, kTruthWc, 300, 1.0, 5.0, rng);
+  points = pointsInView(camera, kMethodTruthWc, 300, 1.0, 5.0, rng);
   std::uniform_real_distribution<double> uniform(0.0, 1.0);
   for (std::size_t i = 0; i < points.size(); ++i) {
-    pixels.push_back(projectWorld(camera, kTruthWc, points[i]) + gaussianPixel(1.0, rng));
+    pixels.push_back(projectWorld(camera, kMethodTruthWc, points[i]) + gaussianPixel(1.0, rng));
     if (i < 60) pixels.back() = {uniform(rng) * camera.width, uniform(rng) * camera.height};
   }
 }
@@ -46,8 +46,8 @@ TEST_P(PnpMethods, RecoverAKnownPoseThroughOutliersAndRepeatExactly) {
   const PoseEstimate first = estimatePosePnp(points, pixels, syntheticCamera(), std::nullopt, options);
   const PoseEstimate second = estimatePosePnp(points, pixels, syntheticCamera(), std::nullopt, options);
   ASSERT_TRUE(first.ok) << first.failure;
-  EXPECT_LT(rotationErrorDeg(first.pose_wc, kTruthWc), 0.1);
-  EXPECT_LT(translationError(first.pose_wc, kTruthWc), 0.003);
+  EXPECT_LT(rotationErrorDeg(first.pose_wc, kMethodTruthWc), 0.1);
+  EXPECT_LT(translationError(first.pose_wc, kMethodTruthWc), 0.003);
   EXPECT_GE(first.inliers.size(), 230u);  // 240 clean matches, 1 px noise, 3 px threshold
   EXPECT_FALSE(first.initial_from_guess);
   EXPECT_TRUE(first.pose_wc.matrix() == second.pose_wc.matrix());

@@ -56,21 +56,21 @@ double rms(const PinholeCamera& camera, const Eigen::Isometry3d& pose_wc, const 
   return std::sqrt(sum / use.size());
 }
 
-const Eigen::Isometry3d kTruthWc = makePose({5, -10, 3}, {0.3, -0.2, 0.5});
+const Eigen::Isometry3d kPnpTruthWc = makePose({5, -10, 3}, {0.3, -0.2, 0.5});
 
 TEST(PosePnp, RecoversAKnownPoseWithNoiseAndThirtyPercentOutliers) {
   const auto camera = syntheticCamera();
-  const PnpScene scene = makePnpScene(camera, kTruthWc, 500, 1.0, 0.3, 1);
+  const PnpScene scene = makePnpScene(camera, kPnpTruthWc, 500, 1.0, 0.3, 1);
   const PoseEstimate estimate = estimatePosePnp(scene.points, scene.pixels, camera, std::nullopt);
   ASSERT_TRUE(estimate.ok) << estimate.failure;
-  const double rotation_deg = rotationErrorDeg(estimate.pose_wc, kTruthWc);
-  const double translation_m = translationError(estimate.pose_wc, kTruthWc);
+  const double rotation_deg = rotationErrorDeg(estimate.pose_wc, kPnpTruthWc);
+  const double translation_m = translationError(estimate.pose_wc, kPnpTruthWc);
   const double initial_rms = rms(camera, estimate.initial_pose_wc, scene, estimate.inliers);
   std::cout << "PnP 500 matches, 30 % outliers, 1 px: rotation " << rotation_deg << " deg, translation "
             << translation_m * 1000 << " mm, " << estimate.inliers.size() << " inliers, RMS " << initial_rms
             << " px (RANSAC) -> " << estimate.rms_reprojection_px << " px (refined); RANSAC pose error "
-            << rotationErrorDeg(estimate.initial_pose_wc, kTruthWc) << " deg, "
-            << translationError(estimate.initial_pose_wc, kTruthWc) * 1000 << " mm\n";
+            << rotationErrorDeg(estimate.initial_pose_wc, kPnpTruthWc) << " deg, "
+            << translationError(estimate.initial_pose_wc, kPnpTruthWc) * 1000 << " mm\n";
   EXPECT_LT(rotation_deg, 0.1);
   EXPECT_LT(translation_m, 0.002);
   EXPECT_FALSE(estimate.initial_from_guess);
@@ -85,7 +85,7 @@ TEST(PosePnp, RecoversAKnownPoseWithNoiseAndThirtyPercentOutliers) {
 
 TEST(PosePnp, IsDeterministic) {
   const auto camera = syntheticCamera();
-  const PnpScene scene = makePnpScene(camera, kTruthWc, 500, 1.0, 0.3, 2);
+  const PnpScene scene = makePnpScene(camera, kPnpTruthWc, 500, 1.0, 0.3, 2);
   const PoseEstimate first = estimatePosePnp(scene.points, scene.pixels, camera, std::nullopt);
   const PoseEstimate second = estimatePosePnp(scene.points, scene.pixels, camera, std::nullopt);
   ASSERT_TRUE(first.ok && second.ok);
@@ -95,8 +95,8 @@ TEST(PosePnp, IsDeterministic) {
 
 TEST(PosePnp, TakesFiveHundredMatchesInAFewMilliseconds) {
   const auto camera = syntheticCamera();
-  const PnpScene scene = makePnpScene(camera, kTruthWc, 500, 1.0, 0.3, 3);
-  const std::optional<Eigen::Isometry3d> guess = kTruthWc * makePose({0.5, 0, 0}, {0.01, 0, 0});
+  const PnpScene scene = makePnpScene(camera, kPnpTruthWc, 500, 1.0, 0.3, 3);
+  const std::optional<Eigen::Isometry3d> guess = kPnpTruthWc * makePose({0.5, 0, 0}, {0.01, 0, 0});
   constexpr int kRuns = 20;
   const auto start = std::chrono::steady_clock::now();
   for (int run = 0; run < kRuns; ++run) ASSERT_TRUE(estimatePosePnp(scene.points, scene.pixels, camera, guess).ok);
@@ -107,24 +107,24 @@ TEST(PosePnp, TakesFiveHundredMatchesInAFewMilliseconds) {
 TEST(PosePnp, AGoodGuessSurvivesARansacFailure) {
   const auto camera = syntheticCamera();
   // 80 % outliers and 10 RANSAC draws: an all-inlier 4-point sample has p ~ 1.6e-3 per draw.
-  const PnpScene scene = makePnpScene(camera, kTruthWc, 500, 1.0, 0.8, 4);
+  const PnpScene scene = makePnpScene(camera, kPnpTruthWc, 500, 1.0, 0.8, 4);
   PnpOptions options;
   options.ransac_iterations = 10;
   const PoseEstimate blind = estimatePosePnp(scene.points, scene.pixels, camera, std::nullopt, options);
   EXPECT_FALSE(blind.ok);
   EXPECT_FALSE(blind.failure.empty());
 
-  const Eigen::Isometry3d guess = kTruthWc * makePose({0.1, 0.1, 0}, {0.003, 0, -0.002});
+  const Eigen::Isometry3d guess = kPnpTruthWc * makePose({0.1, 0.1, 0}, {0.003, 0, -0.002});
   const PoseEstimate seeded = estimatePosePnp(scene.points, scene.pixels, camera, guess, options);
   ASSERT_TRUE(seeded.ok) << seeded.failure;
   EXPECT_TRUE(seeded.initial_from_guess);
-  EXPECT_LT(rotationErrorDeg(seeded.pose_wc, kTruthWc), 0.1);
-  EXPECT_LT(translationError(seeded.pose_wc, kTruthWc), 0.002);
+  EXPECT_LT(rotationErrorDeg(seeded.pose_wc, kPnpTruthWc), 0.1);
+  EXPECT_LT(translationError(seeded.pose_wc, kPnpTruthWc), 0.002);
 }
 
 TEST(PosePnp, ReportsTooFewOrInvalidMatches) {
   const auto camera = syntheticCamera();
-  const PnpScene scene = makePnpScene(camera, kTruthWc, 10, 1.0, 0.0, 5);
+  const PnpScene scene = makePnpScene(camera, kPnpTruthWc, 10, 1.0, 0.0, 5);
   const PoseEstimate few = estimatePosePnp(scene.points, scene.pixels, camera, std::nullopt);
   EXPECT_FALSE(few.ok);
   EXPECT_NE(few.failure.find("too few"), std::string::npos) << few.failure;
@@ -133,7 +133,7 @@ TEST(PosePnp, ReportsTooFewOrInvalidMatches) {
   EXPECT_FALSE(empty.ok);
   EXPECT_FALSE(empty.failure.empty());
 
-  PnpScene mismatched = makePnpScene(camera, kTruthWc, 100, 1.0, 0.0, 6);
+  PnpScene mismatched = makePnpScene(camera, kPnpTruthWc, 100, 1.0, 0.0, 6);
   mismatched.pixels.pop_back();
   const PoseEstimate sizes = estimatePosePnp(mismatched.points, mismatched.pixels, camera, std::nullopt);
   EXPECT_FALSE(sizes.ok);
@@ -146,13 +146,13 @@ TEST(PosePnp, ReportsTooFewOrInvalidMatches) {
 
 TEST(PosePnp, IgnoresNonFiniteMatches) {
   const auto camera = syntheticCamera();
-  PnpScene scene = makePnpScene(camera, kTruthWc, 200, 1.0, 0.0, 7);
+  PnpScene scene = makePnpScene(camera, kPnpTruthWc, 200, 1.0, 0.0, 7);
   const double nan = std::numeric_limits<double>::quiet_NaN();
   for (int i = 0; i < 20; ++i) (i % 2 ? scene.points[i].x() : scene.pixels[i].y()) = nan;
   const PoseEstimate estimate = estimatePosePnp(scene.points, scene.pixels, camera, std::nullopt);
   ASSERT_TRUE(estimate.ok) << estimate.failure;
   for (const int i : estimate.inliers) EXPECT_GE(i, 20);
-  EXPECT_LT(rotationErrorDeg(estimate.pose_wc, kTruthWc), 0.1);
+  EXPECT_LT(rotationErrorDeg(estimate.pose_wc, kPnpTruthWc), 0.1);
 
   for (auto& point : scene.points) point.z() = nan;
   EXPECT_FALSE(estimatePosePnp(scene.points, scene.pixels, camera, std::nullopt).ok);
@@ -160,19 +160,20 @@ TEST(PosePnp, IgnoresNonFiniteMatches) {
 
 TEST(RefinePoseHuber, GrossOutliersPullLeastSquaresFurtherThanHuber) {
   const auto camera = syntheticCamera();
-  PnpScene scene = makePnpScene(camera, kTruthWc, 100, 0.5, 0.0, 8);
+  PnpScene scene = makePnpScene(camera, kPnpTruthWc, 100, 0.5, 0.0, 8);
   std::mt19937 rng(9);
   std::uniform_real_distribution<double> shift(40.0, 80.0);
   for (int i = 0; i < 8; ++i) scene.pixels[i] += Eigen::Vector2d(shift(rng), -shift(rng));  // kept in `use`
   std::vector<int> use(100);
   for (int i = 0; i < 100; ++i) use[i] = i;
-  const Eigen::Isometry3d initial = perturbPose(kTruthWc, 0.01, 0.5, rng);
+  const Eigen::Isometry3d initial = perturbPose(kPnpTruthWc, 0.01, 0.5, rng);
 
   const Eigen::Isometry3d huber = refinePoseHuber(scene.points, scene.pixels, use, camera, initial, 2.0, 50);
   const Eigen::Isometry3d least_squares =
       refinePoseHuber(scene.points, scene.pixels, use, camera, initial, std::numeric_limits<double>::infinity(), 50);
-  const double huber_rot = rotationErrorDeg(huber, kTruthWc), ls_rot = rotationErrorDeg(least_squares, kTruthWc);
-  const double huber_trans = translationError(huber, kTruthWc), ls_trans = translationError(least_squares, kTruthWc);
+  const double huber_rot = rotationErrorDeg(huber, kPnpTruthWc), ls_rot = rotationErrorDeg(least_squares, kPnpTruthWc);
+  const double huber_trans = translationError(huber, kPnpTruthWc),
+               ls_trans = translationError(least_squares, kPnpTruthWc);
   std::cout << "8 gross outliers in 100: Huber " << huber_rot << " deg " << huber_trans * 1000 << " mm; least squares "
             << ls_rot << " deg " << ls_trans * 1000 << " mm\n";
   EXPECT_LT(huber_rot, 0.5 * ls_rot);
@@ -182,15 +183,15 @@ TEST(RefinePoseHuber, GrossOutliersPullLeastSquaresFurtherThanHuber) {
 
 TEST(RefinePoseHuber, RejectsInvalidArguments) {
   const auto camera = syntheticCamera();
-  const PnpScene scene = makePnpScene(camera, kTruthWc, 20, 0.5, 0.0, 10);
-  EXPECT_THROW(refinePoseHuber(scene.points, scene.pixels, {0, 1, 20}, camera, kTruthWc, 2.0, 10),
+  const PnpScene scene = makePnpScene(camera, kPnpTruthWc, 20, 0.5, 0.0, 10);
+  EXPECT_THROW(refinePoseHuber(scene.points, scene.pixels, {0, 1, 20}, camera, kPnpTruthWc, 2.0, 10),
                std::invalid_argument);
-  EXPECT_THROW(refinePoseHuber(scene.points, {}, {}, camera, kTruthWc, 2.0, 10), std::invalid_argument);
-  EXPECT_THROW(refinePoseHuber(scene.points, scene.pixels, {0, 1, 2}, camera, kTruthWc, 0.0, 10),
+  EXPECT_THROW(refinePoseHuber(scene.points, {}, {}, camera, kPnpTruthWc, 2.0, 10), std::invalid_argument);
+  EXPECT_THROW(refinePoseHuber(scene.points, scene.pixels, {0, 1, 2}, camera, kPnpTruthWc, 0.0, 10),
                std::invalid_argument);
   // Too little to refine: the initial pose comes back.
-  const Eigen::Isometry3d unchanged = refinePoseHuber(scene.points, scene.pixels, {0, 1}, camera, kTruthWc, 2.0, 10);
-  EXPECT_TRUE(unchanged.matrix() == kTruthWc.matrix());
+  const Eigen::Isometry3d unchanged = refinePoseHuber(scene.points, scene.pixels, {0, 1}, camera, kPnpTruthWc, 2.0, 10);
+  EXPECT_TRUE(unchanged.matrix() == kPnpTruthWc.matrix());
 }
 
 /// Pixels of the same points in two cameras, camera 1 at the world origin.

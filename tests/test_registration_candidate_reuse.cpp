@@ -90,7 +90,9 @@ TEST(CandidateReuse, WholeIcpRunsAreBitIdenticalToTheUncachedSearch) {
 }
 
 /// Random points with exact duplicates, so that distance ties (FLANN's order) occur.
-Cloud::Ptr randomCloud(std::size_t n, unsigned seed) { return weighted_icp::testing::randomCloud(n, seed, 1.0f, 10); }
+Cloud::Ptr cloudWithDuplicates(std::size_t n, unsigned seed) {
+  return weighted_icp::testing::randomCloud(n, seed, 1.0f, 10);
+}
 
 pcl::Correspondences correspondencesOf(
     pcl::registration::CorrespondenceEstimationBase<pcl::PointXYZ, pcl::PointXYZ>& ce, const Cloud::Ptr& source) {
@@ -110,8 +112,8 @@ void expectSame(const pcl::Correspondences& a, const pcl::Correspondences& b) {
 }
 
 TEST(CandidateReuse, ReusedCandidatesKeepPclsAnswerWithTiesAndAJumpIsSearchedAgain) {
-  const auto target = randomCloud(3000, 3);
-  auto source = randomCloud(2000, 4);  // its duplicates tie with each other's targets too
+  const auto target = cloudWithDuplicates(3000, 3);
+  auto source = cloudWithDuplicates(2000, 4);  // its duplicates tie with each other's targets too
   for (std::size_t i = 0; i < 300; ++i) source->push_back((*target)[i * 3]);  // exact ties at distance 0
   for (const unsigned k : {1u, 5u}) {
     SCOPED_TRACE(::testing::Message() << "k " << k);
@@ -149,8 +151,8 @@ TEST(CandidateReuse, ManySmallStepsAreAnsweredFromTheRememberedNearestAsTheTreeA
   // Late ICP: every point moves a little per call. Most calls are answered from the remembered k + 1
   // nearest (no ranking of all candidates); neighbours whose order swaps on the way must not be missed.
   // Random weights make the choice depend on all k neighbours and their order.
-  const auto target = randomCloud(3000, 5);
-  auto source = randomCloud(2000, 6);
+  const auto target = cloudWithDuplicates(3000, 5);
+  auto source = cloudWithDuplicates(2000, 6);
   for (std::size_t i = 0; i < 200; ++i) source->push_back((*target)[i * 7]);  // ties at distance 0
   std::mt19937 rng(7);
   std::uniform_int_distribution<int> level(0, 3);  // few levels: equal weights go to the nearer point

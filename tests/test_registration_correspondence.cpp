@@ -37,7 +37,7 @@ Cloud::Ptr cloudOf(std::initializer_list<std::array<float, 3>> points) {
 }
 
 /// Random points with exact duplicates, so that distance ties (FLANN's order) occur.
-Cloud::Ptr randomCloud(std::size_t n, unsigned seed) { return weighted_icp::testing::randomCloud(n, seed, 1.0f, 20); }
+Cloud::Ptr cloudWithTies(std::size_t n, unsigned seed) { return weighted_icp::testing::randomCloud(n, seed, 1.0f, 20); }
 
 Cloud::Ptr displaced(const Cloud& cloud, const weighted_icp::Displacement& d) {
   auto out = std::make_shared<Cloud>();
@@ -94,7 +94,7 @@ void expectEquivalentToPcl(const Cloud::Ptr& source, const Cloud::Ptr& target) {
 }
 
 TEST(WeightedCorrespondenceEstimation, KEqualsOneMatchesPclOnRandomCloudsWithDuplicates) {
-  const auto target = randomCloud(3000, 1);
+  const auto target = cloudWithTies(3000, 1);
   expectEquivalentToPcl(displaced(*target, {0.03, -0.02, 0.01, 1, 2, 4}), target);
 }
 
@@ -106,7 +106,7 @@ TEST(WeightedCorrespondenceEstimation, KEqualsOneMatchesPclOnTheRealMap) {
 
 TEST(WeightedCorrespondenceEstimation, UniformWeightsWithLargerKStillMatchPcl) {
   // All weights equal: the tie rule picks the nearest of the k, i.e. PCL's choice.
-  const auto target = randomCloud(2000, 2);
+  const auto target = cloudWithTies(2000, 2);
   const auto source = displaced(*target, {0.02, 0.0, 0.01, 0, 0, 3});
   Stock stock;
   Weighted weighted(7);
@@ -337,8 +337,8 @@ TEST(WeightedCorrespondenceEstimation, NoTargetOrAnAllNanTargetGivesNoCorrespond
 // --- Threads, index reuse, clone ---------------------------------------------------
 
 TEST(WeightedCorrespondenceEstimation, ResultsDoNotDependOnTheNumberOfThreads) {
-  const auto target = randomCloud(20000, 5);
-  const auto source = displaced(*randomCloud(15000, 6), {0.01, 0.02, 0.0, 0, 0, 2});
+  const auto target = cloudWithTies(20000, 5);
+  const auto source = displaced(*cloudWithTies(15000, 6), {0.01, 0.02, 0.0, 0, 0, 2});
   std::vector<double> weights(target->size());
   std::mt19937 rng(7);
   std::uniform_int_distribution<int> count(1, 6);  // many ties, as observation counts
@@ -361,7 +361,7 @@ TEST(WeightedCorrespondenceEstimation, ResultsDoNotDependOnTheNumberOfThreads) {
 }
 
 TEST(NearestNeighborIndex, ReSettingAnUnchangedCloudDoesNotRebuild) {
-  const auto cloud = randomCloud(500, 8);
+  const auto cloud = cloudWithTies(500, 8);
   weighted_icp::NearestNeighborIndex index;
   EXPECT_TRUE(index.build(*cloud));
   EXPECT_FALSE(index.build(*cloud));
@@ -389,7 +389,7 @@ std::string stderrOf(Setters setters) {
 }
 
 TEST(WeightedCorrespondenceEstimation, IgnoredPclSettersWarnAndChangeNothing) {
-  const auto source = randomCloud(300, 11);
+  const auto source = cloudWithTies(300, 11);
   const auto target = displaced(*source, {0.03, -0.02, 0.01, 1, 2, 4});
   // x stretched 100 times: PCL's own class, which honours it, then pairs points differently.
   auto stretched = std::make_shared<pcl::DefaultPointRepresentation<pcl::PointXYZ>>();
@@ -431,7 +431,7 @@ TEST(WeightedCorrespondenceEstimation, IgnoredPclSettersWarnAndChangeNothing) {
 }
 
 TEST(WeightedCorrespondenceEstimation, IcpPassingItsTreesThroughTheBaseDoesNotWarn) {
-  const auto target = randomCloud(200, 12);
+  const auto target = cloudWithTies(200, 12);
   const auto source = displaced(*target, {0.02, 0.01, 0.0, 0, 0, 2});
   pcl::IterativeClosestPoint<pcl::PointXYZ, pcl::PointXYZ> icp;
   icp.setCorrespondenceEstimation(std::make_shared<Weighted>(1));

@@ -29,7 +29,7 @@ Cloud::Ptr identicalCloud(std::size_t n, float coordinate) {
 }
 
 /// Random points in a 10 m cube.
-Cloud::Ptr randomCloud(std::size_t n, unsigned seed) { return weighted_icp::testing::randomCloud(n, seed, 5.0f, 0); }
+Cloud::Ptr cubeCloud(std::size_t n, unsigned seed) { return weighted_icp::testing::randomCloud(n, seed, 5.0f, 0); }
 
 LandmarkCloud::Ptr landmarks(const Cloud& points) {
   auto cloud = std::make_shared<LandmarkCloud>();
@@ -70,7 +70,7 @@ TEST(RegistrationRobustness, HugeIdenticalTargetIsRefusedNamingThePoint) {
   for (const float huge : {1.8e38f, FLT_MAX, -FLT_MAX}) {
     Weighted ce(5);
     const std::string message =
-        invalidArgumentMessage([&] { correspondences(ce, randomCloud(10, 1), identicalCloud(20, huge)); });
+        invalidArgumentMessage([&] { correspondences(ce, cubeCloud(10, 1), identicalCloud(20, huge)); });
     EXPECT_NE(message.find("target point 0"), std::string::npos) << message;
 
     LandmarkAligner aligner;
@@ -81,37 +81,37 @@ TEST(RegistrationRobustness, HugeIdenticalTargetIsRefusedNamingThePoint) {
 }
 
 TEST(RegistrationRobustness, OneUnindexablePointAmongValidOnesIsNamed) {
-  const auto target = randomCloud(30, 2);
+  const auto target = cubeCloud(30, 2);
   (*target)[17].y = 2.5e38f;
   LandmarkAligner aligner;
   const std::string message = invalidArgumentMessage([&] { aligner.setTarget(landmarks(*target)); });
   EXPECT_NE(message.find("point 17"), std::string::npos) << message;
   // As a source it is refused the same way, not silently matched at infinite distances.
   LandmarkAligner valid;
-  valid.setTarget(landmarks(*randomCloud(30, 3)));
+  valid.setTarget(landmarks(*cubeCloud(30, 3)));
   EXPECT_NE(invalidArgumentMessage([&] { valid.align(landmarks(*target)); }).find("source point 17"),
             std::string::npos);
 }
 
 TEST(RegistrationRobustness, CoordinatesUpToTheLimitAreAccepted) {
   Weighted ce(2);
-  const auto target = randomCloud(30, 4);
+  const auto target = cubeCloud(30, 4);
   (*target)[3].x = static_cast<float>(NearestNeighborIndex::kMaxCoordinate);
   (*target)[4].z = -static_cast<float>(NearestNeighborIndex::kMaxCoordinate);
-  EXPECT_NO_THROW(correspondences(ce, randomCloud(10, 5), target));
+  EXPECT_NO_THROW(correspondences(ce, cubeCloud(10, 5), target));
 }
 
 TEST(RegistrationRobustness, IdenticalTargetsBuildWithoutUnboundedRecursion) {
   for (const std::size_t n : {std::size_t{20}, std::size_t{1000000}}) {
     SCOPED_TRACE(n);
     Weighted ce(5);
-    const auto found = correspondences(ce, randomCloud(600, 6), identicalCloud(n, 1.5f));
+    const auto found = correspondences(ce, cubeCloud(600, 6), identicalCloud(n, 1.5f));
     ASSERT_EQ(found.size(), 600u);  // every source point finds one of the identical points
     for (const auto& c : found) EXPECT_LT(c.index_match, static_cast<int>(n));
 
     LandmarkAligner aligner;
     aligner.setTarget(landmarks(*identicalCloud(n, 1.5f)));
-    const AlignmentResult result = aligner.align(landmarks(*randomCloud(50, 7)));
+    const AlignmentResult result = aligner.align(landmarks(*cubeCloud(50, 7)));
     EXPECT_TRUE(result.degenerate);
     EXPECT_FALSE(result.converged);
     EXPECT_NE(result.reason.find("identical"), std::string::npos) << result.reason;
@@ -127,7 +127,7 @@ AlignmentResult alignClouds(const Cloud& source, const Cloud& target, unsigned i
 }
 
 TEST(RegistrationRobustness, DegenerateProblemsAreReportedNotConverged) {
-  const auto good = randomCloud(50, 8);
+  const auto good = cubeCloud(50, 8);
   Cloud line;
   for (int i = 0; i < 40; ++i) line.push_back(pcl::PointXYZ(0.1f * i, 0.2f * i, -0.3f * i));
   Cloud two;
@@ -162,8 +162,8 @@ TEST(RegistrationRobustness, DegenerateProblemsAreReportedNotConverged) {
 
 TEST(RegistrationRobustness, AbsurdKCostsNoMoreThanKEqualToTheTarget) {
   // 1,000 source points: the search runs in its OpenMP region, where a bad_alloc used to abort.
-  const auto source = randomCloud(1000, 9);
-  const auto target = randomCloud(700, 10);
+  const auto source = cubeCloud(1000, 9);
+  const auto target = cubeCloud(700, 10);
   Weighted whole(700);
   Weighted absurd(4294967295u);
   const auto expected = correspondences(whole, source, target);

@@ -169,7 +169,7 @@ TEST(WicpAlignDegenerate, CoordinatesBeyondTheIndexAreRefusedWithFileAndLine) {
   const fs::path scratch = scratchDir("huge");
   const fs::path huge = writeMap(scratch, "huge.txt", std::vector<std::string>(20, "1.8e38 1.8e38 1.8e38"));
   const std::string valid = writeMap(scratch, "valid.txt", grid(40)).string();
-  for (const std::string args :
+  for (const std::string& args :
        {"--source " + valid + " --target " + huge.string(), "--source " + huge.string() + " --target " + valid}) {
     const ToolRun r = run("wicp_align", args, scratch);
     EXPECT_EQ(r.status, 1) << r.err;

@@ -20,28 +20,19 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "test_support.h"
+#include "tool_runner.h"
 
 namespace {
 
 namespace fs = std::filesystem;
 using weighted_icp::testing::binaryDir;
 using weighted_icp::testing::readFile;
+using weighted_icp::testing::runBuiltTool;
 using weighted_icp::testing::scratchDir;
+using weighted_icp::testing::ToolRun;
 using weighted_icp::testing::writeFile;
 
-struct ToolRun {
-  int status = -1;  // exit code, or -1 when killed by a signal
-  std::string err;
-};
-
 fs::path tool(const std::string& name) { return binaryDir() / "examples" / name; }
-
-/// Runs a tool with `args` (shell syntax); stdout is dropped, stderr kept.
-ToolRun run(const std::string& name, const std::string& args, const fs::path& err_file) {
-  const std::string command = "'" + tool(name).string() + "' " + args + " >/dev/null 2>'" + err_file.string() + "'";
-  const int status = std::system(command.c_str());
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, readFile(err_file)};
-}
 
 bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
 
@@ -65,8 +56,8 @@ void waitForProgress(const fs::path& err) {
 /// completely with the fr1 camera; the tests spoil one part of it.
 fs::path exportSequence(const fs::path& scratch, int frames) {
   const fs::path dir = scratch / "seq";
-  const ToolRun r = run("wicp_synthetic_rgbd", "--frames " + std::to_string(frames) + " --out '" + dir.string() + "'",
-                        scratch / "export_err.txt");
+  const ToolRun r = runBuiltTool("wicp_synthetic_rgbd",
+                                 "--frames " + std::to_string(frames) + " --out '" + dir.string() + "'", scratch);
   EXPECT_EQ(r.status, 0) << r.err;
   return dir;
 }
@@ -101,12 +92,12 @@ TEST(WicpRgbdSlamFailures, UnusableInputFailsWithAnErrorLineAndWritesNothing) {
   const auto before = entries(parent);  // empty
 
   blankImages(seq / "rgb");  // all-black RGB: no features
-  ToolRun r = run("wicp_rgbd_slam", slamArgs(seq, parent / "out"), scratch / "err.txt");
+  ToolRun r = runBuiltTool("wicp_rgbd_slam", slamArgs(seq, parent / "out"), scratch);
   expectFailedWithNothingWritten(r, parent, before, "no frame was tracked");
 
   const fs::path seq2 = exportSequence(scratchDir("slam_failures_depth"), 4);
   blankImages(seq2 / "depth");  // all-zero depth: nothing to map
-  r = run("wicp_rgbd_slam", slamArgs(seq2, parent / "out"), scratch / "err.txt");
+  r = runBuiltTool("wicp_rgbd_slam", slamArgs(seq2, parent / "out"), scratch);
   expectFailedWithNothingWritten(r, parent, before, "no frame was tracked");  // every frame lost
 
   // An absurd depth factor is refused when the camera is read, by key.
@@ -114,10 +105,10 @@ TEST(WicpRgbdSlamFailures, UnusableInputFailsWithAnErrorLineAndWritesNothing) {
   writeFile(camera,
             "%YAML:1.0\nfx: 517.3\nfy: 516.5\ncx: 318.6\ncy: 255.3\nk1: 0\nk2: 0\np1: 0\np2: 0\nk3: 0\n"
             "width: 640\nheight: 480\ndepth_factor: 0.005\n");
-  r = run(
+  r = runBuiltTool(
       "wicp_rgbd_slam",
       "--dataset '" + seq2.string() + "' --camera '" + camera.string() + "' --out '" + (parent / "out").string() + "'",
-      scratch / "err.txt");
+      scratch);
   expectFailedWithNothingWritten(r, parent, before, "depth_factor must be between");
 }
 
@@ -127,7 +118,7 @@ TEST(WicpRgbdSlamFailures, GroundTruthWithoutCommonTimestampsIsAWarningAndTheRep
   writeFile(seq / "groundtruth.txt",
             "# far from every frame\n1.0 0 0 0 0 0 0 1\n2.0 0 0 0 0 0 0 1\n3.0 0 0 0 0 0 0 1\n");
   const fs::path out = scratch / "out";
-  const ToolRun r = run("wicp_rgbd_slam", slamArgs(seq, out), scratch / "err.txt");
+  const ToolRun r = runBuiltTool("wicp_rgbd_slam", slamArgs(seq, out), scratch);
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_TRUE(contains(r.err, "wicp_rgbd_slam: warning: no ATE")) << r.err;
   const std::string report = readFile(out / "report.json");
@@ -139,29 +130,29 @@ TEST(WicpRgbdSlamOutputs, AReRunReplacesTheWholeFolderOnlyWithOverwrite) {
   const fs::path scratch = scratchDir("slam_rerun");
   const fs::path seq = exportSequence(scratch, 4);
   const fs::path out = scratch / "out";
-  ASSERT_EQ(run("wicp_rgbd_slam", slamArgs(seq, out), scratch / "err.txt").status, 0);
+  ASSERT_EQ(runBuiltTool("wicp_rgbd_slam", slamArgs(seq, out), scratch).status, 0);
   // An older run's file the new run will not write, as a longer run's mini-map.
   writeFile(out / "minimaps" / "minimap_007.txt", "stale");
   const std::string trajectory = readFile(out / "trajectory.txt");
 
-  ToolRun r = run("wicp_rgbd_slam", slamArgs(seq, out), scratch / "err.txt");
+  ToolRun r = runBuiltTool("wicp_rgbd_slam", slamArgs(seq, out), scratch);
   EXPECT_EQ(r.status, 1);
   EXPECT_TRUE(contains(r.err, "not empty")) << r.err;
   EXPECT_TRUE(contains(r.err, "--overwrite")) << r.err;
   EXPECT_TRUE(fs::exists(out / "minimaps" / "minimap_007.txt")) << "refused, yet changed";
 
   blankImages(seq / "rgb");  // a failed re-run, even with --overwrite, keeps the old folder whole
-  r = run("wicp_rgbd_slam", slamArgs(seq, out, "--overwrite"), scratch / "err.txt");
+  r = runBuiltTool("wicp_rgbd_slam", slamArgs(seq, out, "--overwrite"), scratch);
   EXPECT_EQ(r.status, 1);
   EXPECT_EQ(readFile(out / "trajectory.txt"), trajectory);
   EXPECT_TRUE(fs::exists(out / "map.ply"));
 
   const fs::path seq2 = exportSequence(scratchDir("slam_rerun_2"), 4);
-  r = run("wicp_rgbd_slam", slamArgs(seq2, out, "--overwrite"), scratch / "err.txt");
+  r = runBuiltTool("wicp_rgbd_slam", slamArgs(seq2, out, "--overwrite"), scratch);
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_FALSE(fs::exists(out / "minimaps" / "minimap_007.txt")) << "an older run's file survived the re-run";
   EXPECT_EQ(readFile(out / "trajectory.txt"), trajectory) << "the same frames, deterministic: the same trajectory";
-  EXPECT_EQ(entries(scratch), (std::vector<std::string>{"err.txt", "export_err.txt", "out", "seq"}));
+  EXPECT_EQ(entries(scratch), (std::vector<std::string>{"out", "seq"}));
 }
 
 /// Ctrl-C a second into a run on the synthetic sequence (150 frames, several
@@ -226,32 +217,32 @@ std::string demoArgs(const fs::path& out, const std::string& extra) {
 TEST(WicpDemoOutputs, AReRunNeedsOverwriteAndLeavesNoStaleFile) {
   const fs::path scratch = scratchDir("demo_rerun");
   const fs::path out = scratch / "out";
-  ASSERT_EQ(run("wicp_demo", demoArgs(out, "--frames-per-minimap 20"), scratch / "err.txt").status, 0);
+  ASSERT_EQ(runBuiltTool("wicp_demo", demoArgs(out, "--frames-per-minimap 20"), scratch).status, 0);
   ASSERT_EQ(entries(out / "minimaps").size(), 4u);
 
-  ToolRun r = run("wicp_demo", demoArgs(out, "--frames-per-minimap 40"), scratch / "err.txt");
+  ToolRun r = runBuiltTool("wicp_demo", demoArgs(out, "--frames-per-minimap 40"), scratch);
   EXPECT_EQ(r.status, 1);
   EXPECT_TRUE(contains(r.err, "not empty") && contains(r.err, "--overwrite")) << r.err;
   EXPECT_EQ(entries(out / "minimaps").size(), 4u) << "refused, yet changed";
 
-  r = run("wicp_demo", demoArgs(out, "--frames-per-minimap 40 --overwrite"), scratch / "err.txt");
+  r = runBuiltTool("wicp_demo", demoArgs(out, "--frames-per-minimap 40 --overwrite"), scratch);
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_EQ(entries(out / "minimaps"), (std::vector<std::string>{"minimap_000.txt", "minimap_001.txt"}));
-  EXPECT_EQ(entries(scratch), (std::vector<std::string>{"err.txt", "out"})) << "a temporary folder was left";
+  EXPECT_EQ(entries(scratch), std::vector<std::string>{"out"}) << "a temporary folder was left";
 }
 
 TEST(WicpDemoOutputs, AFailedRunLeavesTheEarlierOutputWhole) {
   const fs::path scratch = scratchDir("demo_failed");
   const fs::path out = scratch / "out";
-  ASSERT_EQ(run("wicp_demo", demoArgs(out, "--frames-per-minimap 20"), scratch / "err.txt").status, 0);
+  ASSERT_EQ(runBuiltTool("wicp_demo", demoArgs(out, "--frames-per-minimap 20"), scratch).status, 0);
   const std::string results = readFile(out / "results.csv");
   // Fails after the session is generated: no mini-map has a landmark seen that often.
-  const ToolRun r = run("wicp_demo", demoArgs(out, "--min-observations 1000000 --overwrite"), scratch / "err.txt");
+  const ToolRun r = runBuiltTool("wicp_demo", demoArgs(out, "--min-observations 1000000 --overwrite"), scratch);
   EXPECT_EQ(r.status, 1);
   EXPECT_TRUE(contains(r.err, "wicp_demo: error: ")) << r.err;
   EXPECT_EQ(readFile(out / "results.csv"), results);
   EXPECT_EQ(entries(out / "minimaps").size(), 4u);
-  EXPECT_EQ(entries(scratch), (std::vector<std::string>{"err.txt", "out"})) << "a temporary folder was left";
+  EXPECT_EQ(entries(scratch), std::vector<std::string>{"out"}) << "a temporary folder was left";
 }
 
 /// A sweep stopped by Ctrl-C publishes nothing: an earlier sweep's folder stays whole even with --overwrite.
@@ -297,10 +288,10 @@ TEST(WicpSweepOutputs, AReRunWithOverwriteLeavesNoStaleFile) {
                            "' --source-frames 0-59 --target-frames 40-99 --max-iterations 3 --threads 1 --no-plot "
                            "--out '" +
                            out.string() + "'";
-  ToolRun r = run("wicp_sweep_yaw", args, scratch / "err.txt");
+  ToolRun r = runBuiltTool("wicp_sweep_yaw", args, scratch);
   EXPECT_EQ(r.status, 1);
   EXPECT_TRUE(contains(r.err, "--overwrite")) << r.err;
-  r = run("wicp_sweep_yaw", args + " --overwrite", scratch / "err.txt");
+  r = runBuiltTool("wicp_sweep_yaw", args + " --overwrite", scratch);
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_EQ(entries(out), (std::vector<std::string>{"results.csv", "run.json"}));
 }

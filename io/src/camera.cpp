@@ -83,9 +83,8 @@ std::string describe(const std::vector<KeyProblem>& problems) {
 /// @brief Refuses a YAML camera file whose lines are not the plain layout camera files have: directives
 /// ("%YAML:1.0"), document markers ("---"), comments, "key: value" lines with a name for key, and indented
 /// lines below a key (an OpenCV matrix of another key). OpenCV's YAML parser can loop forever on malformed text
-/// (found by fuzz/fuzz_camera: "%YAML:1.0\n---<:p\na: -\n", and an indented line right after the directive), so it
-/// is given only text of this layout. XML and
-/// JSON files (first character '<' or '{') are left to FileStorage.
+/// (found by fuzz/fuzz_camera: "%YAML:1.0\n---<:p\na: -\n", and an indented line right after the directive), so
+/// it is given only text of this layout. XML and JSON files (first character '<' or '{') are left to FileStorage.
 /// @param path the camera file
 void requirePlainYamlLayout(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
