@@ -1,6 +1,7 @@
 // Odometry information from tracking: a keyframe held by fewer landmarks is less certain, and a pose graph whose
 // odometry edges carry that information puts a loop's correction on the weak edge instead of spreading it.
 #include <cmath>
+#include <iterator>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -37,6 +38,49 @@ TEST(TrackingInformation, FewerLandmarksGiveALargerCovarianceAndUnknownKeyframes
   EXPECT_FALSE(mapping::keyframePoseCovariance(data.snapshot, 99, data.camera).has_value());
   observed.resize(3);  // below min_observations
   EXPECT_FALSE(mapping::keyframePoseCovariance(thinned, 1, data.camera).has_value());
+}
+
+TEST(TrackingInformation, ALandmarkBothKeyframesSeeCancelsInTheRelativePose) {
+  const SyntheticKeyframes data = syntheticKeyframes(12, false, 180.0, {0, 3});
+  const mapping::KeyframeSnapshot& map = data.snapshot;
+  ASSERT_EQ(map.keyframes.size(), 2u);
+  const frontend::KeyframeId a = map.keyframes.begin()->first, b = std::next(map.keyframes.begin())->first;
+  std::size_t shared = 0;
+  for (const auto& [id, point] : map.points) shared += point.observations.size() >= 2 ? 1 : 0;
+  ASSERT_GT(shared, 30u) << "the fixture's keyframes must share landmarks";
+
+  mapping::TrackingInformationOptions bare;
+  bare.translation_floor_m = bare.rotation_floor_rad = 0.0;
+  // The relative covariance against the two keyframes' own covariances propagated to the edge.
+  const auto separate = [&](const mapping::KeyframeSnapshot& snapshot) {
+    return Covariance6d(
+        mapping::trackedOdometryInformation(
+            snapshot.keyframes.at(a).pose_wc, *mapping::keyframePoseCovariance(snapshot, a, data.camera),
+            snapshot.keyframes.at(b).pose_wc, *mapping::keyframePoseCovariance(snapshot, b, data.camera), bare)
+            .inverse());
+  };
+  const auto joint = mapping::relativePoseCovariance(map, a, b, data.camera);
+  ASSERT_TRUE(joint.has_value());
+  using Solver = Eigen::SelfAdjointEigenSolver<Covariance6d>;
+  EXPECT_GT(Solver(*joint).eigenvalues().minCoeff(), 0.0);
+  EXPECT_LT((*joint - joint->transpose()).norm(), 1e-9 * joint->norm());
+  // The landmarks' own errors move both keyframes alike: counted once per keyframe, they widen the edge.
+  const Covariance6d twice = separate(map);
+  EXPECT_LT(joint->diagonal().head<3>().sum(), 0.8 * twice.diagonal().head<3>().sum());
+  EXPECT_LT(joint->diagonal().tail<3>().sum(), 0.8 * twice.diagonal().tail<3>().sum());
+
+  // With exactly known landmarks nothing is shared but the pixels, and both ways agree.
+  mapping::KeyframeSnapshot exact = map;
+  for (auto& [id, point] : exact.points) point.covariance.setZero();
+  const auto joint_exact = mapping::relativePoseCovariance(exact, a, b, data.camera);
+  ASSERT_TRUE(joint_exact.has_value());
+  const Covariance6d separate_exact = separate(exact);
+  for (int axis = 0; axis < 6; ++axis)
+    EXPECT_NEAR((*joint_exact)(axis, axis), separate_exact(axis, axis), 0.02 * separate_exact(axis, axis))
+        << "axis " << axis;
+
+  EXPECT_FALSE(mapping::relativePoseCovariance(map, a, 99, data.camera).has_value());
+  EXPECT_FALSE(mapping::relativePoseCovariance(map, a, a, data.camera).has_value());
 }
 
 /// A circle of 40 keyframes whose odometry is exact but for one step (`bad`), which is 8 cm and 2 degrees off.

@@ -10,20 +10,21 @@ namespace weighted_icp::mapping {
 
 namespace {
 
-/// Per keyframe (in keyframes.ids order), its pose covariance from tracking, when its landmarks hold it.
+/// Per odometry edge (entry i: keyframes i-1 -> i; entry 0 empty), the relative pose's covariance from tracking,
+/// when the landmarks hold it.
 std::vector<std::optional<Covariance6d>> trackingCovariances(const frontend::Map& map,
                                                              const frontend::KeyframePoses& keyframes,
                                                              const PinholeCamera& camera,
                                                              const TrackingInformationOptions& options) {
   const KeyframeSnapshot snapshot = KeyframeSnapshot::of(map);
-  std::vector<std::optional<Covariance6d>> covariances;
-  for (const frontend::KeyframeId id : keyframes.ids)
-    covariances.push_back(keyframePoseCovariance(snapshot, id, camera, options));
+  std::vector<std::optional<Covariance6d>> covariances(keyframes.ids.size());
+  for (std::size_t i = 1; i < keyframes.ids.size(); ++i)
+    covariances[i] = relativePoseCovariance(snapshot, keyframes.ids[i - 1], keyframes.ids[i], camera, options);
   return covariances;
 }
 
 /// Nodes at the keyframe poses (the first fixed), odometry edges between consecutive keyframes: information from
-/// tracking where both keyframes have a covariance (and no tracking loss lies between), else the noise model.
+/// tracking where the edge has a covariance (and no tracking loss lies between), else the noise model.
 /// The edges' relative poses are the odometry's (corrections undone), not the corrected map's: the map as earlier
 /// corrections left it is bent by their loop edges' errors, and edges read from it would freeze those errors in.
 PoseGraph odometryGraph(const frontend::KeyframePoses& keyframes, const LoopClosingOptions& options,
@@ -35,11 +36,9 @@ PoseGraph odometryGraph(const frontend::KeyframePoses& keyframes, const LoopClos
   for (std::size_t i = 1; i < keyframes.ids.size(); ++i) {
     const Eigen::Isometry3d relative = measured[i - 1].inverse() * measured[i];
     const bool across_segments = keyframes.segments[i - 1] != keyframes.segments[i];
-    const bool tracked = !across_segments && i < covariances.size() && covariances[i - 1] && covariances[i];
-    const Information6d information = tracked
-                                          ? trackedOdometryInformation(measured[i - 1], *covariances[i - 1],
-                                                                       measured[i], *covariances[i], options.tracking)
-                                          : odometryInformation(relative, options.odometry, across_segments);
+    const bool tracked = !across_segments && i < covariances.size() && covariances[i];
+    const Information6d information = tracked ? relativeOdometryInformation(*covariances[i], options.tracking)
+                                              : odometryInformation(relative, options.odometry, across_segments);
     graph.addEdge({keyframes.ids[i - 1], keyframes.ids[i], relative, information, PoseGraphEdgeKind::Odometry});
   }
   return graph;

@@ -3,7 +3,10 @@
 #include "weighted_icp/mapping/tracking_information.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <map>
+#include <utility>
 #include <vector>
 
 namespace weighted_icp::mapping {
@@ -22,6 +25,9 @@ struct Observation {
   Eigen::Vector3d in_camera;
   Eigen::Matrix3d covariance;
   Eigen::Vector2d residual;
+  frontend::MapPointId point = 0;
+  Eigen::Matrix3d world_to_camera = Eigen::Matrix3d::Identity();  // rotation: how the landmark's world error moves c
+  Eigen::Matrix3d world_covariance = Eigen::Matrix3d::Zero();
 };
 
 /// The keyframe's observations whose landmark projects within inlier_px of the measured pixel.
@@ -40,12 +46,109 @@ std::vector<Observation> inlierObservations(const KeyframeSnapshot& map, const f
       if (!residual.allFinite() || residual.norm() > inlier_px) break;
       const Eigen::Matrix3d covariance =
           point->second.covariance.allFinite() ? point->second.covariance : Eigen::Matrix3d::Zero();
-      observations.push_back(
-          {c, world_to_camera.linear() * covariance * world_to_camera.linear().transpose(), residual});
+      observations.push_back({c, world_to_camera.linear() * covariance * world_to_camera.linear().transpose(), residual,
+                              id, world_to_camera.linear(), covariance});
       break;
     }
   }
   return observations;
+}
+
+/// The pixel noise of a keyframe's inliers: their RMS per coordinate, at least the floor.
+double pixelSigma(const std::vector<Observation>& observations, double min_sigma_px) {
+  double squared = 0.0;
+  for (const Observation& o : observations) squared += o.residual.squaredNorm();
+  return std::max(min_sigma_px, std::sqrt(squared / (2.0 * static_cast<double>(observations.size()))));
+}
+
+/// d(pixel)/d(landmark in the camera).
+Eigen::Matrix<double, 2, 3> projectionJacobian(const PinholeCamera& camera, const Eigen::Vector3d& c) {
+  Eigen::Matrix<double, 2, 3> projection;
+  projection << camera.fx / c.z(), 0.0, -camera.fx * c.x() / (c.z() * c.z()), 0.0, camera.fy / c.z(),
+      -camera.fy * c.y() / (c.z() * c.z());
+  return projection;
+}
+
+/// d(pixel)/d(pose perturbation pose_wc * Exp(dt, dr)): the landmark in the camera moves by -dt + [c]x dr.
+Eigen::Matrix<double, 2, 6> poseJacobian(const Eigen::Matrix<double, 2, 3>& projection, const Eigen::Vector3d& c) {
+  Eigen::Matrix<double, 3, 6> dc;
+  dc.leftCols<3>() = -Eigen::Matrix3d::Identity();
+  dc.rightCols<3>() = skew(c);
+  return projection * dc;
+}
+
+/// d(edge error)/d(perturbation of a) and d(edge error)/d(perturbation of b) for the edge a -> b.
+std::pair<Eigen::Matrix<double, 6, 6>, Eigen::Matrix<double, 6, 6>> edgeJacobians(const Eigen::Isometry3d& a_wc,
+                                                                                  const Eigen::Isometry3d& b_wc) {
+  // The edge's error: translation R_a^T (p_b - p_a) - t_ab, rotation on the right of R_ab. Moving a by Exp(da)
+  // changes them by (-dt_a + [t_ab]x dr_a, -R_ab^T dr_a); moving b by Exp(db) by (R_ab dt_b, dr_b).
+  const Eigen::Isometry3d b_in_a = a_wc.inverse() * b_wc;
+  const Eigen::Matrix3d R = b_in_a.linear();
+  Eigen::Matrix<double, 6, 6> J_a = Eigen::Matrix<double, 6, 6>::Zero(), J_b = Eigen::Matrix<double, 6, 6>::Zero();
+  J_a.topLeftCorner<3, 3>() = -Eigen::Matrix3d::Identity();
+  J_a.topRightCorner<3, 3>() = skew(b_in_a.translation());
+  J_a.bottomRightCorner<3, 3>() = -R.transpose();
+  J_b.topLeftCorner<3, 3>() = R;
+  J_b.bottomRightCorner<3, 3>() = Eigen::Matrix3d::Identity();
+  return {J_a, J_b};
+}
+
+/// Inflation and floors on a relative-pose covariance, then its inverse.
+Information6d withInflationAndFloors(Covariance6d covariance, const TrackingInformationOptions& options) {
+  covariance *= options.covariance_inflation;
+  covariance.diagonal().head<3>().array() += options.translation_floor_m * options.translation_floor_m;
+  covariance.diagonal().tail<3>().array() += options.rotation_floor_rad * options.rotation_floor_rad;
+  covariance = 0.5 * (covariance + covariance.transpose());
+  const Information6d information = covariance.ldlt().solve(Information6d::Identity());
+  return 0.5 * (information + information.transpose());
+}
+
+/// The information of two keyframes' poses (12 x 12, a's perturbation first) from the landmarks either sees:
+/// both poses and every landmark are unknowns of one Gauss-Newton system, the landmarks held by their map
+/// covariances as a prior, and the landmarks are eliminated (Schur complement). A landmark both keyframes see
+/// then moves both alike, so its error cancels in their relative pose instead of being counted once per keyframe.
+/// A landmark only one sees eliminates in closed form: its covariance joins the pixel noise, as in
+/// keyframePoseCovariance. Each list is sorted by landmark.
+Eigen::Matrix<double, 12, 12> twoPoseInformation(const std::array<std::vector<Observation>, 2>& seen,
+                                                 const PinholeCamera& camera, double min_pixel_sigma_px) {
+  const std::array<double, 2> weight = {1.0 / std::pow(pixelSigma(seen[0], min_pixel_sigma_px), 2),
+                                        1.0 / std::pow(pixelSigma(seen[1], min_pixel_sigma_px), 2)};
+  Eigen::Matrix<double, 12, 12> poses = Eigen::Matrix<double, 12, 12>::Zero();
+  const auto alone = [&](int k, const Observation& o) {
+    const Eigen::Matrix<double, 2, 3> projection = projectionJacobian(camera, o.in_camera);
+    const Eigen::Matrix<double, 2, 6> J = poseJacobian(projection, o.in_camera);
+    const Eigen::Matrix2d pixel_covariance =
+        Eigen::Matrix2d::Identity() / weight[k] + projection * o.covariance * projection.transpose();
+    poses.block<6, 6>(6 * k, 6 * k) += J.transpose() * pixel_covariance.inverse() * J;
+  };
+  const auto shared = [&](const Observation& in_a, const Observation& in_b) {
+    // A landmark without a covariance is taken as known to 0.1 mm, so that its prior stays invertible.
+    Eigen::Matrix3d hessian =
+        (in_a.world_covariance + 1e-8 * Eigen::Matrix3d::Identity()).ldlt().solve(Eigen::Matrix3d::Identity());
+    Eigen::Matrix<double, 12, 3> coupling = Eigen::Matrix<double, 12, 3>::Zero();
+    for (int k = 0; k < 2; ++k) {
+      const Observation& o = k == 0 ? in_a : in_b;
+      const Eigen::Matrix<double, 2, 3> projection = projectionJacobian(camera, o.in_camera);
+      const Eigen::Matrix<double, 2, 6> J_pose = poseJacobian(projection, o.in_camera);
+      const Eigen::Matrix<double, 2, 3> J_point = projection * o.world_to_camera;
+      poses.block<6, 6>(6 * k, 6 * k) += weight[k] * J_pose.transpose() * J_pose;
+      hessian += weight[k] * J_point.transpose() * J_point;
+      coupling.middleRows<6>(6 * k) += weight[k] * J_pose.transpose() * J_point;
+    }
+    poses -= coupling * hessian.ldlt().solve(coupling.transpose());
+  };
+  // Merge the two lists by landmark.
+  std::size_t i = 0, j = 0;
+  while (i < seen[0].size() || j < seen[1].size()) {
+    if (j == seen[1].size() || (i < seen[0].size() && seen[0][i].point < seen[1][j].point)) {
+      alone(0, seen[0][i++]);
+    } else if (i == seen[0].size() || seen[1][j].point < seen[0][i].point) {
+      alone(1, seen[1][j++]);
+    } else {
+      shared(seen[0][i++], seen[1][j++]);
+    }
+  }
+  return 0.5 * (poses + poses.transpose());
 }
 
 }  // namespace
@@ -57,21 +160,11 @@ std::optional<Covariance6d> keyframePoseCovariance(const KeyframeSnapshot& map, 
   if (found == map.keyframes.end()) return std::nullopt;
   const std::vector<Observation> observations = inlierObservations(map, found->second, camera, options.inlier_px);
   if (observations.size() < std::max<std::size_t>(options.min_observations, 3)) return std::nullopt;
-  double squared = 0.0;
-  for (const Observation& o : observations) squared += o.residual.squaredNorm();
-  const double sigma =
-      std::max(options.min_pixel_sigma_px, std::sqrt(squared / (2.0 * static_cast<double>(observations.size()))));
-  // Perturbation pose_wc * Exp(dt, dr): the landmark in the camera moves by dc = -dt + c x dr = [-I, [c]x].
+  const double sigma = pixelSigma(observations, options.min_pixel_sigma_px);
   Eigen::Matrix<double, 6, 6> hessian = Eigen::Matrix<double, 6, 6>::Zero();
   for (const Observation& o : observations) {
-    const Eigen::Vector3d& c = o.in_camera;
-    Eigen::Matrix<double, 2, 3> projection;
-    projection << camera.fx / c.z(), 0.0, -camera.fx * c.x() / (c.z() * c.z()), 0.0, camera.fy / c.z(),
-        -camera.fy * c.y() / (c.z() * c.z());
-    Eigen::Matrix<double, 3, 6> dc;
-    dc.leftCols<3>() = -Eigen::Matrix3d::Identity();
-    dc.rightCols<3>() = skew(c);
-    const Eigen::Matrix<double, 2, 6> J = projection * dc;
+    const Eigen::Matrix<double, 2, 3> projection = projectionJacobian(camera, o.in_camera);
+    const Eigen::Matrix<double, 2, 6> J = poseJacobian(projection, o.in_camera);
     const Eigen::Matrix2d pixel_covariance =
         sigma * sigma * Eigen::Matrix2d::Identity() + projection * o.covariance * projection.transpose();
     hessian += J.transpose() * pixel_covariance.inverse() * J;
@@ -87,23 +180,38 @@ std::optional<Covariance6d> keyframePoseCovariance(const KeyframeSnapshot& map, 
 Information6d trackedOdometryInformation(const Eigen::Isometry3d& a_wc, const Covariance6d& covariance_a,
                                          const Eigen::Isometry3d& b_wc, const Covariance6d& covariance_b,
                                          const TrackingInformationOptions& options) {
-  // The edge's error: translation R_a^T (p_b - p_a) - t_ab, rotation on the right of R_ab. Moving a by Exp(da)
-  // changes them by (-dt_a + [t_ab]x dr_a, -R_ab^T dr_a); moving b by Exp(db) by (R_ab dt_b, dr_b).
-  const Eigen::Isometry3d b_in_a = a_wc.inverse() * b_wc;
-  const Eigen::Matrix3d R = b_in_a.linear();
-  Eigen::Matrix<double, 6, 6> J_a = Eigen::Matrix<double, 6, 6>::Zero(), J_b = Eigen::Matrix<double, 6, 6>::Zero();
-  J_a.topLeftCorner<3, 3>() = -Eigen::Matrix3d::Identity();
-  J_a.topRightCorner<3, 3>() = skew(b_in_a.translation());
-  J_a.bottomRightCorner<3, 3>() = -R.transpose();
-  J_b.topLeftCorner<3, 3>() = R;
-  J_b.bottomRightCorner<3, 3>() = Eigen::Matrix3d::Identity();
-  Covariance6d covariance =
-      options.covariance_inflation * (J_a * covariance_a * J_a.transpose() + J_b * covariance_b * J_b.transpose());
-  covariance.diagonal().head<3>().array() += options.translation_floor_m * options.translation_floor_m;
-  covariance.diagonal().tail<3>().array() += options.rotation_floor_rad * options.rotation_floor_rad;
-  covariance = 0.5 * (covariance + covariance.transpose());
-  const Information6d information = covariance.ldlt().solve(Information6d::Identity());
-  return 0.5 * (information + information.transpose());
+  const auto [J_a, J_b] = edgeJacobians(a_wc, b_wc);
+  return withInflationAndFloors(J_a * covariance_a * J_a.transpose() + J_b * covariance_b * J_b.transpose(), options);
+}
+
+std::optional<Covariance6d> relativePoseCovariance(const KeyframeSnapshot& map, frontend::KeyframeId a,
+                                                   frontend::KeyframeId b, const PinholeCamera& camera,
+                                                   const TrackingInformationOptions& options) {
+  const auto found_a = map.keyframes.find(a), found_b = map.keyframes.find(b);
+  if (found_a == map.keyframes.end() || found_b == map.keyframes.end() || a == b) return std::nullopt;
+  const std::size_t needed = std::max<std::size_t>(options.min_observations, 3);
+  std::array<std::vector<Observation>, 2> seen = {inlierObservations(map, found_a->second, camera, options.inlier_px),
+                                                  inlierObservations(map, found_b->second, camera, options.inlier_px)};
+  if (seen[0].size() < needed || seen[1].size() < needed) return std::nullopt;
+  for (std::vector<Observation>& observations : seen)
+    std::sort(observations.begin(), observations.end(),
+              [](const Observation& x, const Observation& y) { return x.point < y.point; });
+
+  const Eigen::Matrix<double, 12, 12> poses = twoPoseInformation(seen, camera, options.min_pixel_sigma_px);
+  const Eigen::LDLT<Eigen::Matrix<double, 12, 12>> ldlt(poses);
+  if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0.0)) return std::nullopt;
+  const Eigen::Matrix<double, 12, 12> joint = ldlt.solve(Eigen::Matrix<double, 12, 12>::Identity());
+  const auto [J_a, J_b] = edgeJacobians(found_a->second.pose_wc, found_b->second.pose_wc);
+  Eigen::Matrix<double, 6, 12> J;
+  J << J_a, J_b;
+  const Covariance6d covariance = J * joint * J.transpose();
+  if (!covariance.allFinite()) return std::nullopt;
+  return Covariance6d(0.5 * (covariance + covariance.transpose()));
+}
+
+Information6d relativeOdometryInformation(const Covariance6d& relative_covariance,
+                                          const TrackingInformationOptions& options) {
+  return withInflationAndFloors(relative_covariance, options);
 }
 
 }  // namespace weighted_icp::mapping

@@ -1,9 +1,9 @@
 #pragma once
 // Information of the pose graph's odometry edges estimated from tracking: how
-// well each keyframe's pose is held by the landmarks it observes (the
-// Gauss-Newton Hessian of its reprojection residuals, whitened by the measured
-// pixel noise and the landmarks' covariances), carried to the relative pose of
-// two consecutive keyframes, instead of one noise model for every edge.
+// well two consecutive keyframes' relative pose is held by the landmarks they
+// observe (the Gauss-Newton system of their reprojection residuals, whitened
+// by the measured pixel noise, with the landmarks as unknowns held by their
+// map covariances), instead of one noise model for every edge.
 
 #include <cstddef>
 #include <optional>
@@ -30,11 +30,10 @@ struct TrackingInformationOptions {
   /// @brief Fewer inlier observations than this: the keyframe's pose is not held by its landmarks and the edge
   /// falls back to the noise model.
   std::size_t min_observations = 12;
-  /// @brief Variance factor on the propagated covariance. Chosen on one sequence (the drifting synthetic loop:
-  /// room_scale 2, dim, seed 7), whose keyframe-to-keyframe errors against the truth had per-axis RMS 1.9 mm and
-  /// 0.51 mrad where these edges' standard deviations were 2.1 mm and 0.57 mrad: no inflation. Checked on the
-  /// bright room_scale 2 loop, seeds 7 and 8: errors 1.0 mm / 0.26 mrad against 2.2 mm / 0.63 mrad, the safe side
-  /// (docs/mapping.md). Raise it for a sensor whose errors the landmark covariances do not describe.
+  /// @brief Variance factor on the relative pose's covariance. Checked against the truth on the drifting synthetic
+  /// loop (room_scale 2, seeds 7 and 8 bright, 7 and 9 dim; docs/mapping.md): the keyframe-to-keyframe errors over
+  /// these edges' standard deviations had per-axis RMS 0.47-0.76 on the bright loops and 0.94-1.19 on the dim ones,
+  /// so no inflation. Raise it for a sensor whose errors the landmark covariances do not describe.
   double covariance_inflation = 1.0;
   /// @brief Added in quadrature to every edge's standard deviations (metres, radians), so that no edge claims
   /// sub-millimetre accuracy.
@@ -65,5 +64,27 @@ std::optional<Covariance6d> keyframePoseCovariance(const KeyframeSnapshot& map, 
 Information6d trackedOdometryInformation(const Eigen::Isometry3d& a_wc, const Covariance6d& covariance_a,
                                          const Eigen::Isometry3d& b_wc, const Covariance6d& covariance_b,
                                          const TrackingInformationOptions& options = {});
+
+/// @brief The covariance of the relative pose a -> b given the landmarks either keyframe observes, ordered as the
+/// pose graph's odometry residual, without the inflation. Both poses and every landmark are unknowns of one
+/// Gauss-Newton system (the landmarks held by their map covariances as a prior); eliminating the landmarks leaves
+/// the poses' joint covariance, in which a landmark both keyframes see moves both alike, so its error cancels in
+/// the relative pose instead of being added once per keyframe (what keyframePoseCovariance twice, propagated by
+/// trackedOdometryInformation, does). Unknown keyframes, a == b, too few inliers in either or a singular system
+/// give nothing.
+/// @param map keyframes and map points (world positions, covariances, observations)
+/// @param a the older keyframe
+/// @param b the newer keyframe
+/// @param camera the undistorted pinhole model their pixels were measured with
+/// @param options thresholds
+std::optional<Covariance6d> relativePoseCovariance(const KeyframeSnapshot& map, frontend::KeyframeId a,
+                                                   frontend::KeyframeId b, const PinholeCamera& camera,
+                                                   const TrackingInformationOptions& options = {});
+
+/// @brief The information of an odometry edge from its relativePoseCovariance: times the inflation, plus the floors.
+/// @param relative_covariance the edge's covariance, ordered as the pose graph's residual
+/// @param options inflation and floors
+Information6d relativeOdometryInformation(const Covariance6d& relative_covariance,
+                                          const TrackingInformationOptions& options = {});
 
 }  // namespace weighted_icp::mapping
