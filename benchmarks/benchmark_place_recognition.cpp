@@ -2,7 +2,8 @@
 // true poses, as the mapping tests build them): the bag-of-words query
 // (transform, inverted file, consistency) against databases of growing size,
 // and the geometric verification of a true revisit (matching, RANSAC PnP,
-// weighted ICP, information matrix).
+// weighted ICP, information matrix), and the odometry edges' information that
+// each loop closure computes.
 //
 //   wicp_benchmark_place_recognition [Google Benchmark flags]
 //
@@ -13,6 +14,7 @@
 #include "mapping_fixtures.h"
 #include "weighted_icp/mapping/loop_verifier.h"
 #include "weighted_icp/mapping/place_recognizer.h"
+#include "weighted_icp/mapping/tracking_information.h"
 
 namespace {
 
@@ -60,6 +62,41 @@ void BM_LoopVerification(benchmark::State& state) {
   state.counters["accepted_fraction"] = static_cast<double>(accepted) / static_cast<double>(state.iterations());
 }
 BENCHMARK(BM_LoopVerification)->Unit(benchmark::kMillisecond);
+
+/// The information of every odometry edge of the loop's keyframes, as each loop closure recomputes it:
+/// range(0) = 1 the relative covariance of both keyframes with their landmarks eliminated (the default since
+/// 2026-11-25), 0 each keyframe's own covariance, propagated and added (before).
+void BM_OdometryInformation(benchmark::State& state) {
+  const auto& data = loopKeyframes();
+  std::vector<frontend::KeyframeId> ids;
+  for (const auto& [id, keyframe] : data.snapshot.keyframes) ids.push_back(id);
+  const bool relative = state.range(0) == 1;
+  std::size_t edges = 0;
+  for (auto _ : state) {
+    edges = 0;
+    if (relative) {
+      for (const auto& c : mapping::odometryEdgeCovariances(data.snapshot, ids, data.camera))
+        if (c) {
+          benchmark::DoNotOptimize(mapping::relativeOdometryInformation(*c));
+          ++edges;
+        }
+    } else {
+      std::vector<std::optional<mapping::Covariance6d>> each;
+      for (const frontend::KeyframeId id : ids)
+        each.push_back(mapping::keyframePoseCovariance(data.snapshot, id, data.camera));
+      for (std::size_t i = 1; i < ids.size(); ++i)
+        if (each[i - 1] && each[i]) {
+          benchmark::DoNotOptimize(
+              mapping::trackedOdometryInformation(data.snapshot.keyframes.at(ids[i - 1]).pose_wc, *each[i - 1],
+                                                  data.snapshot.keyframes.at(ids[i]).pose_wc, *each[i]));
+          ++edges;
+        }
+    }
+  }
+  if (edges + 1 != ids.size()) state.SkipWithError("an edge had no covariance");
+  state.counters["edges"] = static_cast<double>(edges);
+}
+BENCHMARK(BM_OdometryInformation)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 

@@ -79,6 +79,14 @@ TEST(TrackingInformation, ALandmarkBothKeyframesSeeCancelsInTheRelativePose) {
     EXPECT_NEAR((*joint_exact)(axis, axis), separate_exact(axis, axis), 0.02 * separate_exact(axis, axis))
         << "axis " << axis;
 
+  // All edges at once: the same covariances, none for the first entry or an unknown keyframe.
+  const auto edges = mapping::odometryEdgeCovariances(map, {a, b, 99}, data.camera);
+  ASSERT_EQ(edges.size(), 3u);
+  EXPECT_FALSE(edges[0].has_value());
+  ASSERT_TRUE(edges[1].has_value());
+  EXPECT_EQ(*edges[1], *joint);
+  EXPECT_FALSE(edges[2].has_value());
+
   EXPECT_FALSE(mapping::relativePoseCovariance(map, a, 99, data.camera).has_value());
   EXPECT_FALSE(mapping::relativePoseCovariance(map, a, a, data.camera).has_value());
 }

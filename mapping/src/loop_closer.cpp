@@ -16,11 +16,7 @@ std::vector<std::optional<Covariance6d>> trackingCovariances(const frontend::Map
                                                              const frontend::KeyframePoses& keyframes,
                                                              const PinholeCamera& camera,
                                                              const TrackingInformationOptions& options) {
-  const KeyframeSnapshot snapshot = KeyframeSnapshot::of(map);
-  std::vector<std::optional<Covariance6d>> covariances(keyframes.ids.size());
-  for (std::size_t i = 1; i < keyframes.ids.size(); ++i)
-    covariances[i] = relativePoseCovariance(snapshot, keyframes.ids[i - 1], keyframes.ids[i], camera, options);
-  return covariances;
+  return odometryEdgeCovariances(KeyframeSnapshot::of(map), keyframes.ids, camera, options);
 }
 
 /// Nodes at the keyframe poses (the first fixed), odometry edges between consecutive keyframes: information from

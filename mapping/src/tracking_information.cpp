@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <map>
 #include <utility>
 #include <vector>
 
@@ -30,12 +29,14 @@ struct Observation {
   Eigen::Matrix3d world_covariance = Eigen::Matrix3d::Zero();
 };
 
-/// The keyframe's observations whose landmark projects within inlier_px of the measured pixel.
+/// The keyframe's observations whose landmark projects within inlier_px of the measured pixel, by landmark id.
 std::vector<Observation> inlierObservations(const KeyframeSnapshot& map, const frontend::Keyframe& keyframe,
                                             const PinholeCamera& camera, double inlier_px) {
   const Eigen::Isometry3d world_to_camera = keyframe.pose_wc.inverse();
+  std::vector<frontend::MapPointId> ids = keyframe.observed_points;
+  std::sort(ids.begin(), ids.end());
   std::vector<Observation> observations;
-  for (const frontend::MapPointId id : keyframe.observed_points) {
+  for (const frontend::MapPointId id : ids) {
     const auto point = map.points.find(id);
     if (point == map.points.end() || !point->second.position.allFinite()) continue;
     for (const frontend::MapPointObservation& o : point->second.observations) {
@@ -108,7 +109,7 @@ Information6d withInflationAndFloors(Covariance6d covariance, const TrackingInfo
 /// covariances as a prior, and the landmarks are eliminated (Schur complement). A landmark both keyframes see
 /// then moves both alike, so its error cancels in their relative pose instead of being counted once per keyframe.
 /// A landmark only one sees eliminates in closed form: its covariance joins the pixel noise, as in
-/// keyframePoseCovariance. Each list is sorted by landmark.
+/// keyframePoseCovariance. Each list is sorted by landmark id (inlierObservations' order).
 Eigen::Matrix<double, 12, 12> twoPoseInformation(const std::array<std::vector<Observation>, 2>& seen,
                                                  const PinholeCamera& camera, double min_pixel_sigma_px) {
   const std::array<double, 2> weight = {1.0 / std::pow(pixelSigma(seen[0], min_pixel_sigma_px), 2),
@@ -184,29 +185,61 @@ Information6d trackedOdometryInformation(const Eigen::Isometry3d& a_wc, const Co
   return withInflationAndFloors(J_a * covariance_a * J_a.transpose() + J_b * covariance_b * J_b.transpose(), options);
 }
 
-std::optional<Covariance6d> relativePoseCovariance(const KeyframeSnapshot& map, frontend::KeyframeId a,
-                                                   frontend::KeyframeId b, const PinholeCamera& camera,
-                                                   const TrackingInformationOptions& options) {
-  const auto found_a = map.keyframes.find(a), found_b = map.keyframes.find(b);
-  if (found_a == map.keyframes.end() || found_b == map.keyframes.end() || a == b) return std::nullopt;
-  const std::size_t needed = std::max<std::size_t>(options.min_observations, 3);
-  std::array<std::vector<Observation>, 2> seen = {inlierObservations(map, found_a->second, camera, options.inlier_px),
-                                                  inlierObservations(map, found_b->second, camera, options.inlier_px)};
-  if (seen[0].size() < needed || seen[1].size() < needed) return std::nullopt;
-  for (std::vector<Observation>& observations : seen)
-    std::sort(observations.begin(), observations.end(),
-              [](const Observation& x, const Observation& y) { return x.point < y.point; });
+namespace {
 
-  const Eigen::Matrix<double, 12, 12> poses = twoPoseInformation(seen, camera, options.min_pixel_sigma_px);
+/// The relative covariance a -> b from both keyframes' inlier observations (relativePoseCovariance's steps 2-3).
+std::optional<Covariance6d> relativeFromObservations(const std::vector<Observation>& seen_a,
+                                                     const std::vector<Observation>& seen_b,
+                                                     const Eigen::Isometry3d& a_wc, const Eigen::Isometry3d& b_wc,
+                                                     const PinholeCamera& camera,
+                                                     const TrackingInformationOptions& options) {
+  const std::size_t needed = std::max<std::size_t>(options.min_observations, 3);
+  if (seen_a.size() < needed || seen_b.size() < needed) return std::nullopt;
+  const Eigen::Matrix<double, 12, 12> poses = twoPoseInformation({seen_a, seen_b}, camera, options.min_pixel_sigma_px);
   const Eigen::LDLT<Eigen::Matrix<double, 12, 12>> ldlt(poses);
   if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0.0)) return std::nullopt;
   const Eigen::Matrix<double, 12, 12> joint = ldlt.solve(Eigen::Matrix<double, 12, 12>::Identity());
-  const auto [J_a, J_b] = edgeJacobians(found_a->second.pose_wc, found_b->second.pose_wc);
+  const auto [J_a, J_b] = edgeJacobians(a_wc, b_wc);
   Eigen::Matrix<double, 6, 12> J;
   J << J_a, J_b;
   const Covariance6d covariance = J * joint * J.transpose();
   if (!covariance.allFinite()) return std::nullopt;
   return Covariance6d(0.5 * (covariance + covariance.transpose()));
+}
+
+}  // namespace
+
+std::optional<Covariance6d> relativePoseCovariance(const KeyframeSnapshot& map, frontend::KeyframeId a,
+                                                   frontend::KeyframeId b, const PinholeCamera& camera,
+                                                   const TrackingInformationOptions& options) {
+  const auto found_a = map.keyframes.find(a), found_b = map.keyframes.find(b);
+  if (found_a == map.keyframes.end() || found_b == map.keyframes.end() || a == b) return std::nullopt;
+  return relativeFromObservations(inlierObservations(map, found_a->second, camera, options.inlier_px),
+                                  inlierObservations(map, found_b->second, camera, options.inlier_px),
+                                  found_a->second.pose_wc, found_b->second.pose_wc, camera, options);
+}
+
+std::vector<std::optional<Covariance6d>> odometryEdgeCovariances(const KeyframeSnapshot& map,
+                                                                 const std::vector<frontend::KeyframeId>& keyframes,
+                                                                 const PinholeCamera& camera,
+                                                                 const TrackingInformationOptions& options) {
+  std::vector<std::optional<Covariance6d>> covariances(keyframes.size());
+  std::vector<Observation> previous;
+  const frontend::Keyframe* previous_keyframe = nullptr;
+  for (std::size_t i = 0; i < keyframes.size(); ++i) {
+    const auto found = map.keyframes.find(keyframes[i]);
+    if (found == map.keyframes.end()) {
+      previous_keyframe = nullptr;
+      continue;
+    }
+    std::vector<Observation> current = inlierObservations(map, found->second, camera, options.inlier_px);
+    if (previous_keyframe && previous_keyframe->id != found->second.id)
+      covariances[i] = relativeFromObservations(previous, current, previous_keyframe->pose_wc, found->second.pose_wc,
+                                                camera, options);
+    previous = std::move(current);
+    previous_keyframe = &found->second;
+  }
+  return covariances;
 }
 
 Information6d relativeOdometryInformation(const Covariance6d& relative_covariance,

@@ -7,6 +7,7 @@
 
 #include <cstddef>
 #include <optional>
+#include <vector>
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -80,6 +81,19 @@ Information6d trackedOdometryInformation(const Eigen::Isometry3d& a_wc, const Co
 std::optional<Covariance6d> relativePoseCovariance(const KeyframeSnapshot& map, frontend::KeyframeId a,
                                                    frontend::KeyframeId b, const PinholeCamera& camera,
                                                    const TrackingInformationOptions& options = {});
+
+/// @brief relativePoseCovariance of every pair of consecutive keyframes, each keyframe's observations gathered once
+/// (what a loop closure recomputes for all its odometry edges).
+/// @param map keyframes and map points
+/// @param keyframes the keyframes in order
+/// @param camera the undistorted pinhole model their pixels were measured with
+/// @param options thresholds
+/// @return entry i: the edge keyframes[i-1] -> keyframes[i]; entry 0 is empty, as is an edge either of whose
+/// keyframes is unknown or not held by its landmarks
+std::vector<std::optional<Covariance6d>> odometryEdgeCovariances(const KeyframeSnapshot& map,
+                                                                 const std::vector<frontend::KeyframeId>& keyframes,
+                                                                 const PinholeCamera& camera,
+                                                                 const TrackingInformationOptions& options = {});
 
 /// @brief The information of an odometry edge from its relativePoseCovariance: times the inflation, plus the floors.
 /// @param relative_covariance the edge's covariance, ordered as the pose graph's residual
