@@ -110,10 +110,11 @@ Information6d withInflationAndFloors(Covariance6d covariance, const TrackingInfo
 /// then moves both alike, so its error cancels in their relative pose instead of being counted once per keyframe.
 /// A landmark only one sees eliminates in closed form: its covariance joins the pixel noise, as in
 /// keyframePoseCovariance. Each list is sorted by landmark id (inlierObservations' order).
-Eigen::Matrix<double, 12, 12> twoPoseInformation(const std::array<std::vector<Observation>, 2>& seen,
-                                                 const PinholeCamera& camera, double min_pixel_sigma_px) {
-  const std::array<double, 2> weight = {1.0 / std::pow(pixelSigma(seen[0], min_pixel_sigma_px), 2),
-                                        1.0 / std::pow(pixelSigma(seen[1], min_pixel_sigma_px), 2)};
+Eigen::Matrix<double, 12, 12> twoPoseInformation(const std::vector<Observation>& seen_a,
+                                                 const std::vector<Observation>& seen_b, const PinholeCamera& camera,
+                                                 double min_pixel_sigma_px) {
+  const std::array<double, 2> weight = {1.0 / std::pow(pixelSigma(seen_a, min_pixel_sigma_px), 2),
+                                        1.0 / std::pow(pixelSigma(seen_b, min_pixel_sigma_px), 2)};
   Eigen::Matrix<double, 12, 12> poses = Eigen::Matrix<double, 12, 12>::Zero();
   const auto alone = [&](int k, const Observation& o) {
     const Eigen::Matrix<double, 2, 3> projection = projectionJacobian(camera, o.in_camera);
@@ -140,13 +141,13 @@ Eigen::Matrix<double, 12, 12> twoPoseInformation(const std::array<std::vector<Ob
   };
   // Merge the two lists by landmark.
   std::size_t i = 0, j = 0;
-  while (i < seen[0].size() || j < seen[1].size()) {
-    if (j == seen[1].size() || (i < seen[0].size() && seen[0][i].point < seen[1][j].point)) {
-      alone(0, seen[0][i++]);
-    } else if (i == seen[0].size() || seen[1][j].point < seen[0][i].point) {
-      alone(1, seen[1][j++]);
+  while (i < seen_a.size() || j < seen_b.size()) {
+    if (j == seen_b.size() || (i < seen_a.size() && seen_a[i].point < seen_b[j].point)) {
+      alone(0, seen_a[i++]);
+    } else if (i == seen_a.size() || seen_b[j].point < seen_a[i].point) {
+      alone(1, seen_b[j++]);
     } else {
-      shared(seen[0][i++], seen[1][j++]);
+      shared(seen_a[i++], seen_b[j++]);
     }
   }
   return 0.5 * (poses + poses.transpose());
@@ -195,7 +196,7 @@ std::optional<Covariance6d> relativeFromObservations(const std::vector<Observati
                                                      const TrackingInformationOptions& options) {
   const std::size_t needed = std::max<std::size_t>(options.min_observations, 3);
   if (seen_a.size() < needed || seen_b.size() < needed) return std::nullopt;
-  const Eigen::Matrix<double, 12, 12> poses = twoPoseInformation({seen_a, seen_b}, camera, options.min_pixel_sigma_px);
+  const Eigen::Matrix<double, 12, 12> poses = twoPoseInformation(seen_a, seen_b, camera, options.min_pixel_sigma_px);
   const Eigen::LDLT<Eigen::Matrix<double, 12, 12>> ldlt(poses);
   if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0.0)) return std::nullopt;
   const Eigen::Matrix<double, 12, 12> joint = ldlt.solve(Eigen::Matrix<double, 12, 12>::Identity());
