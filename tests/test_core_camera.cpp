@@ -1,10 +1,11 @@
-// The camera model: TUM calibrations, matrices, projection and the image bounds.
+// The camera model: TUM calibrations, matrices, projection, its Jacobian and the image bounds; the skew matrix.
 #include <limits>
 #include <stdexcept>
 
 #include <gtest/gtest.h>
 
 #include "weighted_icp/core/camera.h"
+#include "weighted_icp/core/skew.h"
 
 using namespace weighted_icp;
 
@@ -95,4 +96,22 @@ TEST(Camera, InImageCoversExactlyThePixelCentres) {
   EXPECT_FALSE(camera.inImage({camera.width - 0.99, 10.0}));
   EXPECT_FALSE(camera.inImage({10.0, camera.height - 0.99}));
   EXPECT_FALSE(camera.inImage({std::numeric_limits<double>::quiet_NaN(), 10.0}));
+}
+
+TEST(Camera, ProjectionJacobianMatchesFiniteDifferences) {
+  const PinholeCamera camera = tumCamera(3);
+  for (const Eigen::Vector3d& point : {Eigen::Vector3d(0.3, -0.2, 1.5), Eigen::Vector3d(-1.0, 0.7, 0.6)}) {
+    const Eigen::Matrix<double, 2, 3> jacobian = camera.projectionJacobian(point);
+    for (int axis = 0; axis < 3; ++axis) {
+      const Eigen::Vector3d step = 1e-6 * Eigen::Vector3d::Unit(axis);
+      const Eigen::Vector2d numeric = (camera.project(point + step) - camera.project(point - step)) / 2e-6;
+      EXPECT_NEAR((jacobian.col(axis) - numeric).norm(), 0.0, 1e-4) << "axis " << axis;
+    }
+  }
+}
+
+TEST(Skew, IsTheCrossProductMatrix) {
+  const Eigen::Vector3d v(0.5, -2.0, 3.0), w(-1.0, 0.25, 4.0);
+  EXPECT_NEAR((skew(v) * w - v.cross(w)).norm(), 0.0, 1e-12);
+  EXPECT_NEAR((skew(v) + skew(v).transpose()).norm(), 0.0, 0.0) << "skew-symmetric";
 }

@@ -263,7 +263,9 @@ TEST(Backend, AnOptimisationErrorReachesTrackingAndTheBackendStopsCleanly) {
     const std::string from_request = errorOf("keyframeInserted", [&] { backend->keyframeInserted(); });
     const std::string from_flush = errorOf("flush", [&] { backend->flush(); });
     EXPECT_EQ(background ? from_flush : from_request, kInjectedError);
-    if (background) EXPECT_EQ(from_request, "") << "nothing had failed yet when it was asked";
+    if (background) {
+      EXPECT_EQ(from_request, "") << "nothing had failed yet when it was asked";
+    }
     EXPECT_EQ(calls.load(), 2) << "the failing optimisation ran once";
 
     // Not lost once reported, and nothing more is optimised.

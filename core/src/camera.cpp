@@ -27,6 +27,13 @@ Eigen::Vector2d PinholeCamera::project(const Eigen::Vector3d& point_camera) cons
   return {fx * point_camera.x() / point_camera.z() + cx, fy * point_camera.y() / point_camera.z() + cy};
 }
 
+Eigen::Matrix<double, 2, 3> PinholeCamera::projectionJacobian(const Eigen::Vector3d& point_camera) const {
+  const double z = point_camera.z();
+  Eigen::Matrix<double, 2, 3> jacobian;
+  jacobian << fx / z, 0.0, -fx * point_camera.x() / (z * z), 0.0, fy / z, -fy * point_camera.y() / (z * z);
+  return jacobian;
+}
+
 Eigen::Vector3d PinholeCamera::backProject(double u, double v, double depth) const {
   return {(u - cx) / fx * depth, (v - cy) / fy * depth, depth};
 }

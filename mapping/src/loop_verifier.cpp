@@ -14,6 +14,7 @@
 #include <pcl/kdtree/kdtree_flann.h>
 
 #include "weighted_icp/core/named_values.h"
+#include "weighted_icp/core/skew.h"
 #include "weighted_icp/mapping/binary_vocabulary.h"
 #include "weighted_icp/registration/landmark_alignment.h"
 #include "weighted_icp/registration/landmark_point.h"
@@ -74,12 +75,6 @@ Matches matchToLandmarks(const frontend::Keyframe& query, const KeyframeSnapshot
     matches.pixels.push_back(query.pixels[f]);
   }
   return matches;
-}
-
-Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d m;
-  m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-  return m;
 }
 
 /// Overlap of the aligned query cloud with the match cloud: which query points have a match point within
@@ -172,9 +167,7 @@ Eigen::Matrix<double, 6, 6> pnpInformation(const Matches& matches, const std::ve
     const std::size_t m = static_cast<std::size_t>(i);
     const Eigen::Vector3d c = world_to_query * matches.points[m];
     if (!(c.z() > 0.0)) continue;
-    Eigen::Matrix<double, 2, 3> projection;
-    projection << camera.fx / c.z(), 0.0, -camera.fx * c.x() / (c.z() * c.z()), 0.0, camera.fy / c.z(),
-        -camera.fy * c.y() / (c.z() * c.z());
+    const Eigen::Matrix<double, 2, 3> projection = camera.projectionJacobian(c);
     Eigen::Matrix<double, 3, 6> dc;
     dc.leftCols<3>() = -R.transpose();
     dc.rightCols<3>() = skew(c);

@@ -8,25 +8,22 @@
 #include <utility>
 #include <vector>
 
+#include "weighted_icp/core/skew.h"
 namespace weighted_icp::mapping {
 
 namespace {
 
-Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d m;
-  m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-  return m;
-}
-
-/// One observation as the Hessian needs it: the landmark in the keyframe's camera, its covariance there, the
-/// reprojection residual.
+/// One observation as the Hessian needs it: the landmark in the keyframe's camera, the reprojection residual,
+/// the landmark's covariance in the world and the rotation that carries a world error into the camera.
 struct Observation {
   Eigen::Vector3d in_camera;
-  Eigen::Matrix3d covariance;
   Eigen::Vector2d residual;
   frontend::MapPointId point = 0;
-  Eigen::Matrix3d world_to_camera = Eigen::Matrix3d::Identity();  // rotation: how the landmark's world error moves c
+  Eigen::Matrix3d world_to_camera = Eigen::Matrix3d::Identity();
   Eigen::Matrix3d world_covariance = Eigen::Matrix3d::Zero();
+
+  /// The landmark's covariance in the camera.
+  Eigen::Matrix3d cameraCovariance() const { return world_to_camera * world_covariance * world_to_camera.transpose(); }
 };
 
 /// The keyframe's observations whose landmark projects within inlier_px of the measured pixel, by landmark id.
@@ -47,8 +44,7 @@ std::vector<Observation> inlierObservations(const KeyframeSnapshot& map, const f
       if (!residual.allFinite() || residual.norm() > inlier_px) break;
       const Eigen::Matrix3d covariance =
           point->second.covariance.allFinite() ? point->second.covariance : Eigen::Matrix3d::Zero();
-      observations.push_back({c, world_to_camera.linear() * covariance * world_to_camera.linear().transpose(), residual,
-                              id, world_to_camera.linear(), covariance});
+      observations.push_back({c, residual, id, world_to_camera.linear(), covariance});
       break;
     }
   }
@@ -60,14 +56,6 @@ double pixelSigma(const std::vector<Observation>& observations, double min_sigma
   double squared = 0.0;
   for (const Observation& o : observations) squared += o.residual.squaredNorm();
   return std::max(min_sigma_px, std::sqrt(squared / (2.0 * static_cast<double>(observations.size()))));
-}
-
-/// d(pixel)/d(landmark in the camera).
-Eigen::Matrix<double, 2, 3> projectionJacobian(const PinholeCamera& camera, const Eigen::Vector3d& c) {
-  Eigen::Matrix<double, 2, 3> projection;
-  projection << camera.fx / c.z(), 0.0, -camera.fx * c.x() / (c.z() * c.z()), 0.0, camera.fy / c.z(),
-      -camera.fy * c.y() / (c.z() * c.z());
-  return projection;
 }
 
 /// d(pixel)/d(pose perturbation pose_wc * Exp(dt, dr)): the landmark in the camera moves by -dt + [c]x dr.
@@ -117,10 +105,10 @@ Eigen::Matrix<double, 12, 12> twoPoseInformation(const std::vector<Observation>&
                                         1.0 / std::pow(pixelSigma(seen_b, min_pixel_sigma_px), 2)};
   Eigen::Matrix<double, 12, 12> poses = Eigen::Matrix<double, 12, 12>::Zero();
   const auto alone = [&](int k, const Observation& o) {
-    const Eigen::Matrix<double, 2, 3> projection = projectionJacobian(camera, o.in_camera);
+    const Eigen::Matrix<double, 2, 3> projection = camera.projectionJacobian(o.in_camera);
     const Eigen::Matrix<double, 2, 6> J = poseJacobian(projection, o.in_camera);
     const Eigen::Matrix2d pixel_covariance =
-        Eigen::Matrix2d::Identity() / weight[k] + projection * o.covariance * projection.transpose();
+        Eigen::Matrix2d::Identity() / weight[k] + projection * o.cameraCovariance() * projection.transpose();
     poses.block<6, 6>(6 * k, 6 * k) += J.transpose() * pixel_covariance.inverse() * J;
   };
   const auto shared = [&](const Observation& in_a, const Observation& in_b) {
@@ -130,7 +118,7 @@ Eigen::Matrix<double, 12, 12> twoPoseInformation(const std::vector<Observation>&
     Eigen::Matrix<double, 12, 3> coupling = Eigen::Matrix<double, 12, 3>::Zero();
     for (int k = 0; k < 2; ++k) {
       const Observation& o = k == 0 ? in_a : in_b;
-      const Eigen::Matrix<double, 2, 3> projection = projectionJacobian(camera, o.in_camera);
+      const Eigen::Matrix<double, 2, 3> projection = camera.projectionJacobian(o.in_camera);
       const Eigen::Matrix<double, 2, 6> J_pose = poseJacobian(projection, o.in_camera);
       const Eigen::Matrix<double, 2, 3> J_point = projection * o.world_to_camera;
       poses.block<6, 6>(6 * k, 6 * k) += weight[k] * J_pose.transpose() * J_pose;
@@ -165,10 +153,10 @@ std::optional<Covariance6d> keyframePoseCovariance(const KeyframeSnapshot& map, 
   const double sigma = pixelSigma(observations, options.min_pixel_sigma_px);
   Eigen::Matrix<double, 6, 6> hessian = Eigen::Matrix<double, 6, 6>::Zero();
   for (const Observation& o : observations) {
-    const Eigen::Matrix<double, 2, 3> projection = projectionJacobian(camera, o.in_camera);
+    const Eigen::Matrix<double, 2, 3> projection = camera.projectionJacobian(o.in_camera);
     const Eigen::Matrix<double, 2, 6> J = poseJacobian(projection, o.in_camera);
     const Eigen::Matrix2d pixel_covariance =
-        sigma * sigma * Eigen::Matrix2d::Identity() + projection * o.covariance * projection.transpose();
+        sigma * sigma * Eigen::Matrix2d::Identity() + projection * o.cameraCovariance() * projection.transpose();
     hessian += J.transpose() * pixel_covariance.inverse() * J;
   }
   hessian = 0.5 * (hessian + hessian.transpose());

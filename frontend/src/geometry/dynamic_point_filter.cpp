@@ -7,6 +7,7 @@
 #include <string>
 
 #include "input_checks.h"
+#include "weighted_icp/core/skew.h"
 
 namespace weighted_icp::frontend {
 
@@ -19,17 +20,6 @@ void requireSameSize(const A& a, const B& b, const char* function) {
   if (a.size() != b.size())
     throw std::invalid_argument(std::string(function) + ": " + std::to_string(a.size()) + " and " +
                                 std::to_string(b.size()) + " matches");
-}
-
-Eigen::Matrix3d cross(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d m;
-  m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-  return m;
-}
-
-/// Distance of `pixel` to the line (a, b, c), a u + b v + c = 0.
-double distanceToLine(const Eigen::Vector3d& line, const Eigen::Vector2d& pixel) {
-  return std::abs(line.dot(pixel.homogeneous())) / line.head<2>().norm();
 }
 
 }  // namespace
@@ -64,6 +54,21 @@ std::vector<bool> flagDynamicByDisplacement(const std::vector<Eigen::Vector3d>& 
   return flags;
 }
 
+Eigen::Matrix3d fundamentalMatrix(const Eigen::Isometry3d& pose_2_in_1, const PinholeCamera& camera) {
+  const Eigen::Isometry3d pose_21 = pose_2_in_1.inverse();  // x2 = R x1 + t
+  if (!(pose_21.translation().norm() >= 1e-12)) return Eigen::Matrix3d::Zero();
+  Eigen::Matrix3d camera_matrix;
+  camera_matrix << camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1;
+  const Eigen::Matrix3d camera_inverse = camera_matrix.inverse();
+  return camera_inverse.transpose() * skew(pose_21.translation().normalized()) * pose_21.linear() * camera_inverse;
+}
+
+double distanceToLine(const Eigen::Vector3d& line, const Eigen::Vector2d& pixel) {
+  const double norm = line.head<2>().norm();
+  if (!(norm > 0.0)) return std::numeric_limits<double>::quiet_NaN();
+  return std::abs(line.dot(pixel.homogeneous())) / norm;
+}
+
 std::vector<double> symmetricEpipolarDistances(const std::vector<Eigen::Vector2d>& pixels1,
                                                const std::vector<Eigen::Vector2d>& pixels2,
                                                const Eigen::Isometry3d& pose_2_in_1, const PinholeCamera& camera) {
@@ -74,11 +79,7 @@ std::vector<double> symmetricEpipolarDistances(const std::vector<Eigen::Vector2d
   const Eigen::Isometry3d pose_21 = pose_2_in_1.inverse();  // x2 = R x1 + t
   if (!pose_21.matrix().allFinite() || pose_21.translation().norm() < 1e-12) return distances;
 
-  Eigen::Matrix3d camera_matrix;
-  camera_matrix << camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1;
-  const Eigen::Matrix3d camera_inverse = camera_matrix.inverse();
-  const Eigen::Matrix3d fundamental =
-      camera_inverse.transpose() * cross(pose_21.translation().normalized()) * pose_21.linear() * camera_inverse;
+  const Eigen::Matrix3d fundamental = fundamentalMatrix(pose_2_in_1, camera);
   for (std::size_t i = 0; i < pixels1.size(); ++i) {
     if (!pixels1[i].allFinite() || !pixels2[i].allFinite()) continue;
     const double d2 = distanceToLine(fundamental * pixels1[i].homogeneous(), pixels2[i]);

@@ -8,40 +8,10 @@
 #include <stdexcept>
 
 #include "weighted_icp/core/named_values.h"
+#include "weighted_icp/core/statistics.h"
+#include "weighted_icp/frontend/geometry/dynamic_point_filter.h"
 
 namespace weighted_icp::frontend {
-namespace {
-
-/// Distance of pixel2 to the epipolar line F pixel1, F of the motion from camera 1 to camera 2; NaN without
-/// translation.
-double epipolarDistance(const Eigen::Matrix3d& fundamental, const Eigen::Vector2d& pixel1,
-                        const Eigen::Vector2d& pixel2) {
-  const Eigen::Vector3d line = fundamental * pixel1.homogeneous();
-  const double norm = line.head<2>().norm();
-  if (!(norm > 0.0)) return std::numeric_limits<double>::quiet_NaN();
-  return std::abs(line.dot(pixel2.homogeneous())) / norm;
-}
-
-Eigen::Matrix3d fundamentalBetween(const Eigen::Isometry3d& pose1_wc, const Eigen::Isometry3d& pose2_wc,
-                                   const PinholeCamera& camera) {
-  const Eigen::Isometry3d motion = pose2_wc.inverse() * pose1_wc;  // x2 = R x1 + t
-  const Eigen::Vector3d t = motion.translation();
-  if (!(t.norm() > 1e-9)) return Eigen::Matrix3d::Zero();
-  Eigen::Matrix3d cross;
-  cross << 0, -t.z(), t.y(), t.z(), 0, -t.x(), -t.y(), t.x(), 0;
-  Eigen::Matrix3d k;
-  k << camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1;
-  const Eigen::Matrix3d k_inverse = k.inverse();
-  return k_inverse.transpose() * cross * motion.linear() * k_inverse;
-}
-
-double medianOf(std::deque<double> values) {
-  std::sort(values.begin(), values.end());
-  const std::size_t n = values.size();
-  return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
-}
-
-}  // namespace
 
 DynamicDistanceKind parseDynamicDistanceKind(const std::string& name) {
   return parseNamedValue(
@@ -77,10 +47,12 @@ std::vector<bool> DynamicPointHistory::update(std::size_t frame, const std::vect
     Seen& seen = points_[ids[i]];
     const bool known = seen.observed && seen.frame < frame && frame - seen.frame <= options_.forget_after_frames;
     if (known) {
-      const double d = epipolarDistance(fundamentalBetween(seen.pose_wc, pose_wc, camera), seen.pixel, pixels[i]);
+      // Distance of the pixel to the epipolar line of the earlier pixel; NaN without translation.
+      const Eigen::Matrix3d fundamental = fundamentalMatrix(seen.pose_wc.inverse() * pose_wc, camera);
+      const double d = distanceToLine(fundamental * seen.pixel.homogeneous(), pixels[i]);
       if (std::isfinite(d)) {
         flags[i] = seen.distances.empty() ? d > options_.max_first_px
-                                          : d - medianOf(seen.distances) > options_.max_increase_px;
+                                          : d - median(std::vector<double>(seen.distances.begin(), seen.distances.end())) > options_.max_increase_px;
         // Only the values of a point judged static become its reference: one
         // that keeps moving stays flagged instead of making its motion the norm.
         if (!flags[i]) seen.distances.push_back(d);

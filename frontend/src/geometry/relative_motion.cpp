@@ -15,6 +15,7 @@
 #include <opencv2/core/eigen.hpp>  // after Eigen, which it needs
 
 #include "input_checks.h"
+#include "weighted_icp/core/statistics.h"
 #include "solver_options.h"
 #include "weighted_icp/frontend/geometry/pose_estimation.h"
 
@@ -126,13 +127,6 @@ Triangulation triangulateInFront(const cv::Matx33d& camera_matrix, const cv::Mat
         std::acos(std::clamp(x1.dot(ray2) / (cv::norm(x1) * cv::norm(ray2)), -1.0, 1.0)) * 180.0 / CV_PI);
   }
   return triangulation;
-}
-
-double median(std::vector<double> values) {
-  if (values.empty()) return 0.0;
-  const auto middle = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
-  std::nth_element(values.begin(), middle, values.end());
-  return *middle;
 }
 
 std::vector<int> maskIndices(const cv::Mat& mask) {

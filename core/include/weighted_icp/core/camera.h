@@ -29,6 +29,10 @@ struct PinholeCamera {
   /// distortion; NaN for a point on or behind the image plane.
   /// @param point_camera the point in the camera frame, metres
   Eigen::Vector2d project(const Eigen::Vector3d& point_camera) const;
+  /// @brief d(project)/d(point): the 2x3 Jacobian of the undistorted pixel with respect to the point in camera
+  /// coordinates; the caller ensures the point is in front of the camera (z > 0).
+  /// @param point_camera the point in the camera frame, metres
+  Eigen::Matrix<double, 2, 3> projectionJacobian(const Eigen::Vector3d& point_camera) const;
   /// @brief Camera coordinates of an undistorted pixel at metric depth.
   /// @param u column, pixels
   /// @param v row, pixels

@@ -33,6 +33,14 @@ std::vector<bool> flagDynamicByDisplacement(const std::vector<Eigen::Vector3d>& 
                                             const Eigen::Isometry3d& pose_wc, const DepthNoiseModel& noise,
                                             const DynamicPointFilterOptions& options = {});
 
+/// The fundamental matrix F = K^-T [t]x R K^-1 of the motion x2 = R x1 + t (pose_2_in_1 inverted), with the
+/// translation normalised: pixel 2 of a static point lies on the line F pixel1. Zero when the motion has no
+/// translation (no epipolar geometry).
+Eigen::Matrix3d fundamentalMatrix(const Eigen::Isometry3d& pose_2_in_1, const PinholeCamera& camera);
+
+/// Distance in pixels of `pixel` to the image line (a, b, c), a u + b v + c = 0; NaN for a degenerate line.
+double distanceToLine(const Eigen::Vector3d& line, const Eigen::Vector2d& pixel);
+
 /// Symmetric epipolar distance per match, in pixels: the root mean square of
 /// the distance of pixel 2 to the epipolar line of pixel 1 and of pixel 1 to
 /// the line of pixel 2, under F = K^-T [t]x R K^-1 of the known motion. NaN
