@@ -21,10 +21,12 @@ struct SyntheticKeyframes {
   mapping::KeyframeSnapshot snapshot;
 };
 
-/// The given frames of a short loop (the camera goes once round in `frames_per_loop` frames) as keyframes.
+/// The given frames of a short loop (the camera goes once round in `frames_per_loop` frames) as keyframes, in
+/// the default room or one stretched by `room_scale`.
 inline SyntheticKeyframes syntheticKeyframes(std::uint64_t seed, bool repeated_texture, double frames_per_loop,
-                                             const std::vector<std::size_t>& frames) {
+                                             const std::vector<std::size_t>& frames, double room_scale = 1.0) {
   simulation::SyntheticRgbdOptions options;
+  options.room_scale = room_scale;
   options.seed = seed;
   options.frames = frames.empty() ? 1 : frames.back() + 1;
   options.frames_per_loop = frames_per_loop;

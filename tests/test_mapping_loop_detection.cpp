@@ -157,6 +157,25 @@ TEST(LoopVerification, RecoversTheRelativePoseAtAnyYaw) {
   }
 }
 
+TEST(LoopVerification, AnIcpThatLeavesThePnpPoseDoesNotRefuseATrueLoop) {
+  // A room three times as large: landmarks metres apart on far walls, where the weighted stage's choice of the most
+  // confident neighbour pulled the same way at every iteration and slid 1.3 m away from a PnP pose right to 1 cm.
+  constexpr double kLargeRoom = 3.0, kLargeLoop = 540.0;
+  std::vector<std::size_t> frames = testing::everyNth(36, kEvery);
+  for (std::size_t f : testing::everyNth(576, kEvery, 540)) frames.push_back(f);
+  const auto data = testing::syntheticKeyframes(7, false, kLargeLoop, frames, kLargeRoom);
+  const frontend::KeyframeId match = 2;  // frame 12
+  const frontend::KeyframeId query = 8;  // frame 552
+  const LoopVerifier verifier(data.camera);
+  const LoopVerification result = verifier.verify(data.snapshot, query, data.snapshot, match);
+  ASSERT_TRUE(result.accepted) << result.reason;
+  const auto [metres, degrees] =
+      poseError(result.constraint.query_in_match, trueQueryInMatch(data.snapshot, query, match));
+  EXPECT_LT(metres, 0.02);
+  EXPECT_LT(degrees, 0.5);
+  EXPECT_GT(result.overlap, 0.5) << "judged where the clouds overlap";
+}
+
 TEST(PlaceRecognition, ExcludesRecentAndCovisibleKeyframesAndWaitsForConsistency) {
   VocabularyTrainingOptions options;
   options.branching = 4;
