@@ -108,6 +108,7 @@ class SyntheticSource : public FrameSource {
         << (options.moving_object ? ", moving object" : "") << (options.dim_lighting ? ", dim lighting" : "")
         << (options.repeated_texture ? ", repeated texture" : "");
     if (options.room_scale != 1.0) out << ", room scaled by " << options.room_scale;
+    if (options.depth_distortion != 0.0) out << ", depth distortion " << options.depth_distortion;
     if (options.focal_length_error != 0.0 || options.principal_point_error_x_px != 0.0 ||
         options.principal_point_error_y_px != 0.0)
       out << ", tracker's camera off by focal " << options.focal_length_error * 100.0 << " %, cx "
@@ -431,6 +432,9 @@ int main(int argc, char** argv) {
         ("depth-noise", tools::rangedValue(&synthetic.depth_noise_coefficient, 0.0, 1.0)
                             ->default_value(synthetic.depth_noise_coefficient),
          "synthetic: depth noise sigma_z = COEFF * z^2 (0-1)")
+        ("depth-distortion", tools::rangedValue(&synthetic.depth_distortion, -0.1, 0.1)->default_value(0.0),
+         "synthetic: a fixed depth error, depth times 1 + D r^2 (r: distance from the image centre over the focal "
+         "length), as a structured-light sensor's; the odometry drifts steadily (-0.1-0.1)")
         ("repeated-texture", po::bool_switch(&synthetic.repeated_texture),
          "synthetic: every surface shows the same texture tile (perceptual aliasing)")
         ("room-scale", tools::rangedValue(&synthetic.room_scale, 1.0, 4.0)->default_value(1.0),

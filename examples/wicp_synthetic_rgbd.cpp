@@ -41,6 +41,9 @@ int main(int argc, char** argv) {
         ("depth-noise-coefficient", tools::rangedValue(&options.depth_noise_coefficient, 0.0, 1.0)
                                         ->default_value(options.depth_noise_coefficient),
          "depth noise sigma = coefficient * z^2 (metres)")
+        ("depth-distortion", tools::rangedValue(&options.depth_distortion, -0.1, 0.1)->default_value(0.0),
+         "a fixed depth error: depth times 1 + D r^2, r the distance from the image centre over the focal length "
+         "(-0.1-0.1)")
         ("overwrite", po::bool_switch(&overwrite), "replace DIR if it exists and is not empty");
     // clang-format on
     po::variables_map vm;

@@ -192,6 +192,28 @@ TEST(SyntheticRgbd, DepthNoiseIsDeterministicAndUnbiased) {
   EXPECT_LT(std::abs(mean[0]), 0.003);
 }
 
+TEST(SyntheticRgbd, DepthDistortionGrowsWithTheSquaredRadius) {
+  simulation::SyntheticRgbdOptions exact;
+  exact.depth_noise = false;
+  simulation::SyntheticRgbdOptions distorted = exact;
+  distorted.depth_distortion = 0.05;
+  const cv::Mat clean = rawDepth(simulation::SyntheticRgbdSequence(exact).frame(5));
+  const cv::Mat bent = rawDepth(simulation::SyntheticRgbdSequence(distorted).frame(5));
+  const PinholeCamera& camera = exact.camera;
+  std::size_t checked = 0;
+  for (int v = 0; v < camera.height; v += 37) {
+    for (int u = 0; u < camera.width; u += 41) {
+      const double z = clean.at<std::uint16_t>(v, u), z_bent = bent.at<std::uint16_t>(v, u);
+      if (z == 0.0 || z_bent == 0.0) continue;
+      const double r2 = std::pow((u - camera.cx) / camera.fx, 2) + std::pow((v - camera.cy) / camera.fy, 2);
+      // The stored values are rounded to 1 / depth_factor: half a step each.
+      EXPECT_NEAR(z_bent, z * (1.0 + 0.05 * r2), 1.1) << "pixel " << u << ", " << v;
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 100u);
+}
+
 TEST(SyntheticRgbd, RejectsBadOptions) {
   const auto rejects = [](auto change) {
     simulation::SyntheticRgbdOptions options;
@@ -201,6 +223,7 @@ TEST(SyntheticRgbd, RejectsBadOptions) {
   rejects([](simulation::SyntheticRgbdOptions& o) { o.frames = 0; });
   rejects([](simulation::SyntheticRgbdOptions& o) { o.fps = 0.0; });
   rejects([](simulation::SyntheticRgbdOptions& o) { o.depth_noise_coefficient = -0.001; });
+  rejects([](simulation::SyntheticRgbdOptions& o) { o.depth_distortion = 0.2; });
   rejects([](simulation::SyntheticRgbdOptions& o) { o.camera.distortion[0] = 0.1; });
   rejects([](simulation::SyntheticRgbdOptions& o) { o.camera.depth_factor = 0.0; });
   rejects([](simulation::SyntheticRgbdOptions& o) { o.max_depth = o.min_depth; });

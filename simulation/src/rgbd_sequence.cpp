@@ -162,6 +162,7 @@ void validate(const SyntheticRgbdOptions& options) {
   require(!camera.hasDistortion(), "camera distortion is not supported (the renderer casts undistorted rays)");
   require(options.depth_noise_coefficient >= 0.0 && std::isfinite(options.depth_noise_coefficient),
           "depth_noise_coefficient must be finite and not negative");
+  require(std::abs(options.depth_distortion) <= 0.1, "depth_distortion must be in [-0.1, 0.1]");
   require(options.min_depth >= 0.0 && options.max_depth > options.min_depth, "need 0 <= min_depth < max_depth");
   require(options.max_depth * camera.depth_factor <= 65535.0,
           "max_depth * depth_factor must fit the 16-bit depth image (65535)");
@@ -347,7 +348,11 @@ class FrameRenderer {
         cos_max_incidence_(std::cos(options.max_incidence_deg * kDegree)),
         frame_seed_(frame_seed),
         normal_deviates_(hashedNormalTable()),
-        disparity_scale_(camera_.fx * kDisparityBaseline * kDisparitySubpixel) {}  // subpixel units * metres
+        disparity_scale_(camera_.fx * kDisparityBaseline * kDisparitySubpixel) {  // subpixel units * metres
+    column_radius_squared_.resize(static_cast<std::size_t>(camera_.width));
+    for (int u = 0; u < camera_.width; ++u)
+      column_radius_squared_[static_cast<std::size_t>(u)] = std::pow((u - camera_.cx) / camera_.fx, 2);
+  }
 
   /// Row v of the colour image, the raw 16-bit depth (as the sensor stores
   /// it) and the moving-object mask.
@@ -358,6 +363,7 @@ class FrameRenderer {
       if (v >= box.pixels.y && v < box.pixels.y + box.pixels.height) row_boxes.push_back(&box);
     const Eigen::Vector3d row_direction =
         rotation_ * Eigen::Vector3d(-camera_.cx / camera_.fx, (v - camera_.cy) / camera_.fy, 1.0);
+    const double row_radius_squared = std::pow((v - camera_.cy) / camera_.fy, 2);
     cv::Vec3b* color_row = frame.rgbd.color.ptr<cv::Vec3b>(v);
     std::uint16_t* depth_row = raw_depth.ptr<std::uint16_t>(v);
     std::uint8_t* mask_row = frame.moving_object_mask.ptr<std::uint8_t>(v);
@@ -367,7 +373,8 @@ class FrameRenderer {
       const Eigen::Vector3d normal = hit.box->box->shape.toWorld(localNormal(hit));
       const std::uint64_t pixel_hash = mixBits(frame_seed_ ^ static_cast<std::uint64_t>(v * camera_.width + u));
       color_row[u] = color(hit, direction, normal, normal_deviates_[pixel_hash & 0xffff]);
-      depth_row[u] = depth(hit.face.t, direction, normal, normal_deviates_[(pixel_hash >> 16) & 0xffff]);
+      depth_row[u] = depth(hit.face.t, direction, normal, normal_deviates_[(pixel_hash >> 16) & 0xffff],
+                           1.0 + options_.depth_distortion * (row_radius_squared + column_radius_squared_[static_cast<std::size_t>(u)]));
       mask_row[u] = hit.box->box->is_moving_object ? 255 : 0;
     }
   }
@@ -424,14 +431,15 @@ class FrameRenderer {
   }
 
   /// The stored depth of a hit at `t` (the depth, as the ray's camera z is 1):
-  /// 0 out of the sensor's range or incidence, else noisy and quantised as a
-  /// Kinect's if asked.
-  std::uint16_t depth(double t, const Eigen::Vector3d& direction, const Eigen::Vector3d& normal,
-                      double depth_noise) const {
+  /// 0 out of the sensor's range or incidence, else distorted by `distortion` (a factor), noisy and quantised
+  /// as a Kinect's if asked.
+  std::uint16_t depth(double t, const Eigen::Vector3d& direction, const Eigen::Vector3d& normal, double depth_noise,
+                      double distortion) const {
     double depth = t;
     const double cos_incidence = std::abs(normal.dot(direction)) / direction.norm();
     const bool measurable =
         depth >= options_.min_depth && depth <= options_.max_depth && cos_incidence >= cos_max_incidence_;
+    if (measurable) depth *= distortion;
     if (measurable && options_.depth_noise) {
       depth += options_.depth_noise_coefficient * depth * depth * depth_noise;
       // Values are positive: truncating x + 0.5 rounds, without a libm call.
@@ -452,6 +460,7 @@ class FrameRenderer {
   const std::uint64_t frame_seed_;
   const std::vector<float>& normal_deviates_;
   const double disparity_scale_;
+  std::vector<double> column_radius_squared_;  // ((u - cx) / fx)^2 per column, for the depth distortion
 };
 
 }  // namespace
