@@ -6,6 +6,7 @@
 //   map.ply         landmarks with weights and raw metrics
 //   graph.txt       the mini-map graph (docs/mapping.md), loop edges included
 //   loops.txt       the accepted loops (keyframe timestamps, relative pose, inliers, fitness)
+//   loop_candidates.txt  every candidate place recognition proposed and its verdict (why a loop was not closed)
 //   session/        the session folder wicp_merge reads
 //   report.json     counts, timing, skipped frames, loops, ATE when ground truth exists
 //   groundtruth.txt the synthetic sequence's true poses (TUM format), for wicp_evaluate
@@ -17,6 +18,8 @@
 // leaves it as it was. A run that tracked no frame or mapped no landmark fails.
 
 #include <algorithm>
+#include <limits>
+#include <set>
 #include <cstdint>
 #include <filesystem>
 #include <iomanip>
@@ -230,6 +233,40 @@ void writeLoops(const fs::path& path, const mapping::LoopClosingSlam& slam) {
   tools::writeTextFile(path.string(), out.str());
 }
 
+/// loop_candidates.txt: one candidate a line, `query_id match_id query_timestamp match_timestamp score verdict
+/// reason`; the verdict is `accepted`, `pose_graph` (verified, but the pose graph's consistency test did not admit
+/// it) or the verification check that refused it (LoopVerification::refused_by), the reason the rest of the line.
+/// Returns the number of candidates per verdict other than accepted.
+std::map<std::string, std::size_t> writeLoopCandidates(const fs::path& path, const mapping::LoopClosingSlam& slam,
+                                                       const mapping::BowLoopDetector* detector) {
+  std::map<frontend::KeyframeId, double> timestamps;
+  for (const frontend::Keyframe& keyframe : slam.slam().map().keyframes()) timestamps[keyframe.id] = keyframe.timestamp;
+  const auto timestamp = [&](frontend::KeyframeId id) {
+    const auto found = timestamps.find(id);
+    return found == timestamps.end() ? std::numeric_limits<double>::quiet_NaN() : found->second;
+  };
+  std::set<std::pair<frontend::KeyframeId, frontend::KeyframeId>> accepted;
+  for (const mapping::LoopConstraint& loop : slam.acceptedLoops()) accepted.emplace(loop.query, loop.match);
+  std::map<std::string, std::size_t> refusals;
+  std::ostringstream out;
+  out << "# query_id match_id query_timestamp match_timestamp score verdict reason\n" << std::fixed;
+  for (const mapping::LoopCandidateRecord& c : detector ? detector->candidates()
+                                                         : std::vector<mapping::LoopCandidateRecord>{}) {
+    std::string verdict = c.refused_by, reason = c.reason;
+    if (verdict.empty() && accepted.count({c.query, c.match})) {
+      verdict = "accepted";
+    } else if (verdict.empty()) {
+      verdict = "pose_graph";
+      reason = "verified, but not admitted by the pose graph's consistency test";
+    }
+    if (verdict != "accepted") ++refusals[verdict];
+    out << c.query << ' ' << c.match << ' ' << std::setprecision(6) << timestamp(c.query) << ' ' << timestamp(c.match)
+        << ' ' << std::setprecision(3) << c.score << ' ' << verdict << ' ' << reason << '\n';
+  }
+  tools::writeTextFile(path.string(), out.str());
+  return refusals;
+}
+
 /// Writes trajectory.txt, session.txt, minimaps/, map.ply, graph.txt, loops.txt and session/ into `dir`.
 void writeMaps(const fs::path& dir, const mapping::LoopClosingSlam& slam, const PinholeCamera& camera,
                std::size_t minimap_keyframes, const Trajectory& trajectory, const LandmarkMap& session,
@@ -250,8 +287,16 @@ void writeMaps(const fs::path& dir, const mapping::LoopClosingSlam& slam, const 
   writeLoops(dir / "loops.txt", slam);
 }
 
+/// Candidates refused, per check (loop_candidates.txt's verdicts).
+tools::JsonObject refusalCounts(const std::map<std::string, std::size_t>& refusals) {
+  tools::JsonObject counts;
+  for (const auto& [check, count] : refusals) counts.add(check, count);
+  return counts;
+}
+
 tools::JsonObject makeReport(const FrameSource& source, std::size_t frames, const mapping::LoopClosingSlam& closing,
-                             const RunCounts& counts, std::size_t minimaps) {
+                             const RunCounts& counts, std::size_t minimaps,
+                             const std::map<std::string, std::size_t>& loop_refusals) {
   const frontend::RgbdSlam& slam = closing.slam();
   const mapping::LoopClosingStats loops = closing.loopStats();
   tools::JsonObject report;
@@ -275,6 +320,7 @@ tools::JsonObject makeReport(const FrameSource& source, std::size_t frames, cons
       .add("loops_detected", loops.loops_detected)
       .add("loops_accepted", loops.loops_accepted)
       .add("pose_graph_optimisations", loops.pose_graph_optimisations)
+      .add("loop_refusals", refusalCounts(loop_refusals))
       .add("global_bundle_adjustment", closing.globalBundleAdjusted())
       .add("dense_fallback_frames", counts.dense);  // Issue #11: --dense-odometry fallback
   return report;
@@ -293,7 +339,8 @@ int discardInterrupted(io::AtomicFolder& folder, std::size_t processed, std::siz
 /// Builds every output in the folder's temporary copy, then publishes it; an
 /// exception (or a signal, checked last) leaves `--out` as it was.
 int writeAndPublish(io::AtomicFolder& folder, const FrameSource& source, std::size_t frames,
-                    std::size_t minimap_keyframes, const mapping::LoopClosingSlam& closing, RunCounts& counts) {
+                    std::size_t minimap_keyframes, const mapping::LoopClosingSlam& closing,
+                    const mapping::BowLoopDetector* detector, RunCounts& counts) {
   const frontend::RgbdSlam& slam = closing.slam();
   countResults(slam, counts);
   const LandmarkMap session = slam.sessionMap();
@@ -301,7 +348,9 @@ int writeAndPublish(io::AtomicFolder& folder, const FrameSource& source, std::si
   const Trajectory trajectory = slam.trajectory();
   const std::vector<LandmarkMap> minimaps = slam.miniMaps();
   writeMaps(folder.path(), closing, source.camera(), minimap_keyframes, trajectory, session, minimaps);
-  tools::JsonObject report = makeReport(source, frames, closing, counts, minimaps.size());
+  const std::map<std::string, std::size_t> refusals =
+      writeLoopCandidates(folder.path() / "loop_candidates.txt", closing, detector);
+  tools::JsonObject report = makeReport(source, frames, closing, counts, minimaps.size(), refusals);
   std::optional<metrics::AbsoluteTrajectoryError> ate;
   const Trajectory truth = source.groundTruth();
   addAte(truth, trajectory, report, ate);
@@ -326,13 +375,14 @@ int writeAndPublish(io::AtomicFolder& folder, const FrameSource& source, std::si
     std::cout << std::setprecision(2) << "ATE RMSE " << ate->translation.rmse * 100 << " cm over " << ate->pairs
               << " poses\n";
   std::cout << "wrote " << folder.target().string()
-            << "/{trajectory.txt, session.txt, minimaps/, map.ply, graph.txt, loops.txt, session/, report.json}\n";
+            << "/{trajectory.txt, session.txt, minimaps/, map.ply, graph.txt, loops.txt, loop_candidates.txt, session/, "
+               "report.json}\n";
   return 0;
 }
 
 /// The loop detector over the vocabulary given, else the default one installed with the tools.
-mapping::LoopDetector makeDetector(const std::string& vocabulary_option, const PinholeCamera& camera,
-                                   mapping::LoopEdgeSource edge) {
+mapping::BowLoopDetector::Ptr makeDetector(const std::string& vocabulary_option, const PinholeCamera& camera,
+                                           mapping::LoopEdgeSource edge) {
   std::string path = vocabulary_option;
   if (path.empty()) {
     path = tools::findToolDataFile("default_vocabulary.txt");
@@ -344,8 +394,7 @@ mapping::LoopDetector makeDetector(const std::string& vocabulary_option, const P
   auto vocabulary = std::make_shared<const mapping::BinaryVocabulary>(mapping::BinaryVocabulary::load(path));
   mapping::LoopDetectorOptions options;
   options.verification.edge = edge;
-  return mapping::asLoopDetector(
-      std::make_shared<mapping::BowLoopDetector>(std::move(vocabulary), camera, std::move(options)));
+  return std::make_shared<mapping::BowLoopDetector>(std::move(vocabulary), camera, std::move(options));
 }
 
 }  // namespace
@@ -499,8 +548,13 @@ int main(int argc, char** argv) {
       throw po::error("--first-frame " + std::to_string(first_frame) + " leaves no frame (the run has " +
                       std::to_string(frames) + ")");
     // Loaded before the long run, so a bad vocabulary costs nothing.
+    // Kept beside the loop closer's copy: its candidates are read for loop_candidates.txt after the run.
+    mapping::BowLoopDetector::Ptr bow_detector;
     mapping::LoopDetector detector;
-    if (closing_options.loop_closure) detector = makeDetector(vocabulary_path, source->camera(), loop_edge);
+    if (closing_options.loop_closure) {
+      bow_detector = makeDetector(vocabulary_path, source->camera(), loop_edge);
+      detector = mapping::asLoopDetector(bow_detector);
+    }
     // Checked and created before the long run, so a refused --out costs nothing.
     io::AtomicFolder folder = tools::openOutputFolder(out_dir, vm.count("overwrite") > 0);
     std::cout << "running on " << source->describe() << ", frames " << first_frame << " to " << frames
@@ -510,6 +564,7 @@ int main(int argc, char** argv) {
     RunCounts counts = trackFrames(*source, first_frame, frames, slam);
     slam.finish();  // joins the bundle-adjustment and loop-closing threads, also when interrupted
     if (tools::interrupted()) return discardInterrupted(folder, counts.processed, frames - first_frame);
-    return writeAndPublish(folder, *source, frames - first_frame, options.minimap_keyframes, slam, counts);
+    return writeAndPublish(folder, *source, frames - first_frame, options.minimap_keyframes, slam, bow_detector.get(),
+                           counts);
   });
 }

@@ -1,6 +1,9 @@
 // The loop detector (place recognition + verification) inside LoopClosingSlam on whole synthetic runs: a sequence
 // that comes back to its start closes a loop and its ATE does not get worse; one that never revisits closes none.
+#include <algorithm>
 #include <memory>
+#include <set>
+#include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -17,6 +20,8 @@ namespace {
 struct SlamRun {
   mapping::LoopClosingStats stats;
   double ate_m = 0.0;
+  mapping::LoopDetectorStats detector;
+  std::vector<mapping::LoopCandidateRecord> candidates;
 };
 
 /// Runs LoopClosingSlam inline (reproducible) over the whole sequence, with or without loop closure.
@@ -31,7 +36,8 @@ SlamRun runSlam(const simulation::SyntheticRgbdSequence& sequence, bool loop_clo
   slam.finish();
   Trajectory truth;
   for (std::size_t i = 0; i < sequence.size(); ++i) truth.push_back({sequence.timestamp(i), sequence.cameraToWorld(i)});
-  return {slam.loopStats(), metrics::computeAte(truth, slam.trajectory()).translation.rmse};
+  return {slam.loopStats(), metrics::computeAte(truth, slam.trajectory()).translation.rmse, detector->stats(),
+          detector->candidates()};
 }
 
 TEST(LoopDetector, ClosesTheLoopOfARevisitingSequenceWithoutMakingItWorse) {
@@ -46,6 +52,19 @@ TEST(LoopDetector, ClosesTheLoopOfARevisitingSequenceWithoutMakingItWorse) {
   EXPECT_GE(with.stats.loops_accepted, 1u);
   EXPECT_GE(with.stats.pose_graph_optimisations, 1u);
   EXPECT_EQ(without.stats.loops_detected, 0u);
+  // Every candidate is on record with its verdict; the verified ones are the loops handed to the pose graph.
+  EXPECT_EQ(with.candidates.size(), with.detector.candidates);
+  const auto verified = std::count_if(with.candidates.begin(), with.candidates.end(),
+                                      [](const mapping::LoopCandidateRecord& c) { return c.refused_by.empty(); });
+  EXPECT_EQ(static_cast<std::size_t>(verified), with.stats.loops_detected);
+  const std::set<std::string> checks = {"descriptor_matches", "pnp", "pnp_inliers", "icp_landmarks", "icp_degenerate",
+                                        "icp_correction", "icp_inliers", "overlap", "fitness", "drift", "culled"};
+  for (const mapping::LoopCandidateRecord& c : with.candidates) {
+    EXPECT_LT(c.match, c.query);
+    if (c.refused_by.empty()) continue;
+    EXPECT_TRUE(checks.count(c.refused_by)) << c.refused_by;
+    EXPECT_FALSE(c.reason.empty()) << c.refused_by;
+  }
   // Not worse, up to a millimetre (the clean sequence's odometry drifts little).
   EXPECT_LE(with.ate_m, without.ate_m + 1e-3) << "with " << with.ate_m << " m, without " << without.ate_m << " m";
 }

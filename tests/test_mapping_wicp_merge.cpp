@@ -1,9 +1,11 @@
-// wicp_rgbd_slam's loop-closing outputs and wicp_merge as a user runs them: the report's loop counts, graph.txt
-// and session/; two runs of one synthetic sequence merged at their known relative pose; a run of another place
-// reported as "no overlap"; missing and corrupt sessions refused with nothing written.
+// wicp_rgbd_slam's loop-closing outputs and wicp_merge as a user runs them: the report's loop counts, graph.txt,
+// loop_candidates.txt and session/; two runs of one synthetic sequence merged at their known relative pose; a run
+// of another place reported as "no overlap"; missing and corrupt sessions refused with nothing written.
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <sstream>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -48,6 +50,43 @@ TEST(WicpRgbdSlamLoops, ReportsLoopsAndWritesTheGraphAndTheSession) {
   const mapping::Session session = mapping::loadSession((out / "session").string());
   EXPECT_EQ(session.frames.size(), 30u);
   EXPECT_EQ(io::readTrajectory((out / "trajectory.txt").string()).size(), 30u);
+}
+
+TEST(WicpRgbdSlamLoops, ListsEveryLoopCandidateWithItsVerdict) {
+  const fs::path scratch = scratchDir("slam_loop_candidates");
+  // A short loop (45 frames round): candidates are proposed, some refused, some accepted.
+  const fs::path out = slamRun(scratch, "run", 0, 60, "--frames-per-loop 45 --seed 7");
+  const std::string report = readAll(out / "report.json");
+  std::ifstream in(out / "loop_candidates.txt");
+  std::string line;
+  ASSERT_TRUE(std::getline(in, line));
+  EXPECT_EQ(line, "# query_id match_id query_timestamp match_timestamp score verdict reason");
+  std::map<std::string, std::size_t> verdicts;
+  while (std::getline(in, line)) {
+    std::istringstream fields(line);
+    std::size_t query = 0, match = 0;
+    double query_time = 0.0, match_time = 0.0, score = 0.0;
+    std::string verdict, reason;
+    ASSERT_TRUE(fields >> query >> match >> query_time >> match_time >> score >> verdict) << line;
+    std::getline(fields, reason);
+    EXPECT_LT(match, query) << line;
+    EXPECT_LT(match_time, query_time) << line;
+    if (verdict != "accepted") {
+      EXPECT_FALSE(reason.empty()) << line;
+    }
+    ++verdicts[verdict];
+  }
+  ASSERT_GT(verdicts["accepted"], 0u) << report;
+  EXPECT_NE(report.find("\"loops_accepted\":" + std::to_string(verdicts["accepted"])), std::string::npos) << report;
+  // The report counts the refusals per check, as the file lists them.
+  std::string refusals = "\"loop_refusals\":{";
+  bool first = true;
+  for (const auto& [verdict, count] : verdicts) {
+    if (verdict == "accepted") continue;
+    refusals += (first ? "\"" : ",\"") + verdict + "\":" + std::to_string(count);
+    first = false;
+  }
+  EXPECT_NE(report.find(refusals + "}"), std::string::npos) << report;
 }
 
 TEST(WicpRgbdSlamLoops, RefusesABadVocabularyBeforeTrackingAndAVocabularyWithoutLoopClosure) {

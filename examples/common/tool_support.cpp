@@ -193,6 +193,11 @@ JsonObject& JsonObject::add(const std::string& key, const Eigen::MatrixXd& value
   return *this;
 }
 
+JsonObject& JsonObject::add(const std::string& key, const JsonObject& value) {
+  members_.emplace_back(key, value.str());
+  return *this;
+}
+
 std::string JsonObject::str() const {
   std::string out = "{";
   for (std::size_t i = 0; i < members_.size(); ++i)

@@ -175,8 +175,8 @@ class Progress {
   std::chrono::steady_clock::time_point last_print_;
 };
 
-/// A flat JSON object written in insertion order; values are numbers, bools,
-/// strings or matrices (as arrays of rows).
+/// A JSON object written in insertion order; values are numbers, bools,
+/// strings, matrices (as arrays of rows) or other objects.
 class JsonObject {
  public:
   JsonObject& add(const std::string& key, double value);
@@ -186,6 +186,7 @@ class JsonObject {
   JsonObject& add(const std::string& key, const std::string& value);
   JsonObject& add(const std::string& key, const char* value) { return add(key, std::string(value)); }
   JsonObject& add(const std::string& key, const Eigen::MatrixXd& value);
+  JsonObject& add(const std::string& key, const JsonObject& value);
   /// Single line, no trailing newline.
   std::string str() const;
 

@@ -33,10 +33,15 @@ std::optional<LoopConstraint> BowLoopDetector::detect(const frontend::Map& map, 
   // Candidates come best first; the first verified one is the loop.
   for (const PlaceCandidate& candidate : recognizer_.detect(query, bow, snapshot.covisible(query))) {
     ++stats_.candidates;
-    if (!snapshot.keyframes.count(candidate.keyframe)) continue;
+    if (!snapshot.keyframes.count(candidate.keyframe)) {
+      candidates_.push_back({query, candidate.keyframe, candidate.normalised_score, "culled",
+                             "bundle adjustment culled the keyframe since it was added"});
+      continue;
+    }
     std::optional<LoopPrior> prior;
     if (options_.use_odometry_prior) prior = odometryPrior(snapshot, query, candidate.keyframe, options_.drift);
     LoopVerification result = verifier_.verify(snapshot, query, snapshot, candidate.keyframe, prior);
+    candidates_.push_back({query, candidate.keyframe, candidate.normalised_score, result.refused_by, result.reason});
     if (!result.accepted) continue;
     ++stats_.verified;
     result.constraint.score = candidate.normalised_score;

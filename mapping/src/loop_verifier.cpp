@@ -9,6 +9,7 @@
 #include <iterator>
 #include <limits>
 #include <stdexcept>
+#include <utility>
 #include <vector>
 
 #include <pcl/kdtree/kdtree_flann.h>
@@ -213,28 +214,28 @@ std::size_t inliersExplained(const Matches& matches, const std::vector<int>& inl
   return explained;
 }
 
-/// Why the measured loop is refused (empty when every test passes): PnP and ICP disagree, the clouds
-/// overlap too little or too loosely, or the result needs more drift than one session can have had.
-std::string disagreement(const LoopVerification& result, const LoopVerificationOptions& options,
+/// The check that refuses the measured loop and why (both empty when every test passes): PnP and ICP disagree,
+/// the clouds overlap too little or too loosely, or the result needs more drift than one session can have had.
+std::pair<std::string, std::string> disagreement(const LoopVerification& result, const LoopVerificationOptions& options,
                          const std::optional<LoopPrior>& prior) {
   if (result.icp_correction_m > options.max_icp_correction_m ||
       result.icp_correction_deg > options.max_icp_correction_deg)
-    return "ICP moved the PnP pose too far (" + std::to_string(result.icp_correction_m) + " m, " +
-           std::to_string(result.icp_correction_deg) + " deg)";
+    return {"icp_correction", "ICP moved the PnP pose too far (" + std::to_string(result.icp_correction_m) + " m, " +
+           std::to_string(result.icp_correction_deg) + " deg)"};
   if (result.icp_explained_inliers < options.min_inliers)
-    return "the ICP pose explains only " + std::to_string(result.icp_explained_inliers) + " of the " +
-           std::to_string(result.constraint.inliers) + " PnP inliers";
-  if (result.overlap < options.min_overlap) return "too little overlap (" + std::to_string(result.overlap) + ")";
+    return {"icp_inliers", "the ICP pose explains only " + std::to_string(result.icp_explained_inliers) + " of the " +
+           std::to_string(result.constraint.inliers) + " PnP inliers"};
+  if (result.overlap < options.min_overlap) return {"overlap", "too little overlap (" + std::to_string(result.overlap) + ")"};
   if (!(result.constraint.fitness <= options.max_fitness))
-    return "fitness " + std::to_string(result.constraint.fitness);
+    return {"fitness", "fitness " + std::to_string(result.constraint.fitness)};
   if (prior) {
     const Eigen::Isometry3d drift = prior->expected_query_in_match.inverse() * result.constraint.query_in_match;
     const double drift_deg = Eigen::AngleAxisd(drift.linear()).angle() * kRadiansToDegrees;
     if (drift.translation().norm() > prior->max_translation_m || drift_deg > prior->max_rotation_deg)
-      return "implausible drift for one session (" + std::to_string(drift.translation().norm()) + " m, " +
-             std::to_string(drift_deg) + " deg)";
+      return {"drift", "implausible drift for one session (" + std::to_string(drift.translation().norm()) + " m, " +
+             std::to_string(drift_deg) + " deg)"};
   }
-  return "";
+  return {};
 }
 
 }  // namespace
@@ -290,7 +291,8 @@ LoopVerification LoopVerifier::verify(const KeyframeSnapshot& query_map, fronten
   LoopVerification result;
   result.constraint.query = query;
   result.constraint.match = match;
-  const auto refuse = [&](const std::string& why) {
+  const auto refuse = [&](const std::string& check, const std::string& why) {
+    result.refused_by = check;
     result.reason = why;
     return result;
   };
@@ -301,13 +303,13 @@ LoopVerification LoopVerifier::verify(const KeyframeSnapshot& query_map, fronten
   const Matches matches = matchToLandmarks(query_keyframe->second, match_map, match_local, options_);
   result.matches = matches.points.size();
   if (matches.points.size() < options_.min_inliers)
-    return refuse("too few descriptor matches (" + std::to_string(matches.points.size()) + ")");
+    return refuse("descriptor_matches", "too few descriptor matches (" + std::to_string(matches.points.size()) + ")");
   const frontend::PoseEstimate pnp =
       frontend::estimatePosePnp(matches.points, matches.pixels, camera_, std::nullopt, options_.pnp);
   result.constraint.inliers = pnp.inliers.size();
-  if (!pnp.ok) return refuse("PnP failed: " + pnp.failure);
+  if (!pnp.ok) return refuse("pnp", "PnP failed: " + pnp.failure);
   if (pnp.inliers.size() < options_.min_inliers)
-    return refuse("too few PnP inliers (" + std::to_string(pnp.inliers.size()) + ")");
+    return refuse("pnp_inliers", "too few PnP inliers (" + std::to_string(pnp.inliers.size()) + ")");
 
   // 2. The weighted ICP between the local landmark clouds, started where PnP put the query.
   const LandmarkMap query_local =
@@ -315,11 +317,11 @@ LoopVerification LoopVerifier::verify(const KeyframeSnapshot& query_map, fronten
   const WeightFunction weight = weightFunction(options_.weight);
   const LandmarkCloud::Ptr query_cloud = toLandmarkCloud(query_local, weight);
   const LandmarkCloud::Ptr match_cloud = toLandmarkCloud(match_local, weight);
-  if (query_cloud->size() < 3 || match_cloud->size() < 3) return refuse("too few landmarks for ICP");
+  if (query_cloud->size() < 3 || match_cloud->size() < 3) return refuse("icp_landmarks", "too few landmarks for ICP");
   const Eigen::Isometry3d guess = pnp.pose_wc * query_wc.inverse();
   result.pnp_query_in_match = match_wc.inverse() * pnp.pose_wc;
   const AlignmentResult icp = alignMiniMaps(query_cloud, match_cloud, guess, options_);
-  if (icp.degenerate) return refuse("ICP degenerate: " + icp.reason);
+  if (icp.degenerate) return refuse("icp_degenerate", "ICP degenerate: " + icp.reason);
   Eigen::Isometry3d correction(icp.transformation);
   Overlap overlap = measureOverlap(*query_cloud, match_cloud, correction, options_.inlier_distance_m);
   // ICP refines PnP's pose; a result on which fewer query landmarks have a counterpart than at PnP's pose has not
@@ -344,7 +346,7 @@ LoopVerification LoopVerifier::verify(const KeyframeSnapshot& query_map, fronten
   const bool pnp_edge = options_.edge == LoopEdgeSource::Pnp;
   result.constraint.query_in_match =
       pnp_edge ? result.pnp_query_in_match : Eigen::Isometry3d(match_wc.inverse() * correction * query_wc);
-  if (const std::string why = disagreement(result, options_, prior); !why.empty()) return refuse(why);
+  if (const auto [check, why] = disagreement(result, options_, prior); !check.empty()) return refuse(check, why);
 
   result.constraint.information = pnp_edge ? pnpInformation(matches, pnp.inliers, pnp.pose_wc, match_wc, camera_,
                                                             pnp.rms_reprojection_px, options_.min_pixel_sigma_px)

@@ -7,6 +7,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "weighted_icp/core/camera.h"
 #include "weighted_icp/mapping/binary_vocabulary.h"
@@ -26,6 +27,19 @@ struct LoopDetectorOptions {
   DriftBounds drift;
   /// @brief false: verification without the odometry prior (any pose the geometry supports).
   bool use_odometry_prior = true;
+};
+
+/// @brief One candidate place recognition proposed, and what geometric verification made of it.
+struct LoopCandidateRecord {
+  /// @brief The query keyframe and the proposed older keyframe.
+  frontend::KeyframeId query = 0, match = 0;
+  /// @brief Place recognition's normalised score.
+  double score = 0.0;
+  /// @brief The check that refused it (LoopVerification::refused_by, or "culled" for a keyframe bundle adjustment
+  /// removed since); empty when verified.
+  std::string refused_by;
+  /// @brief Why, with the measured values; empty when verified.
+  std::string reason;
 };
 
 /// @brief What the detector did so far (for reports and tests).
@@ -58,6 +72,9 @@ class BowLoopDetector {
 
   /// @brief Counters so far.
   const LoopDetectorStats& stats() const { return stats_; }
+  /// @brief Every candidate so far, in the order verified (a query's candidates best first), with its verdict:
+  /// why a run closed no loop. Read it when detect() is not running (after the loop closer has finished).
+  const std::vector<LoopCandidateRecord>& candidates() const { return candidates_; }
 
   /// @brief "BowLoopDetector".
   static std::string getClassName() { return "BowLoopDetector"; }
@@ -68,6 +85,7 @@ class BowLoopDetector {
   LoopVerifier verifier_;
   LoopDetectorOptions options_;
   LoopDetectorStats stats_;
+  std::vector<LoopCandidateRecord> candidates_;
 };
 
 /// @brief The detector in the form LoopCloser and LoopClosingSlam take; the returned function shares `detector`.

@@ -109,7 +109,10 @@ LoopPrior odometryPrior(const KeyframeSnapshot& map, frontend::KeyframeId query,
 struct LoopVerification {
   /// @brief True when every test passed; `constraint` is then the loop.
   bool accepted = false;
-  /// @brief Why it was refused (empty when accepted).
+  /// @brief The check that refused it, a stable short name (empty when accepted): descriptor_matches, pnp,
+  /// pnp_inliers, icp_landmarks, icp_degenerate, icp_correction, icp_inliers, overlap, fitness or drift.
+  std::string refused_by;
+  /// @brief Why it was refused, with the measured values (empty when accepted).
   std::string reason;
   /// @brief The loop (query, match, relative pose, information, inliers, fitness); score left to the caller.
   LoopConstraint constraint;
