@@ -122,10 +122,11 @@ struct LoopVerification {
   double overlap = 0.0;
   /// @brief The relative pose PnP alone gave (before the ICP), as query_in_match.
   Eigen::Isometry3d pnp_query_in_match = Eigen::Isometry3d::Identity();
-  /// @brief False when the ICP result overlapped the candidate's cloud less than PnP's pose did: the ICP left the
-  /// pose instead of refining it, and the overlap, fitness and (with LoopEdgeSource::Icp) the edge are PnP's.
-  bool icp_refined = true;
-  /// @brief How far ICP moved the PnP pose (metres, degrees); zero when !icp_refined.
+  /// @brief False when, verified with an odometry prior, the weighted ICP's result overlapped the candidate's cloud
+  /// less than PnP's pose did (it left the pose instead of refining it): the checks, and with LoopEdgeSource::Icp
+  /// the edge, are then plain ICP's (k = 1). Without a prior the weighted ICP's result is always the one checked.
+  bool icp_weighted = true;
+  /// @brief How far ICP moved the PnP pose (metres, degrees).
   double icp_correction_m = 0.0, icp_correction_deg = 0.0;
   /// @brief How many PnP inliers the ICP's camera pose still projects within the PnP reprojection threshold: the
   /// loop is refused below min_inliers (the ICP left the solution the descriptor matches support).
