@@ -63,6 +63,29 @@ void BM_LoopVerification(benchmark::State& state) {
 }
 BENCHMARK(BM_LoopVerification)->Unit(benchmark::kMillisecond);
 
+/// The same where the weighted ICP leaves PnP's pose and plain ICP checks it again: a revisit of a room three times
+/// as large (keyframe 8, frame 552, against keyframe 2, frame 12; LoopVerification.AnIcpThatLeavesThePnpPose...).
+void BM_LoopVerificationPlainIcpCheck(benchmark::State& state) {
+  static const testing::SyntheticKeyframes data = [] {
+    std::vector<std::size_t> frames = testing::everyNth(36, 6);
+    for (std::size_t f : testing::everyNth(576, 6, 540)) frames.push_back(f);
+    return testing::syntheticKeyframes(7, false, 540.0, frames, 3.0);
+  }();
+  const mapping::LoopVerifier verifier(data.camera);
+  const frontend::KeyframeId query = 8, match = 2;
+  const mapping::LoopPrior prior = mapping::odometryPrior(data.snapshot, query, match);
+  std::size_t accepted = 0, plain = 0;
+  for (auto _ : state) {
+    const mapping::LoopVerification result = verifier.verify(data.snapshot, query, data.snapshot, match, prior);
+    accepted += result.accepted;
+    plain += !result.icp_weighted;
+    benchmark::DoNotOptimize(result);
+  }
+  state.counters["accepted_fraction"] = static_cast<double>(accepted) / static_cast<double>(state.iterations());
+  state.counters["plain_icp_fraction"] = static_cast<double>(plain) / static_cast<double>(state.iterations());
+}
+BENCHMARK(BM_LoopVerificationPlainIcpCheck)->Unit(benchmark::kMillisecond);
+
 /// The information of every odometry edge of the loop's keyframes, as each loop closure recomputes it:
 /// range(0) = 1 the relative covariance of both keyframes with their landmarks eliminated (the default since
 /// 2026-11-25), 0 each keyframe's own covariance, propagated and added (before).
