@@ -18,14 +18,14 @@
 // leaves it as it was. A run that tracked no frame or mapped no landmark fails.
 
 #include <algorithm>
-#include <limits>
-#include <set>
 #include <cstdint>
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
+#include <limits>
 #include <map>
 #include <optional>
+#include <set>
 #include <sstream>
 
 #include <boost/program_options.hpp>
@@ -250,8 +250,8 @@ std::map<std::string, std::size_t> writeLoopCandidates(const fs::path& path, con
   std::map<std::string, std::size_t> refusals;
   std::ostringstream out;
   out << "# query_id match_id query_timestamp match_timestamp score verdict reason\n" << std::fixed;
-  for (const mapping::LoopCandidateRecord& c : detector ? detector->candidates()
-                                                         : std::vector<mapping::LoopCandidateRecord>{}) {
+  for (const mapping::LoopCandidateRecord& c :
+       detector ? detector->candidates() : std::vector<mapping::LoopCandidateRecord>{}) {
     std::string verdict = c.refused_by, reason = c.reason;
     if (verdict.empty() && accepted.count({c.query, c.match})) {
       verdict = "accepted";
@@ -374,9 +374,10 @@ int writeAndPublish(io::AtomicFolder& folder, const FrameSource& source, std::si
   if (ate)
     std::cout << std::setprecision(2) << "ATE RMSE " << ate->translation.rmse * 100 << " cm over " << ate->pairs
               << " poses\n";
-  std::cout << "wrote " << folder.target().string()
-            << "/{trajectory.txt, session.txt, minimaps/, map.ply, graph.txt, loops.txt, loop_candidates.txt, session/, "
-               "report.json}\n";
+  std::cout
+      << "wrote " << folder.target().string()
+      << "/{trajectory.txt, session.txt, minimaps/, map.ply, graph.txt, loops.txt, loop_candidates.txt, session/, "
+         "report.json}\n";
   return 0;
 }
 

@@ -57,8 +57,9 @@ TEST(LoopDetector, ClosesTheLoopOfARevisitingSequenceWithoutMakingItWorse) {
   const auto verified = std::count_if(with.candidates.begin(), with.candidates.end(),
                                       [](const mapping::LoopCandidateRecord& c) { return c.refused_by.empty(); });
   EXPECT_EQ(static_cast<std::size_t>(verified), with.stats.loops_detected);
-  const std::set<std::string> checks = {"descriptor_matches", "pnp", "pnp_inliers", "icp_landmarks", "icp_degenerate",
-                                        "icp_correction", "icp_inliers", "overlap", "fitness", "drift", "culled"};
+  const std::set<std::string> checks = {
+      "descriptor_matches", "pnp",     "pnp_inliers", "icp_landmarks", "icp_degenerate", "icp_correction",
+      "icp_inliers",        "overlap", "fitness",     "drift",         "culled"};
   for (const mapping::LoopCandidateRecord& c : with.candidates) {
     EXPECT_LT(c.match, c.query);
     if (c.refused_by.empty()) continue;

@@ -218,15 +218,16 @@ std::size_t inliersExplained(const Matches& matches, const std::vector<int>& inl
 /// The check that refuses the measured loop and why (both empty when every test passes): PnP and ICP disagree,
 /// the clouds overlap too little or too loosely, or the result needs more drift than one session can have had.
 std::pair<std::string, std::string> disagreement(const LoopVerification& result, const LoopVerificationOptions& options,
-                         const std::optional<LoopPrior>& prior) {
+                                                 const std::optional<LoopPrior>& prior) {
   if (result.icp_correction_m > options.max_icp_correction_m ||
       result.icp_correction_deg > options.max_icp_correction_deg)
     return {"icp_correction", "ICP moved the PnP pose too far (" + std::to_string(result.icp_correction_m) + " m, " +
-           std::to_string(result.icp_correction_deg) + " deg)"};
+                                  std::to_string(result.icp_correction_deg) + " deg)"};
   if (result.icp_explained_inliers < options.min_inliers)
     return {"icp_inliers", "the ICP pose explains only " + std::to_string(result.icp_explained_inliers) + " of the " +
-           std::to_string(result.constraint.inliers) + " PnP inliers"};
-  if (result.overlap < options.min_overlap) return {"overlap", "too little overlap (" + std::to_string(result.overlap) + ")"};
+                               std::to_string(result.constraint.inliers) + " PnP inliers"};
+  if (result.overlap < options.min_overlap)
+    return {"overlap", "too little overlap (" + std::to_string(result.overlap) + ")"};
   if (!(result.constraint.fitness <= options.max_fitness))
     return {"fitness", "fitness " + std::to_string(result.constraint.fitness)};
   if (prior) {
@@ -234,7 +235,7 @@ std::pair<std::string, std::string> disagreement(const LoopVerification& result,
     const double drift_deg = Eigen::AngleAxisd(drift.linear()).angle() * kRadiansToDegrees;
     if (drift.translation().norm() > prior->max_translation_m || drift_deg > prior->max_rotation_deg)
       return {"drift", "implausible drift for one session (" + std::to_string(drift.translation().norm()) + " m, " +
-             std::to_string(drift_deg) + " deg)"};
+                           std::to_string(drift_deg) + " deg)"};
   }
   return {};
 }

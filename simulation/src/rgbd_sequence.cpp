@@ -373,8 +373,9 @@ class FrameRenderer {
       const Eigen::Vector3d normal = hit.box->box->shape.toWorld(localNormal(hit));
       const std::uint64_t pixel_hash = mixBits(frame_seed_ ^ static_cast<std::uint64_t>(v * camera_.width + u));
       color_row[u] = color(hit, direction, normal, normal_deviates_[pixel_hash & 0xffff]);
-      depth_row[u] = depth(hit.face.t, direction, normal, normal_deviates_[(pixel_hash >> 16) & 0xffff],
-                           1.0 + options_.depth_distortion * (row_radius_squared + column_radius_squared_[static_cast<std::size_t>(u)]));
+      depth_row[u] = depth(
+          hit.face.t, direction, normal, normal_deviates_[(pixel_hash >> 16) & 0xffff],
+          1.0 + options_.depth_distortion * (row_radius_squared + column_radius_squared_[static_cast<std::size_t>(u)]));
       mask_row[u] = hit.box->box->is_moving_object ? 255 : 0;
     }
   }

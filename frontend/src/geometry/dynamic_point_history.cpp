@@ -51,8 +51,12 @@ std::vector<bool> DynamicPointHistory::update(std::size_t frame, const std::vect
       const Eigen::Matrix3d fundamental = fundamentalMatrix(seen.pose_wc.inverse() * pose_wc, camera);
       const double d = distanceToLine(fundamental * seen.pixel.homogeneous(), pixels[i]);
       if (std::isfinite(d)) {
-        flags[i] = seen.distances.empty() ? d > options_.max_first_px
-                                          : d - median(std::vector<double>(seen.distances.begin(), seen.distances.end())) > options_.max_increase_px;
+        if (seen.distances.empty()) {
+          flags[i] = d > options_.max_first_px;
+        } else {
+          const double usual = median(std::vector<double>(seen.distances.begin(), seen.distances.end()));
+          flags[i] = d - usual > options_.max_increase_px;
+        }
         // Only the values of a point judged static become its reference: one
         // that keeps moving stays flagged instead of making its motion the norm.
         if (!flags[i]) seen.distances.push_back(d);

@@ -15,8 +15,8 @@
 #include <opencv2/core/eigen.hpp>  // after Eigen, which it needs
 
 #include "input_checks.h"
-#include "weighted_icp/core/statistics.h"
 #include "solver_options.h"
+#include "weighted_icp/core/statistics.h"
 #include "weighted_icp/frontend/geometry/pose_estimation.h"
 
 namespace weighted_icp::frontend {
