@@ -199,6 +199,45 @@ AlignmentResult alignMiniMaps(const LandmarkCloud::Ptr& query_cloud, const Landm
   return aligner.align(query_cloud, guess.matrix());
 }
 
+/// Step 2 of verify: the ICP that checks PnP's pose, its correction of the query's cloud and their overlap.
+struct IcpCheck {
+  Eigen::Isometry3d correction = Eigen::Isometry3d::Identity();
+  Overlap overlap;
+  bool weighted = true;    // the weighted ICP's result (else plain ICP's)
+  std::string degenerate;  // the aligner's reason when the problem was degenerate
+};
+
+/// The weighted ICP from PnP's pose (`guess`), and, when its result overlaps the match cloud less than the guess does
+/// and `within_session`, plain ICP instead.
+IcpCheck checkWithIcp(const LandmarkCloud::Ptr& query_cloud, const LandmarkCloud::Ptr& match_cloud,
+                      const Eigen::Isometry3d& guess, const LoopVerificationOptions& options, bool within_session) {
+  const auto run = [&](bool weighted) {
+    const AlignmentResult icp = alignMiniMaps(query_cloud, match_cloud, guess, options, weighted);
+    IcpCheck check;
+    check.weighted = weighted;
+    if (icp.degenerate) {
+      check.degenerate = icp.reason.empty() ? "degenerate" : icp.reason;
+      return check;
+    }
+    check.correction = Eigen::Isometry3d(icp.transformation);
+    check.overlap = measureOverlap(*query_cloud, match_cloud, check.correction, options.inlier_distance_m);
+    return check;
+  };
+  const IcpCheck weighted = run(true);
+  if (!weighted.degenerate.empty() || !within_session) return weighted;
+  // ICP refines PnP's pose; a result on which fewer query landmarks have a counterpart than at PnP's pose has not
+  // refined it but left it. On sparse clouds (a large room, landmarks metres apart) the weighted stage's choice of
+  // the most confident of k neighbours can pull one way at every iteration: it slid 1.3 m from PnP poses right to
+  // 1 cm, overlap falling from 0.86 to 0.4, and refused every true loop. Within a session the check is then made by
+  // plain ICP (the refinement stage alone, nearest neighbours), which has no such bias (it moved those poses
+  // 0.1-2.3 cm); the odometry prior still bounds where an aliased place may put the query. Between sessions the
+  // weighted stage's verdict stands: in a room whose every surface shows the same texture, a place three quarters
+  // round it matched the first session's start with 140 PnP inliers and 94 % overlap at 1.3 cm RMS, and only the
+  // weighted stage's disagreement kept the two sessions apart.
+  const Overlap at_pnp = measureOverlap(*query_cloud, match_cloud, guess, options.inlier_distance_m);
+  return at_pnp.fraction > weighted.overlap.fraction ? run(false) : weighted;
+}
+
 /// How many of the PnP inliers the camera pose `pose_wc` still projects within RANSAC's reprojection threshold (in
 /// front of the camera): the ICP result must explain the descriptor matches as PnP's did, or one of the two has
 /// found a wrong solution (on a synthetic loop the ICP slid 6 cm and 4.5 degrees from a PnP pose right to 2 mm,
@@ -313,7 +352,7 @@ LoopVerification LoopVerifier::verify(const KeyframeSnapshot& query_map, fronten
   if (pnp.inliers.size() < options_.min_inliers)
     return refuse("pnp_inliers", "too few PnP inliers (" + std::to_string(pnp.inliers.size()) + ")");
 
-  // 2. The weighted ICP between the local landmark clouds, started where PnP put the query.
+  // 2. ICP between the local landmark clouds, started where PnP put the query (checkWithIcp).
   const LandmarkMap query_local =
       query_map.localLandmarks(query_map.neighbourhood(query, options_.query_neighbour_keyframes));
   const WeightFunction weight = weightFunction(options_.weight);
@@ -322,27 +361,11 @@ LoopVerification LoopVerifier::verify(const KeyframeSnapshot& query_map, fronten
   if (query_cloud->size() < 3 || match_cloud->size() < 3) return refuse("icp_landmarks", "too few landmarks for ICP");
   const Eigen::Isometry3d guess = pnp.pose_wc * query_wc.inverse();
   result.pnp_query_in_match = match_wc.inverse() * pnp.pose_wc;
-  AlignmentResult icp = alignMiniMaps(query_cloud, match_cloud, guess, options_, true);
-  if (icp.degenerate) return refuse("icp_degenerate", "ICP degenerate: " + icp.reason);
-  Eigen::Isometry3d correction(icp.transformation);
-  Overlap overlap = measureOverlap(*query_cloud, match_cloud, correction, options_.inlier_distance_m);
-  // ICP refines PnP's pose; a result on which fewer query landmarks have a counterpart than at PnP's pose has not
-  // refined it but left it. On sparse clouds (a large room, landmarks metres apart) the weighted stage's choice of
-  // the most confident of k neighbours can pull one way at every iteration: it slid 1.3 m from PnP poses right to
-  // 1 cm, overlap falling from 0.86 to 0.4, and refused every true loop. With an odometry prior (a loop within one
-  // session) the check is then made by plain ICP (the refinement stage alone, nearest neighbours), which has no such
-  // bias (it moved those poses 0.1-2.3 cm); the prior still bounds where an aliased place may put the query.
-  // Without one (sessions being merged) the weighted stage's verdict stands: in a room whose every surface shows
-  // the same texture, a place three quarters round it matched the first session's start with 140 PnP inliers and
-  // 94 % overlap at 1.3 cm RMS, and only the weighted stage's disagreement kept the two sessions apart.
-  if (const Overlap at_pnp = measureOverlap(*query_cloud, match_cloud, guess, options_.inlier_distance_m);
-      prior && at_pnp.fraction > overlap.fraction) {
-    icp = alignMiniMaps(query_cloud, match_cloud, guess, options_, false);
-    if (icp.degenerate) return refuse("icp_degenerate", "ICP degenerate: " + icp.reason);
-    correction = Eigen::Isometry3d(icp.transformation);
-    overlap = measureOverlap(*query_cloud, match_cloud, correction, options_.inlier_distance_m);
-    result.icp_weighted = false;
-  }
+  const IcpCheck icp = checkWithIcp(query_cloud, match_cloud, guess, options_, prior.has_value());
+  if (!icp.degenerate.empty()) return refuse("icp_degenerate", "ICP degenerate: " + icp.degenerate);
+  const Eigen::Isometry3d& correction = icp.correction;
+  const Overlap& overlap = icp.overlap;
+  result.icp_weighted = icp.weighted;
 
   // 3. Do PnP and the landmark geometry agree, and do the clouds overlap closely?
   const Eigen::Isometry3d change = (guess * query_wc).inverse() * (correction * query_wc);
