@@ -287,6 +287,18 @@ void writeMaps(const fs::path& dir, const mapping::LoopClosingSlam& slam, const 
   writeLoops(dir / "loops.txt", slam);
 }
 
+/// " (N candidates refused, most by CHECK: loop_candidates.txt)" for the summary line; empty when none was.
+std::string refusedSummary(const std::map<std::string, std::size_t>& refusals) {
+  std::size_t total = 0;
+  auto most = refusals.end();
+  for (auto it = refusals.begin(); it != refusals.end(); ++it) {
+    total += it->second;
+    if (most == refusals.end() || it->second > most->second) most = it;
+  }
+  if (total == 0) return "";
+  return " (" + std::to_string(total) + " candidate(s) refused, most by " + most->first + ": loop_candidates.txt)";
+}
+
 /// Candidates refused, per check (loop_candidates.txt's verdicts).
 tools::JsonObject refusalCounts(const std::map<std::string, std::size_t>& refusals) {
   tools::JsonObject counts;
@@ -367,10 +379,10 @@ int writeAndPublish(io::AtomicFolder& folder, const FrameSource& source, std::si
 
   std::cout << std::fixed << std::setprecision(1) << "tracked " << counts.tracked << "/" << frames << " frames, "
             << slam.map().keyframeCount() << " keyframes, " << slam.map().mapPointCount() << " landmarks, "
-            << minimaps.size() << " mini-maps, " << closing.loopStats().loops_accepted << " loop(s) closed; median "
-            << percentile(counts.tracking_ms, 0.5) << " ms/frame (p90 " << percentile(counts.tracking_ms, 0.9)
-            << "); skipped " << counts.skipped << ", lost " << counts.lost << " (" << counts.predicted
-            << " of those posed by prediction)\n";
+            << minimaps.size() << " mini-maps, " << closing.loopStats().loops_accepted << " loop(s) closed"
+            << refusedSummary(refusals) << "; median " << percentile(counts.tracking_ms, 0.5) << " ms/frame (p90 "
+            << percentile(counts.tracking_ms, 0.9) << "); skipped " << counts.skipped << ", lost " << counts.lost
+            << " (" << counts.predicted << " of those posed by prediction)\n";
   if (ate)
     std::cout << std::setprecision(2) << "ATE RMSE " << ate->translation.rmse * 100 << " cm over " << ate->pairs
               << " poses\n";

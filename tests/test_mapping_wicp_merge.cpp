@@ -55,7 +55,11 @@ TEST(WicpRgbdSlamLoops, ReportsLoopsAndWritesTheGraphAndTheSession) {
 TEST(WicpRgbdSlamLoops, ListsEveryLoopCandidateWithItsVerdict) {
   const fs::path scratch = scratchDir("slam_loop_candidates");
   // A short loop (45 frames round): candidates are proposed, some refused, some accepted.
-  const fs::path out = slamRun(scratch, "run", 0, 60, "--frames-per-loop 45 --seed 7");
+  const fs::path out = scratch / "run";
+  const ToolRun slam = runBuiltTool(
+      "wicp_rgbd_slam", "--synthetic-frames 60 --frames-per-loop 45 --seed 7 --deterministic --out " + out.string(),
+      scratch);
+  ASSERT_EQ(slam.status, 0) << slam.err;
   const std::string report = readAll(out / "report.json");
   std::ifstream in(out / "loop_candidates.txt");
   std::string line;
@@ -87,6 +91,13 @@ TEST(WicpRgbdSlamLoops, ListsEveryLoopCandidateWithItsVerdict) {
     first = false;
   }
   EXPECT_NE(report.find(refusals + "}"), std::string::npos) << report;
+  // The summary line says how many were refused and where to read why.
+  std::size_t refused = 0;
+  for (const auto& [verdict, count] : verdicts) refused += verdict == "accepted" ? 0 : count;
+  if (refused > 0) {
+    EXPECT_NE(slam.out.find(std::to_string(refused) + " candidate(s) refused"), std::string::npos) << slam.out;
+    EXPECT_NE(slam.out.find("loop_candidates.txt)"), std::string::npos) << slam.out;
+  }
 }
 
 TEST(WicpRgbdSlamLoops, RefusesABadVocabularyBeforeTrackingAndAVocabularyWithoutLoopClosure) {
