@@ -214,12 +214,18 @@ void addAte(const Trajectory& truth, const Trajectory& trajectory, tools::JsonOb
   }
 }
 
+/// Each keyframe's timestamp, by id (loops.txt and loop_candidates.txt name keyframes by their timestamps).
+std::map<frontend::KeyframeId, double> keyframeTimestamps(const mapping::LoopClosingSlam& slam) {
+  std::map<frontend::KeyframeId, double> timestamps;
+  for (const frontend::Keyframe& keyframe : slam.slam().map().keyframes()) timestamps[keyframe.id] = keyframe.timestamp;
+  return timestamps;
+}
+
 /// loops.txt: one accepted loop a line, `query_timestamp match_timestamp tx ty tz qx qy qz qw inliers fitness`
 /// (the query keyframe's camera in the match keyframe's, as the pose graph took it), so that a run with ground truth
 /// can tell a right loop from a wrong one.
-void writeLoops(const fs::path& path, const mapping::LoopClosingSlam& slam) {
-  std::map<frontend::KeyframeId, double> timestamps;
-  for (const frontend::Keyframe& keyframe : slam.slam().map().keyframes()) timestamps[keyframe.id] = keyframe.timestamp;
+void writeLoops(const fs::path& path, const mapping::LoopClosingSlam& slam,
+                const std::map<frontend::KeyframeId, double>& timestamps) {
   std::ostringstream out;
   out << "# query_timestamp match_timestamp tx ty tz qx qy qz qw inliers fitness\n" << std::setprecision(17);
   for (const mapping::LoopConstraint& loop : slam.acceptedLoops()) {
@@ -238,9 +244,8 @@ void writeLoops(const fs::path& path, const mapping::LoopClosingSlam& slam) {
 /// it) or the verification check that refused it (LoopVerification::refused_by), the reason the rest of the line.
 /// Returns the number of candidates per verdict other than accepted.
 std::map<std::string, std::size_t> writeLoopCandidates(const fs::path& path, const mapping::LoopClosingSlam& slam,
+                                                       const std::map<frontend::KeyframeId, double>& timestamps,
                                                        const mapping::BowLoopDetector* detector) {
-  std::map<frontend::KeyframeId, double> timestamps;
-  for (const frontend::Keyframe& keyframe : slam.slam().map().keyframes()) timestamps[keyframe.id] = keyframe.timestamp;
   const auto timestamp = [&](frontend::KeyframeId id) {
     const auto found = timestamps.find(id);
     return found == timestamps.end() ? std::numeric_limits<double>::quiet_NaN() : found->second;
@@ -267,7 +272,7 @@ std::map<std::string, std::size_t> writeLoopCandidates(const fs::path& path, con
   return refusals;
 }
 
-/// Writes trajectory.txt, session.txt, minimaps/, map.ply, graph.txt, loops.txt and session/ into `dir`.
+/// Writes trajectory.txt, session.txt, minimaps/, map.ply, graph.txt and session/ into `dir`.
 void writeMaps(const fs::path& dir, const mapping::LoopClosingSlam& slam, const PinholeCamera& camera,
                std::size_t minimap_keyframes, const Trajectory& trajectory, const LandmarkMap& session,
                const std::vector<LandmarkMap>& minimaps) {
@@ -284,7 +289,6 @@ void writeMaps(const fs::path& dir, const mapping::LoopClosingSlam& slam, const 
   mapping::saveMiniMapGraph(mapping::MiniMapGraph::fromSlamMap(slam.slam().map(), minimap_keyframes),
                             (dir / "graph.txt").string());
   mapping::saveSession(mapping::captureSession(slam.slam(), camera), (dir / "session").string());
-  writeLoops(dir / "loops.txt", slam);
 }
 
 /// " (N candidates refused, most by CHECK: loop_candidates.txt)" for the summary line; empty when none was.
@@ -360,8 +364,10 @@ int writeAndPublish(io::AtomicFolder& folder, const FrameSource& source, std::si
   const Trajectory trajectory = slam.trajectory();
   const std::vector<LandmarkMap> minimaps = slam.miniMaps();
   writeMaps(folder.path(), closing, source.camera(), minimap_keyframes, trajectory, session, minimaps);
+  const std::map<frontend::KeyframeId, double> timestamps = keyframeTimestamps(closing);
+  writeLoops(folder.path() / "loops.txt", closing, timestamps);
   const std::map<std::string, std::size_t> refusals =
-      writeLoopCandidates(folder.path() / "loop_candidates.txt", closing, detector);
+      writeLoopCandidates(folder.path() / "loop_candidates.txt", closing, timestamps, detector);
   tools::JsonObject report = makeReport(source, frames, closing, counts, minimaps.size(), refusals);
   std::optional<metrics::AbsoluteTrajectoryError> ate;
   const Trajectory truth = source.groundTruth();

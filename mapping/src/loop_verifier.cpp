@@ -86,10 +86,8 @@ struct Overlap {
   double fraction = 0.0;
 };
 
-Overlap measureOverlap(const LandmarkCloud& query_cloud, const LandmarkCloud::ConstPtr& match_cloud,
+Overlap measureOverlap(const LandmarkCloud& query_cloud, const pcl::KdTreeFLANN<LandmarkPoint>& match_tree,
                        const Eigen::Isometry3d& correction, double inlier_distance) {
-  pcl::KdTreeFLANN<LandmarkPoint> tree;
-  tree.setInputCloud(match_cloud);
   Overlap overlap;
   std::vector<int> index(1);
   std::vector<float> squared(1);
@@ -103,7 +101,7 @@ Overlap measureOverlap(const LandmarkCloud& query_cloud, const LandmarkCloud::Co
     LandmarkPoint probe = p;
     probe.x = static_cast<float>(moved.x()), probe.y = static_cast<float>(moved.y());
     probe.z = static_cast<float>(moved.z());
-    if (tree.nearestKSearch(probe, 1, index, squared) < 1) continue;
+    if (match_tree.nearestKSearch(probe, 1, index, squared) < 1) continue;
     if (squared[0] > inlier_distance * inlier_distance) continue;
     overlap.pairs.emplace_back(i, static_cast<std::size_t>(index[0]));
     sum += squared[0];
@@ -211,6 +209,8 @@ struct IcpCheck {
 /// and `within_session`, plain ICP instead.
 IcpCheck checkWithIcp(const LandmarkCloud::Ptr& query_cloud, const LandmarkCloud::Ptr& match_cloud,
                       const Eigen::Isometry3d& guess, const LoopVerificationOptions& options, bool within_session) {
+  pcl::KdTreeFLANN<LandmarkPoint> match_tree;  // built once for every overlap measured here
+  match_tree.setInputCloud(match_cloud);
   const auto run = [&](bool weighted) {
     const AlignmentResult icp = alignMiniMaps(query_cloud, match_cloud, guess, options, weighted);
     IcpCheck check;
@@ -220,7 +220,7 @@ IcpCheck checkWithIcp(const LandmarkCloud::Ptr& query_cloud, const LandmarkCloud
       return check;
     }
     check.correction = Eigen::Isometry3d(icp.transformation);
-    check.overlap = measureOverlap(*query_cloud, match_cloud, check.correction, options.inlier_distance_m);
+    check.overlap = measureOverlap(*query_cloud, match_tree, check.correction, options.inlier_distance_m);
     return check;
   };
   const IcpCheck weighted = run(true);
@@ -234,7 +234,7 @@ IcpCheck checkWithIcp(const LandmarkCloud::Ptr& query_cloud, const LandmarkCloud
   // weighted stage's verdict stands: in a room whose every surface shows the same texture, a place three quarters
   // round it matched the first session's start with 140 PnP inliers and 94 % overlap at 1.3 cm RMS, and only the
   // weighted stage's disagreement kept the two sessions apart.
-  const Overlap at_pnp = measureOverlap(*query_cloud, match_cloud, guess, options.inlier_distance_m);
+  const Overlap at_pnp = measureOverlap(*query_cloud, match_tree, guess, options.inlier_distance_m);
   return at_pnp.fraction > weighted.overlap.fraction ? run(false) : weighted;
 }
 

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "weighted_icp/core/skew.h"
+
 namespace weighted_icp::mapping {
 
 namespace {
