@@ -9,6 +9,12 @@ namespace weighted_icp {
 
 cv::Matx33d PinholeCamera::cameraMatrix() const { return {fx, 0.0, cx, 0.0, fy, cy, 0.0, 0.0, 1.0}; }
 
+Eigen::Matrix3d PinholeCamera::intrinsicMatrix() const {
+  Eigen::Matrix3d k;
+  k << fx, 0.0, cx, 0.0, fy, cy, 0.0, 0.0, 1.0;
+  return k;
+}
+
 cv::Mat PinholeCamera::distortionCoefficients() const {
   cv::Mat coefficients(1, 5, CV_64F);
   for (int i = 0; i < 5; ++i) coefficients.at<double>(i) = distortion[static_cast<std::size_t>(i)];

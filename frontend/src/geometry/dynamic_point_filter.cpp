@@ -57,9 +57,7 @@ std::vector<bool> flagDynamicByDisplacement(const std::vector<Eigen::Vector3d>& 
 Eigen::Matrix3d fundamentalMatrix(const Eigen::Isometry3d& pose_2_in_1, const PinholeCamera& camera) {
   const Eigen::Isometry3d pose_21 = pose_2_in_1.inverse();  // x2 = R x1 + t
   if (!(pose_21.translation().norm() >= 1e-12)) return Eigen::Matrix3d::Zero();
-  Eigen::Matrix3d camera_matrix;
-  camera_matrix << camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1;
-  const Eigen::Matrix3d camera_inverse = camera_matrix.inverse();
+  const Eigen::Matrix3d camera_inverse = camera.intrinsicMatrix().inverse();
   return camera_inverse.transpose() * skew(pose_21.translation().normalized()) * pose_21.linear() * camera_inverse;
 }
 

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <stdexcept>
 
 #include "weighted_icp/core/named_values.h"
@@ -43,13 +44,18 @@ std::vector<bool> DynamicPointHistory::update(std::size_t frame, const std::vect
     throw std::invalid_argument("DynamicPointHistory::update: " + std::to_string(ids.size()) + " ids but " +
                                 std::to_string(pixels.size()) + " pixels");
   std::vector<bool> flags(ids.size(), false);
+  // Most points were last seen in the same few frames: one fundamental matrix per earlier frame.
+  std::map<std::size_t, Eigen::Matrix3d> fundamentals;
   for (std::size_t i = 0; i < ids.size(); ++i) {
     Seen& seen = points_[ids[i]];
     const bool known = seen.observed && seen.frame < frame && frame - seen.frame <= options_.forget_after_frames;
     if (known) {
       // Distance of the pixel to the epipolar line of the earlier pixel; NaN without translation.
-      const Eigen::Matrix3d fundamental = fundamentalMatrix(seen.pose_wc.inverse() * pose_wc, camera);
-      const double d = distanceToLine(fundamental * seen.pixel.homogeneous(), pixels[i]);
+      auto fundamental = fundamentals.find(seen.frame);
+      if (fundamental == fundamentals.end())
+        fundamental =
+            fundamentals.emplace(seen.frame, fundamentalMatrix(seen.pose_wc.inverse() * pose_wc, camera)).first;
+      const double d = distanceToLine(fundamental->second * seen.pixel.homogeneous(), pixels[i]);
       if (std::isfinite(d)) {
         if (seen.distances.empty()) {
           flags[i] = d > options_.max_first_px;

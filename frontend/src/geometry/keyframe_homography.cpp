@@ -98,8 +98,7 @@ Eigen::Matrix3d keyframeToFrameHomography(const PinholeCamera& camera, const Eig
   const Eigen::Vector3d translation = t_j - rotation * t_k;
   const Eigen::Vector3d normal_k = rotation_k * plane_world.normal;
   const double offset_k = plane_world.offset - plane_world.normal.dot(rotation_k.transpose() * t_k);
-  Eigen::Matrix3d k;
-  k << camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1;
+  const Eigen::Matrix3d k = camera.intrinsicMatrix();
   return k * (rotation - translation * normal_k.transpose() / offset_k) * k.inverse();
 }
 

@@ -20,6 +20,8 @@ struct PinholeCamera {
 
   /// @brief The 3x3 intrinsic matrix as OpenCV takes it.
   cv::Matx33d cameraMatrix() const;
+  /// @brief The same 3x3 intrinsic matrix K for Eigen arithmetic (homographies, fundamental matrices).
+  Eigen::Matrix3d intrinsicMatrix() const;
   /// @brief The distortion coefficients as a 1x5 CV_64F row (k1 k2 p1 p2 k3).
   cv::Mat distortionCoefficients() const;
   /// @brief True when any distortion coefficient is non-zero.
