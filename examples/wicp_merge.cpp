@@ -4,12 +4,15 @@
 //   trajectory_session_N.txt  the same, session N's frames only (unique timestamps)
 //   map.ply         the merged landmarks with weights
 //   graph.txt       the joint mini-map graph (sequential and merge edges)
+//   loops.txt       the loops between sessions the joint pose graph took (keyframe timestamps, relative pose)
 //   report.json     per session: merged or not, loops found and agreeing, its frame in the first one's
 // A session that shares no place with the others is left out and reported as
 // "no overlap" (exit 0); it is never forced in.
 
+#include <cstdint>
 #include <iomanip>
 #include <iostream>
+#include <map>
 #include <sstream>
 
 #include <boost/program_options.hpp>
@@ -36,6 +39,29 @@ mapping::BinaryVocabulary::ConstPtr loadVocabulary(std::string path) {
   return std::make_shared<const mapping::BinaryVocabulary>(mapping::BinaryVocabulary::load(path));
 }
 
+/// loops.txt: one loop between sessions a line, `query_session query_timestamp match_session match_timestamp tx ty tz
+/// qx qy qz qw inliers fitness` (the query keyframe's camera in the match keyframe's, as the joint pose graph took
+/// it), so that sessions with ground truth can tell a right loop from a wrong one.
+void writeLoops(const fs::path& path, const std::vector<mapping::Session>& sessions,
+                const mapping::SessionMerge& merge) {
+  constexpr std::uint64_t stride = mapping::MiniMapGraph::kSessionIdStride;
+  std::vector<std::map<frontend::KeyframeId, double>> timestamps(sessions.size());
+  for (std::size_t s = 0; s < sessions.size(); ++s)
+    for (const frontend::Keyframe& keyframe : sessions[s].keyframes) timestamps[s][keyframe.id] = keyframe.timestamp;
+  std::ostringstream out;
+  out << "# query_session query_timestamp match_session match_timestamp tx ty tz qx qy qz qw inliers fitness\n"
+      << std::setprecision(17);
+  for (const mapping::LoopConstraint& loop : merge.loops) {
+    const std::size_t qs = loop.query / stride, ms = loop.match / stride;
+    const Eigen::Quaterniond q(loop.query_in_match.linear());
+    const Eigen::Vector3d t = loop.query_in_match.translation();
+    out << qs << ' ' << timestamps[qs].at(loop.query % stride) << ' ' << ms << ' '
+        << timestamps[ms].at(loop.match % stride) << ' ' << t.x() << ' ' << t.y() << ' ' << t.z() << ' ' << q.x() << ' '
+        << q.y() << ' ' << q.z() << ' ' << q.w() << ' ' << loop.inliers << ' ' << loop.fitness << '\n';
+  }
+  tools::writeTextFile(path.string(), out.str());
+}
+
 tools::JsonObject makeReport(const std::vector<std::string>& folders, const mapping::SessionMerge& merge) {
   tools::JsonObject report;
   std::size_t merged = 0;
@@ -48,6 +74,7 @@ tools::JsonObject makeReport(const std::vector<std::string>& folders, const mapp
     if (s > 0)
       report.add(key + "_loops_found", link.loops_found)
           .add(key + "_loops_agreeing", link.loops_agreeing)
+          .add(key + "_loops_with_link_prior", link.loops_with_link_prior)
           .add(key + "_free_space_judged", link.free_space_judged)
           .add(key + "_free_space_violation", link.free_space_violation);
     if (link.merged) {
@@ -80,7 +107,7 @@ int main(int argc, char** argv) {
         "Merges SLAM sessions (the session/ folders of wicp_rgbd_slam) into the first one's frame: place\n"
         "recognition between their keyframes, verification with no prior (PnP, weighted ICP), at least\n"
         "--min-loops verified loops agreeing on the transform, one joint pose graph. DIR gets trajectory.txt\n"
-        "(every frame of every merged session, TUM format), map.ply, graph.txt and report.json, published\n"
+        "(every frame of every merged session, TUM format), map.ply, graph.txt, loops.txt and report.json, published\n"
         "in one rename. A session without overlap is left out and the report says \"no overlap\" (exit 0).\n"
         "Exit 1: an error (a missing or corrupt session file, named with its line), nothing written.\n"
         "Exit 2: bad command line. Options");
@@ -98,6 +125,12 @@ int main(int argc, char** argv) {
                                          ->default_value(options.max_free_space_violation),
          "largest fraction of landmark sightings that may lie in space the other session saw through (0-1; "
          "1 turns the check off; docs/mapping.md)")
+        ("agreeing-loops-only", "keep only the loops verified without prior that agree on the transform (do not "
+                                "verify the other keyframes again with the link as prior)")
+        ("odometry-information", tools::namedValue(&options.tracking_information, tools::parseOdometryInformation,
+                                                   tools::odometryInformationName),
+         "the joint pose graph's odometry edges within a session: information from tracking (reprojection "
+         "Hessians) or the fixed noise model")
         ("minimap-keyframes", tools::rangedValue(&options.keyframes_per_minimap, std::size_t{1}, std::size_t{100000})
                                   ->default_value(options.keyframes_per_minimap),
          "keyframes per mini-map of graph.txt (1-100000)");
@@ -105,6 +138,7 @@ int main(int argc, char** argv) {
     po::variables_map vm;
     if (!tools::parseCommandLine(argc, argv, description, vm)) return 0;
     if (folders.size() < 2) throw po::error("give at least two --session folders");
+    options.loops_with_link_prior = vm.count("agreeing-loops-only") == 0;
     io::AtomicFolder folder(out_dir, vm.count("overwrite") > 0);
     const auto vocabulary = loadVocabulary(vocabulary_path);
     std::vector<mapping::Session> sessions;
@@ -120,14 +154,17 @@ int main(int argc, char** argv) {
     io::saveLandmarkCloud(*toLandmarkCloud(merge.graph.mergedMap(), CovarianceWeight{}),
                           (folder.path() / "map.ply").string());
     mapping::saveMiniMapGraph(merge.graph, (folder.path() / "graph.txt").string());
+    writeLoops(folder.path() / "loops.txt", sessions, merge);
     const tools::JsonObject report = makeReport(folders, merge);
     tools::writeTextFile((folder.path() / "report.json").string(), report.str() + "\n");
     folder.publish();
     for (std::size_t s = 1; s < folders.size(); ++s)
       std::cout << folders[s] << ": " << (merge.sessions[s].merged ? "merged" : "no overlap, left out") << " ("
                 << merge.sessions[s].loops_agreeing << " agreeing of " << merge.sessions[s].loops_found
-                << " verified loops)\n";
-    std::cout << "wrote " << folder.target().string() << "/{trajectory.txt, map.ply, graph.txt, report.json}\n";
+                << " verified loops, " << merge.sessions[s].loops_with_link_prior
+                << " more verified with the link as prior)\n";
+    std::cout << "wrote " << folder.target().string()
+              << "/{trajectory.txt, map.ply, graph.txt, loops.txt, report.json}\n";
     return 0;
   });
 }

@@ -418,14 +418,6 @@ mapping::BowLoopDetector::Ptr makeDetector(const std::string& vocabulary_option,
 
 }  // namespace
 
-namespace {
-/// --odometry-information's names: the pose graph's odometry edges from tracking, or the fixed noise model.
-std::string odometryInformationName(bool from_tracking) { return from_tracking ? "tracking" : "model"; }
-bool parseOdometryInformation(const std::string& name) {
-  return weighted_icp::parseNamedValue(name, {true, false}, odometryInformationName, "odometry information");
-}
-}  // namespace
-
 int main(int argc, char** argv) {
   // First, so that a signal at any point stops the run cleanly, never killing
   // it between writing a file and publishing the folder.
@@ -481,8 +473,8 @@ int main(int argc, char** argv) {
         ("loop-edge", tools::namedValue(&loop_edge, mapping::parseLoopEdgeSource,
                                         [](mapping::LoopEdgeSource e) { return mapping::toString(e); }),
          "a verified loop's edge: PnP's pose (the weighted ICP checks it) or the ICP-refined pose")
-        ("odometry-information", tools::namedValue(&closing_options.odometry_from_tracking, parseOdometryInformation,
-                                                   odometryInformationName),
+        ("odometry-information", tools::namedValue(&closing_options.odometry_from_tracking, tools::parseOdometryInformation,
+                                                   tools::odometryInformationName),
          "the pose graph's odometry edges: information from tracking (reprojection Hessians) or the fixed noise model")
         ("global-ba", tools::rangedValue(&closing_options.global_bundle_adjustment_iterations, 0, 1000)
                           ->default_value(closing_options.global_bundle_adjustment_iterations),

@@ -147,6 +147,24 @@ TEST(WicpMerge, TwoRunsOfOneSequenceMergeAtTheirKnownRelativePose) {
   EXPECT_NE(report.find("all sessions merged"), std::string::npos) << report;
   EXPECT_TRUE(fs::is_regular_file(out / "map.ply"));
   EXPECT_TRUE(fs::is_regular_file(out / "graph.txt"));
+  EXPECT_NE(report.find("\"session_1_loops_with_link_prior\":"), std::string::npos) << report;
+  // loops.txt: a header, then one loop a line naming both sessions and keyframe timestamps the runs share.
+  std::istringstream loops(readAll(out / "loops.txt"));
+  std::string line;
+  ASSERT_TRUE(std::getline(loops, line));
+  EXPECT_EQ(line.rfind("# query_session", 0), 0u) << line;
+  std::size_t rows = 0;
+  for (; std::getline(loops, line); ++rows) {
+    std::istringstream fields(line);
+    int query_session = -1, match_session = -1;
+    double query_time = 0.0, match_time = 0.0;
+    ASSERT_TRUE(fields >> query_session >> query_time >> match_session >> match_time) << line;
+    EXPECT_EQ(query_session, 1);
+    EXPECT_EQ(match_session, 0);
+  }
+  const std::size_t accepted = report.find("\"loops_accepted\":" + std::to_string(rows) + ",");
+  EXPECT_NE(accepted, std::string::npos) << rows << " rows; " << report;
+  EXPECT_GT(rows, 0u);
   // Each run's world is its first camera: b's frame 20 must land where the truth puts it relative to frame 0.
   const simulation::SyntheticRgbdSequence truth(simulation::SyntheticRgbdOptions{});
   const Eigen::Isometry3d expected = truth.cameraToWorld(0).inverse() * truth.cameraToWorld(20);

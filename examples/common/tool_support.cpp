@@ -18,6 +18,7 @@
 
 #include <unistd.h>
 
+#include "weighted_icp/core/named_values.h"
 #include "weighted_icp/io/atomic_file.h"
 
 namespace weighted_icp::tools {
@@ -236,6 +237,12 @@ std::string findToolDataFile(const std::string& name) {
   for (const fs::path& candidate : {bin / name, bin.parent_path() / "share" / "weighted_icp" / name})
     if (fs::is_regular_file(candidate, error)) return candidate.string();
   return {};
+}
+
+std::string odometryInformationName(bool from_tracking) { return from_tracking ? "tracking" : "model"; }
+
+bool parseOdometryInformation(const std::string& name) {
+  return parseNamedValue(name, {true, false}, odometryInformationName, "odometry information");
 }
 
 }  // namespace weighted_icp::tools

@@ -211,4 +211,12 @@ io::AtomicFolder openOutputFolder(const std::string& out_dir, bool overwrite);
 /// @return its path, or empty when neither exists
 std::string findToolDataFile(const std::string& name);
 
+/// @brief --odometry-information's names (wicp_rgbd_slam, wicp_merge): the pose graph's odometry edges with
+/// information from tracking ("tracking") or from the fixed noise model ("model").
+/// @param from_tracking the option's value
+std::string odometryInformationName(bool from_tracking);
+/// @brief Parses --odometry-information's value; any other name throws, listing the accepted ones.
+/// @param name "tracking" or "model"
+bool parseOdometryInformation(const std::string& name);
+
 }  // namespace weighted_icp::tools

@@ -4,6 +4,9 @@
 #include "weighted_icp/mapping/keyframe_snapshot.h"
 
 #include <algorithm>
+#include <iterator>
+#include <stdexcept>
+#include <string>
 
 namespace weighted_icp::mapping {
 
@@ -25,6 +28,18 @@ std::set<frontend::KeyframeId> KeyframeSnapshot::covisible(frontend::KeyframeId 
       if (o.keyframe != keyframe) result.insert(o.keyframe);
   }
   return result;
+}
+
+double KeyframeSnapshot::pathLength(frontend::KeyframeId a, frontend::KeyframeId b) const {
+  const auto first = keyframes.find(std::min(a, b));
+  const auto last = keyframes.find(std::max(a, b));
+  if (first == keyframes.end() || last == keyframes.end())
+    throw std::invalid_argument("KeyframeSnapshot::pathLength: unknown keyframe " +
+                                std::to_string(first == keyframes.end() ? std::min(a, b) : std::max(a, b)));
+  double path = 0.0;
+  for (auto it = first; it != last; ++it)
+    path += (std::next(it)->second.pose_wc.translation() - it->second.pose_wc.translation()).norm();
+  return path;
 }
 
 std::vector<frontend::KeyframeId> KeyframeSnapshot::neighbourhood(frontend::KeyframeId keyframe,

@@ -305,11 +305,7 @@ LoopPrior odometryPrior(const KeyframeSnapshot& map, frontend::KeyframeId query,
   if (q == map.keyframes.end() || m == map.keyframes.end())
     throw std::invalid_argument("odometryPrior: unknown keyframe " +
                                 std::to_string(q == map.keyframes.end() ? query : match));
-  double path = 0.0;
-  const auto first = map.keyframes.find(std::min(query, match));
-  const auto last = map.keyframes.find(std::max(query, match));
-  for (auto it = first; it != last; ++it)
-    path += (std::next(it)->second.pose_wc.translation() - it->second.pose_wc.translation()).norm();
+  const double path = map.pathLength(query, match);
   LoopPrior prior;
   prior.expected_query_in_match = m->second.pose_wc.inverse() * q->second.pose_wc;
   prior.max_translation_m = bounds.translation_floor_m + bounds.translation_per_metre * path;

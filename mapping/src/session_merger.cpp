@@ -2,13 +2,17 @@
 #include "weighted_icp/mapping/session_merger.h"
 
 #include <cmath>
+#include <functional>
+#include <limits>
 #include <map>
 #include <memory>
 #include <optional>
+#include <set>
 #include <stdexcept>
 
 #include "weighted_icp/mapping/keyframe_snapshot.h"
 #include "weighted_icp/mapping/place_recognizer.h"
+#include "weighted_icp/mapping/tracking_information.h"
 
 namespace weighted_icp::mapping {
 
@@ -29,20 +33,27 @@ Prepared prepare(const Session& session, const BinaryVocabulary& vocabulary) {
   return prepared;
 }
 
-/// Verified loops from `query`'s keyframes to `match`'s (query = query keyframe, match = match keyframe, local ids).
+/// Gives the prior of a candidate (query keyframe, match keyframe), or none.
+using PriorOf = std::function<std::optional<LoopPrior>(frontend::KeyframeId, frontend::KeyframeId)>;
+
+/// Verified loops from `query`'s keyframes to `match`'s (query = query keyframe, match = match keyframe, local ids),
+/// at most one per query keyframe; the keyframes in `skip` are not queried.
 std::vector<LoopConstraint> verifiedLoops(const Prepared& query, const Prepared& match,
                                           const BinaryVocabulary::ConstPtr& vocabulary, const LoopVerifier& verifier,
-                                          const SessionMergeOptions& options) {
+                                          const SessionMergeOptions& options, const PriorOf& prior_of,
+                                          const std::set<frontend::KeyframeId>& skip = {}) {
   PlaceRecognitionOptions recognition;
   recognition.exclude_recent = 0;  // the other session's ids are unrelated to the query's
   PlaceRecognizer recognizer(vocabulary, recognition);
   for (const auto& [id, bow] : match.bows) recognizer.add(id, bow);
   std::vector<LoopConstraint> loops;
   for (const auto& [id, bow] : query.bows) {
+    if (skip.count(id)) continue;
     // An id no keyframe of `match` has, so that no candidate is excluded as "recent".
     const auto ranked = recognizer.rank(kStride + id, bow, {});
     for (std::size_t c = 0; c < ranked.size() && c < options.candidates_per_keyframe; ++c) {
-      LoopVerification result = verifier.verify(query.snapshot, id, match.snapshot, ranked[c].keyframe, std::nullopt);
+      LoopVerification result =
+          verifier.verify(query.snapshot, id, match.snapshot, ranked[c].keyframe, prior_of(id, ranked[c].keyframe));
       if (!result.accepted) continue;
       result.constraint.score = ranked[c].score;
       loops.push_back(result.constraint);
@@ -88,6 +99,28 @@ std::vector<LoopConstraint> agreeingLoops(const std::vector<LoopConstraint>& loo
   return best;
 }
 
+/// The prior a link gives a candidate once two sessions are linked: the relative pose predicted by the agreeing
+/// loop nearest to it (path travelled in both sessions from that loop's keyframes), with bounds growing with that
+/// path as within one session (odometryPrior).
+LoopPrior linkPrior(const Prepared& query, frontend::KeyframeId q, const Prepared& match, frontend::KeyframeId c,
+                    const std::vector<LoopConstraint>& agreeing, const DriftBounds& bounds) {
+  double nearest_path = std::numeric_limits<double>::infinity();
+  const LoopConstraint* nearest = &agreeing.front();
+  for (const LoopConstraint& loop : agreeing) {
+    const double path = query.snapshot.pathLength(q, loop.query) + match.snapshot.pathLength(c, loop.match);
+    if (path < nearest_path) {
+      nearest_path = path;
+      nearest = &loop;
+    }
+  }
+  LoopPrior prior;
+  prior.expected_query_in_match = match.snapshot.keyframes.at(c).pose_wc.inverse() *
+                                  worldTransform(*nearest, query, match) * query.snapshot.keyframes.at(q).pose_wc;
+  prior.max_translation_m = bounds.translation_floor_m + bounds.translation_per_metre * nearest_path;
+  prior.max_rotation_deg = bounds.rotation_floor_deg + bounds.rotation_per_metre_deg * nearest_path;
+  return prior;
+}
+
 /// The free-space check both ways (each map's landmarks against the other's keyframes), recorded in `link`; true
 /// when the violations stay within the options' bound.
 bool consistent(const Prepared& query, const PinholeCamera& query_camera, const Prepared& match,
@@ -104,6 +137,24 @@ bool consistent(const Prepared& query, const PinholeCamera& query_camera, const 
   return both.violationRatio() <= options.max_free_space_violation;
 }
 
+/// Once two sessions are linked they are verified again like one session: each query keyframe no agreeing loop
+/// holds, with the link's prior (linkPrior), so that the plain-ICP check of a loop within a session applies and
+/// loops far from the first ones bring the drift between them to the pose graph. Without a prior, the sparse
+/// clouds of a larger room made the weighted check refuse most true loops (LoopVerifier::verify).
+std::vector<LoopConstraint> loopsWithLinkPrior(const Prepared& query, const Prepared& match,
+                                               const std::vector<LoopConstraint>& agreeing,
+                                               const BinaryVocabulary::ConstPtr& vocabulary,
+                                               const LoopVerifier& verifier, const SessionMergeOptions& options) {
+  std::set<frontend::KeyframeId> linked;
+  for (const LoopConstraint& loop : agreeing) linked.insert(loop.query);
+  return verifiedLoops(
+      query, match, vocabulary, verifier, options,
+      [&](frontend::KeyframeId q, frontend::KeyframeId c) {
+        return std::optional<LoopPrior>(linkPrior(query, q, match, c, agreeing, options.link_drift));
+      },
+      linked);
+}
+
 /// Links every session it can to the merged ones (the first, then those linked to it), until none is left.
 void linkSessions(const std::vector<Prepared>& prepared, const BinaryVocabulary::ConstPtr& vocabulary,
                   const SessionMergeOptions& options, const std::vector<Session>& sessions, SessionMerge& merge) {
@@ -115,7 +166,8 @@ void linkSessions(const std::vector<Prepared>& prepared, const BinaryVocabulary:
       const LoopVerifier verifier(sessions[s].camera, options.verification);  // PnP of the query's pixels
       for (std::size_t m = 0; m < prepared.size() && !link.merged; ++m) {
         if (m == s || !merge.sessions[m].merged) continue;
-        const auto loops = verifiedLoops(prepared[s], prepared[m], vocabulary, verifier, options);
+        const auto loops = verifiedLoops(prepared[s], prepared[m], vocabulary, verifier, options,
+                                         [](frontend::KeyframeId, frontend::KeyframeId) { return std::nullopt; });
         Eigen::Isometry3d s_in_m = Eigen::Isometry3d::Identity();
         const auto agreeing = agreeingLoops(loops, prepared[s], prepared[m], options, s_in_m);
         link.loops_found += loops.size();
@@ -126,7 +178,13 @@ void linkSessions(const std::vector<Prepared>& prepared, const BinaryVocabulary:
         link.merged = progress = true;
         link.linked_to = m;
         link.world_in_first = merge.sessions[m].world_in_first * s_in_m;
-        for (LoopConstraint loop : agreeing) {
+        std::vector<LoopConstraint> joined = agreeing;
+        if (options.loops_with_link_prior) {
+          const auto added = loopsWithLinkPrior(prepared[s], prepared[m], agreeing, vocabulary, verifier, options);
+          link.loops_with_link_prior = added.size();
+          joined.insert(joined.end(), added.begin(), added.end());
+        }
+        for (LoopConstraint loop : joined) {
           loop.query += s * kStride;
           loop.match += m * kStride;
           merge.loops.push_back(loop);
@@ -136,25 +194,42 @@ void linkSessions(const std::vector<Prepared>& prepared, const BinaryVocabulary:
   }
 }
 
+/// Per odometry edge of a session (entry i: its keyframes i-1 -> i in id order; entry 0 empty), the relative pose's
+/// covariance from tracking where the landmarks hold it; all empty when the options use the noise model only.
+std::vector<std::optional<Covariance6d>> trackingCovariances(const Prepared& session, const PinholeCamera& camera,
+                                                             const SessionMergeOptions& options) {
+  if (!options.tracking_information) return {};
+  std::vector<frontend::KeyframeId> ids;
+  for (const auto& entry : session.snapshot.keyframes) ids.push_back(entry.first);
+  return odometryEdgeCovariances(session.snapshot, ids, camera, options.tracking);
+}
+
 /// One pose graph over all merged keyframes (odometry within sessions, the agreeing loops between them);
 /// returns the optimised poses by offset id.
 std::map<frontend::KeyframeId, Eigen::Isometry3d> optimise(const std::vector<Prepared>& prepared,
+                                                           const std::vector<Session>& sessions,
                                                            const SessionMergeOptions& options, SessionMerge& merge) {
   PoseGraph graph;
   bool first = true;
   for (std::size_t s = 0; s < prepared.size(); ++s) {
     if (!merge.sessions[s].merged) continue;
+    const auto covariances = trackingCovariances(prepared[s], sessions[s].camera, options);
     const frontend::Keyframe* previous = nullptr;
+    std::size_t i = 0;
     for (const auto& [id, keyframe] : prepared[s].snapshot.keyframes) {
       graph.addNode(s * kStride + id, merge.sessions[s].world_in_first * keyframe.pose_wc, first);
       first = false;
       if (previous) {
         const Eigen::Isometry3d relative = previous->pose_wc.inverse() * keyframe.pose_wc;
+        const bool across_segments = previous->segment != keyframe.segment;
+        const bool tracked = !across_segments && i < covariances.size() && covariances[i];
         graph.addEdge({s * kStride + previous->id, s * kStride + id, relative,
-                       odometryInformation(relative, options.odometry, previous->segment != keyframe.segment),
+                       tracked ? relativeOdometryInformation(*covariances[i], options.tracking)
+                               : odometryInformation(relative, options.odometry, across_segments),
                        PoseGraphEdgeKind::Odometry});
       }
       previous = &keyframe;
+      ++i;
     }
   }
   for (const LoopConstraint& loop : merge.loops) graph.addEdge(loopEdge(loop));
@@ -243,7 +318,7 @@ SessionMerge mergeSessions(const std::vector<Session>& sessions, const BinaryVoc
   merge.sessions.resize(sessions.size());
   merge.session_trajectories.resize(sessions.size());
   linkSessions(prepared, vocabulary, options, sessions, merge);
-  const auto poses = optimise(prepared, options, merge);
+  const auto poses = optimise(prepared, sessions, options, merge);
   buildGraphAndTrajectory(sessions, options, poses, merge);
   return merge;
 }

@@ -37,6 +37,12 @@ struct KeyframeSnapshot {
   /// @param radius how many keyframes before and after
   std::vector<frontend::KeyframeId> neighbourhood(frontend::KeyframeId keyframe, std::size_t radius) const;
 
+  /// @brief The distance travelled between two keyframes: the sum of the translations between consecutive
+  /// keyframes (in id order) from one to the other.
+  /// @param a a keyframe id; unknown throws std::invalid_argument
+  /// @param b a keyframe id; unknown throws std::invalid_argument
+  double pathLength(frontend::KeyframeId a, frontend::KeyframeId b) const;
+
   /// @brief The landmark model of the points seen from `frames`: those frames' poses, and each point any of them
   /// observes with only their observations (as LandmarkMap::miniMap), in point-id order; landmark ids are
   /// map point ids.

@@ -16,6 +16,7 @@
 #include "weighted_icp/mapping/minimap_graph.h"
 #include "weighted_icp/mapping/pose_graph.h"
 #include "weighted_icp/mapping/session.h"
+#include "weighted_icp/mapping/tracking_information.h"
 
 namespace weighted_icp::mapping {
 
@@ -29,6 +30,12 @@ struct SessionMergeOptions {
   double agreement_translation_m = 0.10, agreement_rotation_deg = 5.0;
   /// @brief Geometric verification (PnP from any starting pose, weighted ICP check).
   LoopVerificationOptions verification;
+  /// @brief Once a session is linked (agreeing loops, free space), verify its other keyframes again with the link
+  /// as prior, as loops within one session are: the relative pose the nearest agreeing loop predicts, within
+  /// `link_drift` of the path travelled from that loop's keyframes in both sessions.
+  bool loops_with_link_prior = true;
+  /// @brief How far a loop verified with the link's prior may be from the pose it predicts.
+  DriftBounds link_drift;
   /// @brief The two maps in one frame must not contradict each other: at most this fraction of the landmarks
   /// judged by checkFreeSpace (both ways) may lie, by the majority of their sightings, in space the other
   /// session's keyframes saw through. Chosen between correct merges (at most 0.22 % measured: synthetic, a larger
@@ -37,7 +44,12 @@ struct SessionMergeOptions {
   double max_free_space_violation = 0.02;
   /// @brief How checkFreeSpace judges a sighting.
   FreeSpaceOptions free_space;
-  /// @brief Information of the odometry edges within a session.
+  /// @brief Odometry edges within a session take their information from tracking (the landmarks both keyframes
+  /// observe, as a loop closure within one session does by default); false: the noise model for every edge.
+  bool tracking_information = true;
+  /// @brief How tracking's information is estimated.
+  TrackingInformationOptions tracking;
+  /// @brief Information of the odometry edges tracking does not hold (across a tracking loss, too few landmarks).
   OdometryNoiseModel odometry;
   /// @brief The joint pose graph's solver and gate.
   PoseGraphOptions pose_graph;
@@ -53,6 +65,8 @@ struct SessionLink {
   std::size_t linked_to = 0;
   /// @brief Verified loops found against the already merged sessions, and those that agree on the transform.
   std::size_t loops_found = 0, loops_agreeing = 0;
+  /// @brief Loops added once linked, verified with the link as prior (SessionMergeOptions::loops_with_link_prior).
+  std::size_t loops_with_link_prior = 0;
   /// @brief The free-space check of the agreed transform against the session it was tested with (the one it
   /// joined, or the last one tried): landmarks judged both ways and the fraction in the other's free space.
   std::size_t free_space_judged = 0;

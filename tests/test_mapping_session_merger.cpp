@@ -1,0 +1,121 @@
+// mergeSessions at the library level: two sessions of the larger room (true poses), the second one's world moved
+// elsewhere; the link found by agreeing loops, then the other keyframes verified with the link as prior, every loop
+// right. And KeyframeSnapshot::pathLength, which bounds that prior.
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <stdexcept>
+#include <utility>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "mapping_fixtures.h"
+#include "weighted_icp/mapping/session.h"
+#include "weighted_icp/mapping/session_merger.h"
+
+namespace weighted_icp::mapping {
+namespace {
+
+constexpr double kDegree = M_PI / 180.0;
+constexpr std::uint64_t kStride = MiniMapGraph::kSessionIdStride;
+
+/// Keyframes at their true poses as a saved session holds them (one frame per keyframe), the world moved by
+/// `motion` (a session started elsewhere).
+Session asSession(const testing::SyntheticKeyframes& data, const Eigen::Isometry3d& motion) {
+  Session session;
+  session.camera = data.camera;
+  for (const auto& [id, keyframe] : data.snapshot.keyframes) {
+    session.keyframes.push_back(keyframe);
+    session.keyframes.back().pose_wc = motion * keyframe.pose_wc;
+    session.frames.push_back({keyframe.timestamp, id, Eigen::Isometry3d::Identity()});
+  }
+  for (const auto& [id, point] : data.snapshot.points) {
+    session.points.push_back(point);
+    session.points.back().position = motion * point.position;
+    session.points.back().covariance = motion.linear() * point.covariance * motion.linear().transpose();
+  }
+  session.validate();
+  return session;
+}
+
+struct LargeRoomSessions {
+  std::vector<Session> sessions;
+  testing::SyntheticKeyframes first, second;
+  Eigen::Isometry3d second_world_in_first;
+};
+
+/// The larger room's first 220 frames, and frames 200-430: the two overlap where one ends and the other starts,
+/// and again where the camera comes back to the room's start at the end of the lap.
+const LargeRoomSessions& largeRoomSessions() {
+  static const LargeRoomSessions data = [] {
+    constexpr double kLargeRoom = 2.0, kLargeLoop = 360.0;  // a lap of 360 frames
+    constexpr std::size_t kEvery = 9;
+    LargeRoomSessions d{
+        {},
+        testing::syntheticKeyframes(7, false, kLargeLoop, testing::everyNth(221, kEvery), kLargeRoom),
+        testing::syntheticKeyframes(7, false, kLargeLoop, testing::everyNth(431, kEvery, 200), kLargeRoom),
+        Eigen::Isometry3d::Identity()};
+    Eigen::Isometry3d motion = Eigen::Isometry3d::Identity();
+    motion.linear() = Eigen::AngleAxisd(120.0 * kDegree, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    motion.translation() = Eigen::Vector3d(2.0, -1.0, 0.2);
+    d.sessions = {asSession(d.first, Eigen::Isometry3d::Identity()), asSession(d.second, motion)};
+    d.second_world_in_first = motion.inverse();
+    return d;
+  }();
+  return data;
+}
+
+/// Largest error of the merge's loops against the true relative poses (metres, degrees).
+std::pair<double, double> worstLoopError(const SessionMerge& merge, const LargeRoomSessions& data) {
+  double metres = 0.0, degrees = 0.0;
+  for (const LoopConstraint& loop : merge.loops) {
+    const auto& query = data.second.snapshot.keyframes.at(loop.query % kStride);
+    const auto& match = data.first.snapshot.keyframes.at(loop.match % kStride);
+    const Eigen::Isometry3d error = (match.pose_wc.inverse() * query.pose_wc).inverse() * loop.query_in_match;
+    metres = std::max(metres, error.translation().norm());
+    degrees = std::max(degrees, Eigen::AngleAxisd(error.linear()).angle() / kDegree);
+  }
+  return {metres, degrees};
+}
+
+TEST(SessionMerger, VerifiesTheOtherKeyframesAgainWithTheLinkAsPrior) {
+  const LargeRoomSessions& data = largeRoomSessions();
+  SessionMergeOptions options;
+  // Loops agree only within 1 cm / 0.2 degrees: the link rests on fewer of them, the others are left to the second
+  // pass (as the weighted check without a prior leaves them in a larger room, LoopVerification tests).
+  options.agreement_translation_m = 0.01;
+  options.agreement_rotation_deg = 0.2;
+  options.loops_with_link_prior = false;
+  const SessionMerge agreeing_only = mergeSessions(data.sessions, testing::trainedVocabulary(), options);
+  ASSERT_TRUE(agreeing_only.sessions[1].merged) << "the first pass must link the sessions for the test to say anything";
+  EXPECT_EQ(agreeing_only.sessions[1].loops_with_link_prior, 0u);
+
+  options.loops_with_link_prior = true;
+  const SessionMerge merge = mergeSessions(data.sessions, testing::trainedVocabulary(), options);
+  ASSERT_TRUE(merge.sessions[1].merged);
+  EXPECT_GT(merge.sessions[1].loops_with_link_prior, 0u) << "no keyframe was verified again";
+  EXPECT_EQ(merge.loops.size(), agreeing_only.loops.size() + merge.sessions[1].loops_with_link_prior);
+  const auto [metres, degrees] = worstLoopError(merge, data);
+  EXPECT_LT(metres, 0.03);
+  EXPECT_LT(degrees, 0.5);
+  // The second session's world lands where the truth puts it.
+  const Eigen::Isometry3d error = data.second_world_in_first.inverse() * merge.sessions[1].world_in_first;
+  EXPECT_LT(error.translation().norm(), 0.02);
+  EXPECT_LT(Eigen::AngleAxisd(error.linear()).angle() / kDegree, 0.5);
+}
+
+TEST(KeyframeSnapshot, PathLengthSumsTheStepsBetweenTwoKeyframesEitherWay) {
+  const testing::SyntheticKeyframes first = testing::syntheticKeyframes(7, false, 180.0, {0, 6, 12, 18});
+  const auto& keyframes = first.snapshot.keyframes;
+  const double steps = (keyframes.at(1).pose_wc.translation() - keyframes.at(0).pose_wc.translation()).norm() +
+                       (keyframes.at(2).pose_wc.translation() - keyframes.at(1).pose_wc.translation()).norm();
+  EXPECT_GT(steps, 0.0);
+  EXPECT_DOUBLE_EQ(first.snapshot.pathLength(0, 2), steps);
+  EXPECT_DOUBLE_EQ(first.snapshot.pathLength(2, 0), steps);
+  EXPECT_EQ(first.snapshot.pathLength(3, 3), 0.0);
+  EXPECT_THROW(first.snapshot.pathLength(0, 100000), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace weighted_icp::mapping
