@@ -4,7 +4,7 @@
 //   trajectory_session_N.txt  the same, session N's frames only (unique timestamps)
 //   map.ply         the merged landmarks with weights
 //   graph.txt       the joint mini-map graph (sequential and merge edges)
-//   loops.txt       the loops between sessions the joint pose graph took (keyframe timestamps, relative pose)
+//   loops.txt       the verified loops between sessions given to the joint pose graph (timestamps, relative pose)
 //   report.json     per session: merged or not, loops found and agreeing, its frame in the first one's
 // A session that shares no place with the others is left out and reported as
 // "no overlap" (exit 0); it is never forced in.
@@ -40,7 +40,7 @@ mapping::BinaryVocabulary::ConstPtr loadVocabulary(std::string path) {
 }
 
 /// loops.txt: one loop between sessions a line, `query_session query_timestamp match_session match_timestamp tx ty tz
-/// qx qy qz qw inliers fitness` (the query keyframe's camera in the match keyframe's, as the joint pose graph took
+/// qx qy qz qw inliers fitness` (the query keyframe's camera in the match keyframe's, as the joint pose graph was given
 /// it), so that sessions with ground truth can tell a right loop from a wrong one.
 void writeLoops(const fs::path& path, const std::vector<mapping::Session>& sessions,
                 const mapping::SessionMerge& merge) {
@@ -95,6 +95,22 @@ tools::JsonObject makeReport(const std::vector<std::string>& folders, const mapp
   return report;
 }
 
+/// Every output file into the (unpublished) folder `dir`.
+void writeOutputs(const fs::path& dir, const std::vector<std::string>& folders,
+                  const std::vector<mapping::Session>& sessions, const mapping::SessionMerge& merge) {
+  io::writeTrajectory(merge.trajectory, (dir / "trajectory.txt").string());
+  // Per session too: runs of one sequence that overlap in time repeat timestamps in trajectory.txt.
+  for (std::size_t s = 0; s < sessions.size(); ++s)
+    if (merge.sessions[s].merged)
+      io::writeTrajectory(merge.session_trajectories[s],
+                          (dir / ("trajectory_session_" + std::to_string(s) + ".txt")).string());
+  io::saveLandmarkCloud(*toLandmarkCloud(merge.graph.mergedMap(), CovarianceWeight{}), (dir / "map.ply").string());
+  mapping::saveMiniMapGraph(merge.graph, (dir / "graph.txt").string());
+  writeLoops(dir / "loops.txt", sessions, merge);
+  const tools::JsonObject report = makeReport(folders, merge);
+  tools::writeTextFile((dir / "report.json").string(), report.str() + "\n");
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -106,7 +122,8 @@ int main(int argc, char** argv) {
         "wicp_merge --session A --session B [--session C ...] --out DIR [--vocabulary FILE] [--overwrite]\n"
         "Merges SLAM sessions (the session/ folders of wicp_rgbd_slam) into the first one's frame: place\n"
         "recognition between their keyframes, verification with no prior (PnP, weighted ICP), at least\n"
-        "--min-loops verified loops agreeing on the transform, one joint pose graph. DIR gets trajectory.txt\n"
+        "--min-loops verified loops agreeing on the transform, a free-space check, then the other keyframes\n"
+        "verified again with the link as prior, one joint pose graph. DIR gets trajectory.txt\n"
         "(every frame of every merged session, TUM format), map.ply, graph.txt, loops.txt and report.json, published\n"
         "in one rename. A session without overlap is left out and the report says \"no overlap\" (exit 0).\n"
         "Exit 1: an error (a missing or corrupt session file, named with its line), nothing written.\n"
@@ -145,18 +162,7 @@ int main(int argc, char** argv) {
     for (const std::string& path : folders) sessions.push_back(mapping::loadSession(path));
 
     const mapping::SessionMerge merge = mapping::mergeSessions(sessions, vocabulary, options);
-    io::writeTrajectory(merge.trajectory, (folder.path() / "trajectory.txt").string());
-    // Per session too: runs of one sequence that overlap in time repeat timestamps in trajectory.txt.
-    for (std::size_t s = 0; s < sessions.size(); ++s)
-      if (merge.sessions[s].merged)
-        io::writeTrajectory(merge.session_trajectories[s],
-                            (folder.path() / ("trajectory_session_" + std::to_string(s) + ".txt")).string());
-    io::saveLandmarkCloud(*toLandmarkCloud(merge.graph.mergedMap(), CovarianceWeight{}),
-                          (folder.path() / "map.ply").string());
-    mapping::saveMiniMapGraph(merge.graph, (folder.path() / "graph.txt").string());
-    writeLoops(folder.path() / "loops.txt", sessions, merge);
-    const tools::JsonObject report = makeReport(folders, merge);
-    tools::writeTextFile((folder.path() / "report.json").string(), report.str() + "\n");
+    writeOutputs(folder.path(), folders, sessions, merge);
     folder.publish();
     for (std::size_t s = 1; s < folders.size(); ++s)
       std::cout << folders[s] << ": " << (merge.sessions[s].merged ? "merged" : "no overlap, left out") << " ("
