@@ -29,13 +29,16 @@ void removeScratch() {
 }  // namespace
 
 const std::filesystem::path& scratchFolder() {
-  static const std::filesystem::path folder = [] {
-    auto path = std::filesystem::temp_directory_path() / ("weighted_icp_fuzz_" + std::to_string(::getpid()));
-    std::filesystem::create_directories(path);
+  // Never destroyed: removeScratch runs at exit, and a static path would be destroyed before it (its destructor
+  // is registered after the atexit call made while constructing it), leaving every folder behind.
+  static const std::filesystem::path* const folder = [] {
+    auto* path = new std::filesystem::path(std::filesystem::temp_directory_path() /
+                                           ("weighted_icp_fuzz_" + std::to_string(::getpid())));
+    std::filesystem::create_directories(*path);
     std::atexit(removeScratch);
     return path;
   }();
-  return folder;
+  return *folder;
 }
 
 std::string writeInput(const std::string& name, std::string_view bytes) {
