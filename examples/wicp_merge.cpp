@@ -13,6 +13,7 @@
 #include <iomanip>
 #include <iostream>
 #include <map>
+#include <memory>
 #include <sstream>
 
 #include <boost/program_options.hpp>
@@ -161,7 +162,19 @@ int main(int argc, char** argv) {
     std::vector<mapping::Session> sessions;
     for (const std::string& path : folders) sessions.push_back(mapping::loadSession(path));
 
+    // One progress line per verification pass, on stderr.
+    std::unique_ptr<tools::Progress> progress;
+    std::string current_pass;
+    options.progress = [&](const std::string& pass, std::size_t done, std::size_t total) {
+      if (pass != current_pass) {
+        if (progress) progress->finish();
+        current_pass = pass;
+        progress = std::make_unique<tools::Progress>("verifying " + pass, total);
+      }
+      if (done > 0) progress->step();
+    };
     const mapping::SessionMerge merge = mapping::mergeSessions(sessions, vocabulary, options);
+    if (progress) progress->finish();
     writeOutputs(folder.path(), folders, sessions, merge);
     folder.publish();
     for (std::size_t s = 1; s < folders.size(); ++s)

@@ -4,7 +4,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <map>
 #include <stdexcept>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -92,7 +94,22 @@ TEST(SessionMerger, VerifiesTheOtherKeyframesAgainWithTheLinkAsPrior) {
   EXPECT_EQ(agreeing_only.sessions[1].loops_with_link_prior, 0u);
 
   options.loops_with_link_prior = true;
+  std::map<std::string, std::pair<std::size_t, std::size_t>> passes;  // pass -> last (done, total)
+  options.progress = [&](const std::string& pass, std::size_t done, std::size_t total) {
+    EXPECT_LE(done, total) << pass;
+    passes[pass] = {done, total};
+  };
   const SessionMerge merge = mergeSessions(data.sessions, testing::trainedVocabulary(), options);
+  // Progress: both passes reported, each to its end; the second one over the keyframes no agreeing loop holds.
+  ASSERT_EQ(passes.size(), 2u);
+  const auto first = passes.find("session 1 against 0");
+  const auto second = passes.find("session 1 against 0 with the link as prior");
+  ASSERT_NE(first, passes.end());
+  ASSERT_NE(second, passes.end());
+  EXPECT_EQ(first->second.first, first->second.second);
+  EXPECT_EQ(first->second.second, data.sessions[1].keyframes.size());
+  EXPECT_EQ(second->second.first, second->second.second);
+  EXPECT_LT(second->second.second, first->second.second);
   ASSERT_TRUE(merge.sessions[1].merged);
   EXPECT_GT(merge.sessions[1].loops_with_link_prior, 0u) << "no keyframe was verified again";
   EXPECT_EQ(merge.loops.size(), agreeing_only.loops.size() + merge.sessions[1].loops_with_link_prior);

@@ -9,6 +9,7 @@
 #include <optional>
 #include <set>
 #include <stdexcept>
+#include <string>
 
 #include "weighted_icp/mapping/keyframe_snapshot.h"
 #include "weighted_icp/mapping/place_recognizer.h"
@@ -41,14 +42,17 @@ using PriorOf = std::function<std::optional<LoopPrior>(frontend::KeyframeId, fro
 std::vector<LoopConstraint> verifiedLoops(const Prepared& query, const Prepared& match,
                                           const BinaryVocabulary::ConstPtr& vocabulary, const LoopVerifier& verifier,
                                           const SessionMergeOptions& options, const PriorOf& prior_of,
-                                          const std::set<frontend::KeyframeId>& skip = {}) {
+                                          const std::string& pass, const std::set<frontend::KeyframeId>& skip = {}) {
   PlaceRecognitionOptions recognition;
   recognition.exclude_recent = 0;  // the other session's ids are unrelated to the query's
   PlaceRecognizer recognizer(vocabulary, recognition);
   for (const auto& [id, bow] : match.bows) recognizer.add(id, bow);
   std::vector<LoopConstraint> loops;
+  const std::size_t total = query.bows.size() - skip.size();
+  std::size_t done = 0;
   for (const auto& [id, bow] : query.bows) {
     if (skip.count(id)) continue;
+    if (options.progress) options.progress(pass, done++, total);
     // An id no keyframe of `match` has, so that no candidate is excluded as "recent".
     const auto ranked = recognizer.rank(kStride + id, bow, {});
     for (std::size_t c = 0; c < ranked.size() && c < options.candidates_per_keyframe; ++c) {
@@ -60,6 +64,7 @@ std::vector<LoopConstraint> verifiedLoops(const Prepared& query, const Prepared&
       break;
     }
   }
+  if (options.progress) options.progress(pass, total, total);
   return loops;
 }
 
@@ -144,7 +149,8 @@ bool consistent(const Prepared& query, const PinholeCamera& query_camera, const 
 std::vector<LoopConstraint> loopsWithLinkPrior(const Prepared& query, const Prepared& match,
                                                const std::vector<LoopConstraint>& agreeing,
                                                const BinaryVocabulary::ConstPtr& vocabulary,
-                                               const LoopVerifier& verifier, const SessionMergeOptions& options) {
+                                               const LoopVerifier& verifier, const SessionMergeOptions& options,
+                                               const std::string& pass) {
   std::set<frontend::KeyframeId> linked;
   for (const LoopConstraint& loop : agreeing) linked.insert(loop.query);
   return verifiedLoops(
@@ -152,7 +158,7 @@ std::vector<LoopConstraint> loopsWithLinkPrior(const Prepared& query, const Prep
       [&](frontend::KeyframeId q, frontend::KeyframeId c) {
         return std::optional<LoopPrior>(linkPrior(query, q, match, c, agreeing, options.link_drift));
       },
-      linked);
+      pass, linked);
 }
 
 /// Links every session it can to the merged ones (the first, then those linked to it), until none is left.
@@ -166,8 +172,10 @@ void linkSessions(const std::vector<Prepared>& prepared, const BinaryVocabulary:
       const LoopVerifier verifier(sessions[s].camera, options.verification);  // PnP of the query's pixels
       for (std::size_t m = 0; m < prepared.size() && !link.merged; ++m) {
         if (m == s || !merge.sessions[m].merged) continue;
-        const auto loops = verifiedLoops(prepared[s], prepared[m], vocabulary, verifier, options,
-                                         [](frontend::KeyframeId, frontend::KeyframeId) { return std::nullopt; });
+        const std::string pass = "session " + std::to_string(s) + " against " + std::to_string(m);
+        const auto loops = verifiedLoops(
+            prepared[s], prepared[m], vocabulary, verifier, options,
+            [](frontend::KeyframeId, frontend::KeyframeId) { return std::nullopt; }, pass);
         Eigen::Isometry3d s_in_m = Eigen::Isometry3d::Identity();
         const auto agreeing = agreeingLoops(loops, prepared[s], prepared[m], options, s_in_m);
         link.loops_found += loops.size();
@@ -180,7 +188,8 @@ void linkSessions(const std::vector<Prepared>& prepared, const BinaryVocabulary:
         link.world_in_first = merge.sessions[m].world_in_first * s_in_m;
         std::vector<LoopConstraint> joined = agreeing;
         if (options.loops_with_link_prior) {
-          const auto added = loopsWithLinkPrior(prepared[s], prepared[m], agreeing, vocabulary, verifier, options);
+          const auto added = loopsWithLinkPrior(prepared[s], prepared[m], agreeing, vocabulary, verifier, options,
+                                                pass + " with the link as prior");
           link.loops_with_link_prior = added.size();
           joined.insert(joined.end(), added.begin(), added.end());
         }

@@ -7,6 +7,8 @@
 // contradict each other). Sessions that do not overlap are reported, never
 // forced together.
 #include <cstddef>
+#include <functional>
+#include <string>
 #include <vector>
 
 #include "weighted_icp/core/trajectory.h"
@@ -55,6 +57,10 @@ struct SessionMergeOptions {
   PoseGraphOptions pose_graph;
   /// @brief Keyframes per mini-map of the merged mini-map graph.
   std::size_t keyframes_per_minimap = 10;
+  /// @brief Called after each query keyframe is verified (a merge of long sessions takes minutes): the pass
+  /// ("session 1 against 0", or "... with the link as prior"), keyframes done and keyframes in the pass. Empty:
+  /// silent. Called from the merging thread.
+  std::function<void(const std::string& pass, std::size_t done, std::size_t total)> progress;
 };
 
 /// @brief How one session joined the merge.
