@@ -1,6 +1,7 @@
 // wicp_rgbd_slam's loop-closing outputs and wicp_merge as a user runs them: the report's loop counts, graph.txt,
 // loop_candidates.txt and session/; two runs of one synthetic sequence merged at their known relative pose; a run
-// of another place reported as "no overlap"; missing and corrupt sessions refused with nothing written.
+// of another place reported as "no overlap"; missing and corrupt sessions refused with nothing written; and
+// scripts/check_loops.py, which judges a run's loops.txt against ground truth.
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
@@ -165,6 +166,15 @@ TEST(WicpMerge, TwoRunsOfOneSequenceMergeAtTheirKnownRelativePose) {
   const std::size_t accepted = report.find("\"loops_accepted\":" + std::to_string(rows) + ",");
   EXPECT_NE(accepted, std::string::npos) << rows << " rows; " << report;
   EXPECT_GT(rows, 0u);
+  // scripts/check_loops.py judges them against both runs' ground truth (one synthetic world): none wrong.
+  const ToolRun check =
+      runScript("check_loops.py",
+                "--loops " + (out / "loops.txt").string() + " --groundtruth " + (a / "groundtruth.txt").string() +
+                    " --groundtruth " + (b / "groundtruth.txt").string() + " --json",
+                scratch);
+  EXPECT_EQ(check.status, 0) << check.out << check.err;
+  EXPECT_NE(lastLine(check.out).find("\"loops\": " + std::to_string(rows) + ", \"wrong\": 0,"), std::string::npos)
+      << check.out;
   // Each run's world is its first camera: b's frame 20 must land where the truth puts it relative to frame 0.
   const simulation::SyntheticRgbdSequence truth(simulation::SyntheticRgbdOptions{});
   const Eigen::Isometry3d expected = truth.cameraToWorld(0).inverse() * truth.cameraToWorld(20);
@@ -177,6 +187,29 @@ TEST(WicpMerge, TwoRunsOfOneSequenceMergeAtTheirKnownRelativePose) {
   EXPECT_NEAR(merged[0].timestamp, truth.timestamp(20), 1e-9);
   EXPECT_LT((b_first.translation() - expected.translation()).norm(), 0.02);
   EXPECT_LT(Eigen::AngleAxisd(b_first.rotation().transpose() * expected.rotation()).angle() * 180 / M_PI, 1.0);
+}
+
+TEST(CheckLoops, FlagsALoopFarFromTheTruthAndNamesTheLineOfBadInput) {
+  const fs::path scratch = scratchDir("check_loops");
+  // Ground truth: the camera at the origin at t = 0, 1 m ahead along x at t = 1 (no rotation).
+  writeFile(scratch / "groundtruth.txt", "# timestamp tx ty tz qx qy qz qw\n0 0 0 0 0 0 0 1\n1 1 0 0 0 0 0 1\n");
+  // Query t = 1 in match t = 0: the truth is (1, 0, 0). One loop 1 cm off, one 10 cm off.
+  writeFile(scratch / "loops.txt",
+            "# query_timestamp match_timestamp tx ty tz qx qy qz qw inliers fitness\n"
+            "1 0 1.01 0 0 0 0 0 1 100 0.0001\n"
+            "1 0 1.10 0 0 0 0 0 1 100 0.0001\n");
+  const std::string files =
+      "--loops " + (scratch / "loops.txt").string() + " --groundtruth " + (scratch / "groundtruth.txt").string();
+  const ToolRun run = runScript("check_loops.py", files + " --json", scratch);
+  EXPECT_EQ(run.status, 1) << run.out << run.err;
+  EXPECT_NE(lastLine(run.out).find("\"loops\": 2, \"wrong\": 1,"), std::string::npos) << run.out;
+  EXPECT_NE(run.out.find("1.00 cm"), std::string::npos) << run.out;
+  EXPECT_NE(run.out.find("10.00 cm, 0.00 deg  WRONG"), std::string::npos) << run.out;
+  // A malformed line: exit 2, the file and line named.
+  writeFile(scratch / "loops.txt", "1 0 1.01 0 0 0 0 0 1 100 0.0001\n1 0 oops\n");
+  const ToolRun bad = runScript("check_loops.py", files, scratch);
+  EXPECT_EQ(bad.status, 2);
+  EXPECT_NE(bad.err.find("loops.txt:2:"), std::string::npos) << bad.err;
 }
 
 TEST(WicpMerge, ARunOfAnotherPlaceIsReportedAsNoOverlapAndBadSessionsAreRefused) {

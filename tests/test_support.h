@@ -16,6 +16,9 @@ namespace weighted_icp::testing {
 inline std::filesystem::path dataDir() { return WEIGHTED_ICP_DATA_DIR; }
 inline std::filesystem::path realMapPath() { return dataDir() / "map_fr1_desk.txt"; }
 inline std::filesystem::path binaryDir() { return WEIGHTED_ICP_BINARY_DIR; }
+inline std::filesystem::path sourceDir() { return WEIGHTED_ICP_SOURCE_DIR; }
+/// The Python the project's scripts run with (Debian's, with numpy).
+inline std::filesystem::path pythonPath() { return WEIGHTED_ICP_PYTHON; }
 
 /// Where this test process keeps its scratch folders. The process id makes it this run's own: ctest -j runs
 /// every test in its own process, side by side with other runs (another worktree, another user).

@@ -26,16 +26,14 @@ struct ToolRun {
   std::string err;
 };
 
-/// Runs build/examples/<tool> with `args` (shell syntax). stderr goes through
-/// a file in `scratch`, removed afterwards. With `timeout_seconds` > 0 the run is killed after
-/// that long (status 124), so an option that makes a tool run forever fails
-/// the test instead of hanging it.
-inline ToolRun runBuiltTool(const std::string& tool, const std::string& args, const std::filesystem::path& scratch,
-                            int timeout_seconds = 0) {
+/// Runs `program_and_args` (shell syntax). stderr goes through a file in `scratch`, removed afterwards. With
+/// `timeout_seconds` > 0 the run is killed after that long (status 124), so an option that makes a tool run
+/// forever fails the test instead of hanging it.
+inline ToolRun runCommand(const std::string& program_and_args, const std::filesystem::path& scratch,
+                          int timeout_seconds = 0) {
   const std::filesystem::path err_file = scratch / "stderr.txt";
   const std::string limit = timeout_seconds > 0 ? "timeout " + std::to_string(timeout_seconds) + " " : "";
-  const std::string command =
-      limit + "'" + (binaryDir() / "examples" / tool).string() + "' " + args + " 2>'" + err_file.string() + "'";
+  const std::string command = limit + program_and_args + " 2>'" + err_file.string() + "'";
   ToolRun result;
   FILE* pipe = popen(command.c_str(), "r");
   if (!pipe) {
@@ -55,6 +53,18 @@ inline ToolRun runBuiltTool(const std::string& tool, const std::string& args, co
   std::error_code ignored;
   std::filesystem::remove(err_file, ignored);
   return result;
+}
+
+/// Runs build/examples/<tool> with `args` (shell syntax), as runCommand.
+inline ToolRun runBuiltTool(const std::string& tool, const std::string& args, const std::filesystem::path& scratch,
+                            int timeout_seconds = 0) {
+  return runCommand("'" + (binaryDir() / "examples" / tool).string() + "' " + args, scratch, timeout_seconds);
+}
+
+/// Runs scripts/<script> with the project's Python (pythonPath()) and `args`, as runCommand.
+inline ToolRun runScript(const std::string& script, const std::string& args, const std::filesystem::path& scratch) {
+  return runCommand("'" + pythonPath().string() + "' '" + (sourceDir() / "scripts" / script).string() + "' " + args,
+                    scratch);
 }
 
 /// The last non-empty line of a tool's output: where --json puts its object.
