@@ -41,8 +41,9 @@ mapping::BinaryVocabulary::ConstPtr loadVocabulary(std::string path) {
 }
 
 /// loops.txt: one loop between sessions a line, `query_session query_timestamp match_session match_timestamp tx ty tz
-/// qx qy qz qw inliers fitness` (the query keyframe's camera in the match keyframe's, as the joint pose graph was given
-/// it), so that sessions with ground truth can tell a right loop from a wrong one.
+/// qx qy qz qw inliers fitness used` (the query keyframe's camera in the match keyframe's, as the joint pose graph was
+/// given it; used: 1 when its consistency test admitted the loop), so that sessions with ground truth can tell a right
+/// loop from a wrong one.
 void writeLoops(const fs::path& path, const std::vector<mapping::Session>& sessions,
                 const mapping::SessionMerge& merge) {
   constexpr std::uint64_t stride = mapping::MiniMapGraph::kSessionIdStride;
@@ -50,15 +51,17 @@ void writeLoops(const fs::path& path, const std::vector<mapping::Session>& sessi
   for (std::size_t s = 0; s < sessions.size(); ++s)
     for (const frontend::Keyframe& keyframe : sessions[s].keyframes) timestamps[s][keyframe.id] = keyframe.timestamp;
   std::ostringstream out;
-  out << "# query_session query_timestamp match_session match_timestamp tx ty tz qx qy qz qw inliers fitness\n"
+  out << "# query_session query_timestamp match_session match_timestamp tx ty tz qx qy qz qw inliers fitness used\n"
       << std::setprecision(17);
-  for (const mapping::LoopConstraint& loop : merge.loops) {
+  for (std::size_t i = 0; i < merge.loops.size(); ++i) {
+    const mapping::LoopConstraint& loop = merge.loops[i];
     const std::size_t qs = loop.query / stride, ms = loop.match / stride;
     const Eigen::Quaterniond q(loop.query_in_match.linear());
     const Eigen::Vector3d t = loop.query_in_match.translation();
     out << qs << ' ' << timestamps[qs].at(loop.query % stride) << ' ' << ms << ' '
         << timestamps[ms].at(loop.match % stride) << ' ' << t.x() << ' ' << t.y() << ' ' << t.z() << ' ' << q.x() << ' '
-        << q.y() << ' ' << q.z() << ' ' << q.w() << ' ' << loop.inliers << ' ' << loop.fitness << '\n';
+        << q.y() << ' ' << q.z() << ' ' << q.w() << ' ' << loop.inliers << ' ' << loop.fitness << ' '
+        << (merge.loop_used[i] ? 1 : 0) << '\n';
   }
   tools::writeTextFile(path.string(), out.str());
 }

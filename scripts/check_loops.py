@@ -2,7 +2,7 @@
 """Checks the loops of a run against ground truth: how far each loop's relative pose is from the true one.
 
 Reads the loops.txt of wicp_rgbd_slam (query_timestamp match_timestamp tx ty tz qx qy qz qw inliers fitness) or of
-wicp_merge (query_session query_timestamp match_session match_timestamp tx ... fitness) and one or more TUM ground
+wicp_merge (query_session query_timestamp match_session match_timestamp tx ... fitness used) and one or more TUM ground
 truth files (for a merge, every session's groundtruth.txt: synthetic runs share the sequence's world). A keyframe
 is paired with the ground-truth pose nearest in time (within --max-difference seconds). A loop is wrong when it is
 more than --max-translation metres or --max-rotation degrees from the truth (5 cm, 2 degrees: the README's figures).
@@ -92,10 +92,10 @@ def main():
     for number, v in rows(args.loops):
         if len(v) == 11:
             query_time, match_time, measured = v[0], v[1], v[2:9]
-        elif len(v) == 13:
+        elif len(v) == 14:
             query_time, match_time, measured = v[1], v[3], v[4:11]
         else:
-            fail(f"{args.loops}:{number}: expected 11 (wicp_rgbd_slam) or 13 (wicp_merge) values, found {len(v)}")
+            fail(f"{args.loops}:{number}: expected 11 (wicp_rgbd_slam) or 14 (wicp_merge) values, found {len(v)}")
         query, match = (nearest(times, poses, t, args.max_difference) for t in (query_time, match_time))
         if query is None or match is None:
             unmatched += 1

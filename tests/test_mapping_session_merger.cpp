@@ -113,6 +113,9 @@ TEST(SessionMerger, VerifiesTheOtherKeyframesAgainWithTheLinkAsPrior) {
   ASSERT_TRUE(merge.sessions[1].merged);
   EXPECT_GT(merge.sessions[1].loops_with_link_prior, 0u) << "no keyframe was verified again";
   EXPECT_EQ(merge.loops.size(), agreeing_only.loops.size() + merge.sessions[1].loops_with_link_prior);
+  ASSERT_EQ(merge.loop_used.size(), merge.loops.size());
+  EXPECT_EQ(static_cast<std::size_t>(std::count(merge.loop_used.begin(), merge.loop_used.end(), true)),
+            merge.summary.loops_used);
   const auto [metres, degrees] = worstLoopError(merge, data);
   EXPECT_LT(metres, 0.03);
   EXPECT_LT(degrees, 0.5);

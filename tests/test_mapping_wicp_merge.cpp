@@ -157,11 +157,15 @@ TEST(WicpMerge, TwoRunsOfOneSequenceMergeAtTheirKnownRelativePose) {
   std::size_t rows = 0;
   for (; std::getline(loops, line); ++rows) {
     std::istringstream fields(line);
-    int query_session = -1, match_session = -1;
-    double query_time = 0.0, match_time = 0.0;
+    int query_session = -1, match_session = -1, used = -1;
+    double query_time = 0.0, match_time = 0.0, skipped = 0.0;
     ASSERT_TRUE(fields >> query_session >> query_time >> match_session >> match_time) << line;
+    for (int i = 0; i < 9; ++i) ASSERT_TRUE(fields >> skipped) << line;  // pose, inliers, fitness
+    ASSERT_TRUE(fields >> used) << line;
     EXPECT_EQ(query_session, 1);
     EXPECT_EQ(match_session, 0);
+    EXPECT_TRUE(used == 0 || used == 1) << line;
+    EXPECT_FALSE(fields >> skipped) << "more fields than the header names: " << line;
   }
   const std::size_t accepted = report.find("\"loops_accepted\":" + std::to_string(rows) + ",");
   EXPECT_NE(accepted, std::string::npos) << rows << " rows; " << report;

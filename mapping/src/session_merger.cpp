@@ -241,9 +241,13 @@ std::map<frontend::KeyframeId, Eigen::Isometry3d> optimise(const std::vector<Pre
       ++i;
     }
   }
+  const std::size_t first_loop_edge = graph.edges().size();
   for (const LoopConstraint& loop : merge.loops) graph.addEdge(loopEdge(loop));
   merge.summary = graph.optimize(options.pose_graph);
   if (!merge.summary.ok) throw std::runtime_error("joint pose graph failed: " + merge.summary.message);
+  merge.loop_used.clear();
+  for (std::size_t i = 0; i < merge.loops.size(); ++i)
+    merge.loop_used.push_back(merge.summary.edge_used[first_loop_edge + i]);
   return graph.poses();
 }
 

@@ -87,6 +87,8 @@ struct SessionMerge {
   std::vector<SessionLink> sessions;
   /// @brief The agreeing loops between sessions; keyframe ids are session * MiniMapGraph::kSessionIdStride + id.
   std::vector<LoopConstraint> loops;
+  /// @brief Per loop: whether the joint pose graph's consistency test admitted it (PoseGraphSummary::edge_used).
+  std::vector<bool> loop_used;
   /// @brief Every frame of every merged session in the first session's frame (original timestamps, session by
   /// session: runs of one sequence that overlap in time repeat timestamps).
   Trajectory trajectory;
