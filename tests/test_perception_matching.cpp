@@ -33,13 +33,9 @@ std::string pairName(const FramePair& p) {
   return "fr" + std::to_string(p.freiburg) + "_" + std::to_string(p.reference) + "_to_" + std::to_string(p.query);
 }
 
-std::filesystem::path sequenceDir(int freiburg) {
-  return weighted_icp::testing::dataDir() / (freiburg == 1 ? "tum_fr1_xyz_head" : "tum_fr3_teddy_head");
-}
-
 const RealSequence& sequence(int freiburg) {
-  static const RealSequence fr1 = RealSequence::open(sequenceDir(1), 1);
-  static const RealSequence fr3 = RealSequence::open(sequenceDir(3), 3);
+  static const RealSequence fr1 = RealSequence::open(weighted_icp::testing::tumHeadDir(1), 1);
+  static const RealSequence fr3 = RealSequence::open(weighted_icp::testing::tumHeadDir(3), 3);
   return freiburg == 1 ? fr1 : fr3;
 }
 
@@ -74,7 +70,9 @@ bool sameMatches(const std::vector<cv::DMatch>& a, const std::vector<cv::DMatch>
 
 class RealFramePair : public ::testing::TestWithParam<FramePair> {
  protected:
-  void SetUp() override { WEIGHTED_ICP_REQUIRE_FILE(sequenceDir(GetParam().freiburg) / "groundtruth.txt"); }
+  void SetUp() override {
+    WEIGHTED_ICP_REQUIRE_FILE(weighted_icp::testing::tumHeadDir(GetParam().freiburg) / "groundtruth.txt");
+  }
 };
 
 TEST_P(RealFramePair, LshFindsMostBruteForceMatches) {
@@ -144,7 +142,7 @@ INSTANTIATE_TEST_SUITE_P(Tum, RealFramePair,
 
 TEST(DescriptorMatcher, LshMatchesDoNotDependOnOpenCvsRandomStateOrThread) {
   const FramePair p{1, 0, 5};
-  WEIGHTED_ICP_REQUIRE_FILE(sequenceDir(p.freiburg) / "rgb.txt");
+  WEIGHTED_ICP_REQUIRE_FILE(weighted_icp::testing::tumHeadDir(p.freiburg) / "rgb.txt");
   const std::vector<cv::DMatch> first = matchPair(p, withKind(MatcherKind::FlannLsh));
   const uint64 state_before = cv::theRNG().state;
   cv::theRNG().next();  // as any other user of cv::theRNG() would

@@ -20,10 +20,6 @@ using weighted_icp::testing::RealSequence;
 
 const std::string kModelDir = ImageQualityGateOptions{}.model_dir;
 
-std::filesystem::path sequenceDir(int freiburg) {
-  return weighted_icp::testing::dataDir() / (freiburg == 1 ? "tum_fr1_xyz_head" : "tum_fr3_teddy_head");
-}
-
 /// Heavy Gaussian blur (sigma 3) plus sensor-like noise (sigma 15), seeded.
 cv::Mat blurredAndNoisy(const cv::Mat& gray) {
   cv::Mat blurred, noise(gray.size(), CV_32F), degraded;
@@ -39,9 +35,10 @@ class RealFrameQuality : public ::testing::TestWithParam<int> {};
 
 TEST_P(RealFrameQuality, ScoresASharpFrameBetterThanItsBlurredNoisyCopy) {
   WEIGHTED_ICP_REQUIRE_FILE(kModelDir);
-  WEIGHTED_ICP_REQUIRE_FILE(sequenceDir(GetParam()) / "rgb.txt");
+  WEIGHTED_ICP_REQUIRE_FILE(weighted_icp::testing::tumHeadDir(GetParam()) / "rgb.txt");
   const ImageQualityGate gate;
-  const weighted_icp::RgbdFrame frame = RealSequence::open(sequenceDir(GetParam()), GetParam()).frame(0);
+  const weighted_icp::RgbdFrame frame =
+      RealSequence::open(weighted_icp::testing::tumHeadDir(GetParam()), GetParam()).frame(0);
   const double sharp = gate.score(frame.gray());
   const double degraded = gate.score(blurredAndNoisy(frame.gray()));
   std::cout << "fr" << GetParam() << " frame 0: BRISQUE " << sharp << ", blurred and noisy " << degraded << "\n";
@@ -54,9 +51,9 @@ TEST_P(RealFrameQuality, ScoresASharpFrameBetterThanItsBlurredNoisyCopy) {
 
 TEST_P(RealFrameQuality, PassesEveryRealFrameWithTheDefaultThreshold) {
   WEIGHTED_ICP_REQUIRE_FILE(kModelDir);
-  WEIGHTED_ICP_REQUIRE_FILE(sequenceDir(GetParam()) / "rgb.txt");
+  WEIGHTED_ICP_REQUIRE_FILE(weighted_icp::testing::tumHeadDir(GetParam()) / "rgb.txt");
   const ImageQualityGate gate;
-  const RealSequence data = RealSequence::open(sequenceDir(GetParam()), GetParam());
+  const RealSequence data = RealSequence::open(weighted_icp::testing::tumHeadDir(GetParam()), GetParam());
   const std::size_t step = GetParam() == 1 ? 1 : 4;  // fr3: every 4th of 200 frames, to keep the test short
   double worst = 0.0;
   for (std::size_t i = 0; i < data.sequence.size(); i += step) {
