@@ -42,6 +42,7 @@ int main(int argc, char** argv) {
         ("focal", tools::rangedValue(&options.focal_length_px, 50.0, 5000.0)->default_value(options.focal_length_px), "focal: new fx in px (50-5000)")
         ("depth-offset", tools::rangedValue(&offset_x, -0.5, 0.5)->default_value(offset_x), "unregistered: depth camera x offset, m")
         ("depth-rotation", tools::rangedValue(&options.depth_rotation_deg, -10.0, 10.0)->default_value(options.depth_rotation_deg), "unregistered: rotation about y, degrees")
+        ("no-depth-calibration", "unregistered: leave the depth camera out of camera.yaml (the front end then reads depth unregistered)")
         ("blur-length", tools::rangedValue(&options.blur_length_px, 1.0, 200.0)->default_value(options.blur_length_px), "blur: length in px (1-200)")
         ("gain", tools::rangedValue(&options.low_light_gain, 0.01, 1.0)->default_value(options.low_light_gain), "low-light: gain (0.01-1)")
         ("gamma", tools::rangedValue(&options.low_light_gamma, 0.1, 10.0)->default_value(options.low_light_gamma), "low-light: gamma (0.1-10)")
@@ -57,6 +58,7 @@ int main(int argc, char** argv) {
     // clang-format on
     po::variables_map vm;
     if (!tools::parseCommandLine(argc, argv, description, vm)) return 0;
+    options.describe_depth_camera = vm.count("no-depth-calibration") == 0;
     try {
       options.kinds = simulation::parseVariantKinds(kinds);
     } catch (const std::invalid_argument& e) {

@@ -33,10 +33,11 @@ struct VariantRun {
 /// wicp_rgbd_slam --dataset DIR would: the camera is the variant's camera.yaml.
 VariantRun trackVariant(const std::string& sequence, int freiburg, const std::string& kinds,
                         frontend::QualityGateMode mode = frontend::QualityGateMode::Relative,
-                        std::size_t max_frames = 0) {
+                        std::size_t max_frames = 0, bool describe_depth_camera = true) {
   const fs::path dir = weighted_icp::testing::scratchDir("variant") / "out";
   simulation::SequenceVariantOptions options;
   options.kinds = simulation::parseVariantKinds(kinds);
+  options.describe_depth_camera = describe_depth_camera;
   simulation::VariantSource source =
       simulation::tumVariantSource((weighted_icp::testing::dataDir() / sequence).string(), tumCamera(freiburg));
   if (max_frames) source.size = std::min(source.size, max_frames);  // the variant is written for these frames only
@@ -80,6 +81,18 @@ TEST(FrontendVariants, JpegColourAndMillimetreDepthTrackBelowOneAndAHalfCentimet
   const VariantRun run = trackVariant("tum_fr1_xyz_head", 1, "jpeg,mm-depth,focal");
   EXPECT_EQ(run.without_pose, 0u);
   EXPECT_LT(run.ate_m, 0.015);
+}
+
+TEST(FrontendVariants, UnregisteredDepthIsRegisteredWithItsCalibration) {
+  if (!haveData("tum_fr3_teddy_head")) GTEST_SKIP() << "no " << weighted_icp::testing::dataDir() / "tum_fr3_teddy_head";
+  // The variant's camera.yaml names its depth camera: the front end registers every depth image. First 100 frames:
+  // the original tracks to 0.30 cm, the variant with its calibration to 0.44 cm, without it to 1.14 cm.
+  const auto relative = frontend::QualityGateMode::Relative;
+  const VariantRun registered = trackVariant("tum_fr3_teddy_head", 3, "unregistered", relative, 100);
+  const VariantRun unregistered = trackVariant("tum_fr3_teddy_head", 3, "unregistered", relative, 100, false);
+  EXPECT_EQ(registered.without_pose, 0u);
+  EXPECT_LT(registered.ate_m, 0.008);
+  EXPECT_LT(registered.ate_m, 0.75 * unregistered.ate_m);
 }
 
 TEST(FrontendVariants, RelativeGateKeepsBurstFramesOutOfTheMapOnTwoSequences) {

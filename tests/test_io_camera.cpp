@@ -65,6 +65,38 @@ TEST(Camera, YamlRoundTripKeepsEveryValue) {
   EXPECT_EQ(std::distance(fs::directory_iterator(dir), fs::directory_iterator()), 1);
 }
 
+TEST(Camera, AnUnregisteredDepthCameraRoundTripsAndNeedsAllItsKeys) {
+  const auto dir = weighted_icp::testing::scratchDir("camera_depth_camera");
+  PinholeCamera camera = tumCamera(1);
+  camera.unregistered_depth = DepthCamera{580.5, 581.25, 314.0, 236.0, {0.025, -0.001, 0.002}, {0.001, 0.0087, -0.002}};
+  const std::string path = (dir / "camera.yaml").string();
+  io::saveCamera(camera, path);
+  const PinholeCamera loaded = io::loadCamera(path);
+  ASSERT_TRUE(loaded.unregistered_depth.has_value());
+  EXPECT_EQ(loaded.unregistered_depth->fx, 580.5);
+  EXPECT_EQ(loaded.unregistered_depth->cy, 236.0);
+  EXPECT_EQ(loaded.unregistered_depth->translation_m, camera.unregistered_depth->translation_m);
+  EXPECT_EQ(loaded.unregistered_depth->rotation_rad, camera.unregistered_depth->rotation_rad);
+  // Without the keys, none.
+  writeFile(dir / "plain.yaml", kCompleteYaml);
+  EXPECT_FALSE(io::loadCamera((dir / "plain.yaml").string()).unregistered_depth.has_value());
+  // Some of them: every missing one named.
+  writeFile(dir / "partial.yaml", std::string(kCompleteYaml) + "depth_fx: 580\ndepth_tx: 0.025\n");
+  const std::string partial = errorOf((dir / "partial.yaml").string());
+  for (const char* key :
+       {"depth_fy", "depth_cx", "depth_cy", "depth_ty", "depth_tz", "depth_rx", "depth_ry", "depth_rz"})
+    EXPECT_NE(partial.find(std::string(key) + " is missing"), std::string::npos) << key << ": " << partial;
+  EXPECT_EQ(partial.find("depth_fx is"), std::string::npos) << partial;
+  // Out of range: a depth camera 2 m away, a rotation beyond pi.
+  writeFile(dir / "far.yaml", std::string(kCompleteYaml) +
+                                  "depth_fx: 580\ndepth_fy: 580\ndepth_cx: 320\ndepth_cy: 240\ndepth_tx: 2.0\n"
+                                  "depth_ty: 0\ndepth_tz: 0\ndepth_rx: 0\ndepth_ry: 4.0\ndepth_rz: 0\n");
+  const std::string far = errorOf((dir / "far.yaml").string());
+  EXPECT_NE(far.find("depth_tx"), std::string::npos) << far;
+  EXPECT_NE(far.find("depth_ry"), std::string::npos) << far;
+  EXPECT_EQ(far.find("depth_fx"), std::string::npos) << far;
+}
+
 TEST(Camera, HandWrittenYamlLoads) {
   const auto dir = weighted_icp::testing::scratchDir("camera_hand_written");
   writeFile(dir / "camera.yaml", kCompleteYaml);

@@ -15,6 +15,10 @@ namespace weighted_icp::testing {
 
 inline std::filesystem::path dataDir() { return WEIGHTED_ICP_DATA_DIR; }
 inline std::filesystem::path realMapPath() { return dataDir() / "map_fr1_desk.txt"; }
+/// The TUM head of Freiburg 1 (tum_fr1_xyz_head) or, for any other number, 3 (tum_fr3_teddy_head).
+inline std::filesystem::path tumHeadDir(int freiburg) {
+  return dataDir() / (freiburg == 1 ? "tum_fr1_xyz_head" : "tum_fr3_teddy_head");
+}
 inline std::filesystem::path binaryDir() { return WEIGHTED_ICP_BINARY_DIR; }
 inline std::filesystem::path sourceDir() { return WEIGHTED_ICP_SOURCE_DIR; }
 /// The Python the project's scripts run with (Debian's, with numpy).

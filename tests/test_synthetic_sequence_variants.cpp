@@ -143,6 +143,21 @@ TEST(SequenceVariants, UnregisteredDepthIsSeenFromTheOffsetCamera) {
                std::invalid_argument);
 }
 
+TEST(SequenceVariants, AnUnregisteredVariantsCameraFileNamesItsDepthCameraUnlessAskedNot) {
+  const simulation::VariantSource source = smallSynthetic(2);
+  simulation::SequenceVariantOptions options = kinds("unregistered,focal");
+  const Written variant = writeAndOpen(source, options, scratchDir("variant") / "calibrated");
+  ASSERT_TRUE(variant.camera.unregistered_depth.has_value());
+  const DepthCamera& depth = *variant.camera.unregistered_depth;
+  EXPECT_NEAR(depth.translation_m[0], 0.025, 1e-12);
+  EXPECT_NEAR(depth.rotation_rad[1], 0.5 * M_PI / 180.0, 1e-12);
+  // Zoomed after the depth was moved: the depth camera's intrinsics zoomed with the colour camera's.
+  EXPECT_NEAR(depth.fx, variant.camera.fx, 1e-9);
+  EXPECT_NEAR(depth.cx, variant.camera.cx, 1e-9);
+  options.describe_depth_camera = false;
+  EXPECT_FALSE(writeAndOpen(source, options, scratchDir("variant") / "bare").camera.unregistered_depth.has_value());
+}
+
 TEST(SequenceVariants, JpegColourIsWrittenAsJpegAndStaysCloseToTheOriginal) {
   const simulation::VariantSource source = smallSynthetic(2);
   const Written variant = writeAndOpen(source, kinds("jpeg"), scratchDir("variant") / "jpeg");

@@ -7,6 +7,15 @@
 
 namespace weighted_icp {
 
+Eigen::Isometry3d DepthCamera::depthInColor() const {
+  const Eigen::Vector3d rotation(rotation_rad[0], rotation_rad[1], rotation_rad[2]);
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  if (rotation.norm() > 0.0)
+    pose.linear() = Eigen::AngleAxisd(rotation.norm(), rotation.normalized()).toRotationMatrix();
+  pose.translation() = Eigen::Vector3d(translation_m[0], translation_m[1], translation_m[2]);
+  return pose;
+}
+
 cv::Matx33d PinholeCamera::cameraMatrix() const { return {fx, 0.0, cx, 0.0, fy, cy, 0.0, 0.0, 1.0}; }
 
 Eigen::Matrix3d PinholeCamera::intrinsicMatrix() const {

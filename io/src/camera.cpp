@@ -19,6 +19,11 @@ namespace weighted_icp::io {
 namespace {
 
 const char* const kDistortionKeys[5] = {"k1", "k2", "p1", "p2", "k3"};
+/// The unregistered depth camera's keys, all or none: intrinsics, then its pose in the colour camera's frame.
+const char* const kDepthCameraKeys[10] = {"depth_fx", "depth_fy", "depth_cx", "depth_cy", "depth_tx",
+                                          "depth_ty", "depth_tz", "depth_rx", "depth_ry", "depth_rz"};
+/// The depth camera may sit at most this far from the colour camera (metres) and turn at most pi.
+constexpr double kMaxDepthCameraOffset = 1.0;
 
 /// A key of the camera file and what is wrong with it.
 struct KeyProblem {
@@ -71,6 +76,16 @@ std::vector<KeyProblem> invalidKeys(const PinholeCamera& camera) {
   principal("cx", camera.cx, camera.width);
   principal("cy", camera.cy, camera.height);
   inRange("depth_factor", camera.depth_factor, kMinDepthFactor, kMaxDepthFactor);
+  if (const auto& depth = camera.unregistered_depth) {
+    inRange("depth_fx", depth->fx, kMinFocal, kMaxFocal);
+    inRange("depth_fy", depth->fy, kMinFocal, kMaxFocal);
+    principal("depth_cx", depth->cx, camera.width);
+    principal("depth_cy", depth->cy, camera.height);
+    for (std::size_t i = 0; i < 3; ++i) {
+      inRange(kDepthCameraKeys[4 + i], depth->translation_m[i], -kMaxDepthCameraOffset, kMaxDepthCameraOffset);
+      inRange(kDepthCameraKeys[7 + i], depth->rotation_rad[i], -M_PI, M_PI);
+    }
+  }
   return problems;
 }
 
@@ -124,6 +139,27 @@ void requirePlainYamlLayout(const std::string& path) {
   }
 }
 
+/// The optional unregistered depth camera: none of its keys, or all of them (the missing ones reported).
+template <typename ReadReal>
+void readDepthCamera(const cv::FileStorage& storage, const ReadReal& real, PinholeCamera& camera) {
+  bool any = false;
+  for (const char* key : kDepthCameraKeys) any |= !storage[key].empty();
+  if (!any) return;
+  DepthCamera depth;
+  double* const values[10] = {&depth.fx,
+                              &depth.fy,
+                              &depth.cx,
+                              &depth.cy,
+                              &depth.translation_m[0],
+                              &depth.translation_m[1],
+                              &depth.translation_m[2],
+                              &depth.rotation_rad[0],
+                              &depth.rotation_rad[1],
+                              &depth.rotation_rad[2]};
+  for (std::size_t i = 0; i < 10; ++i) real(kDepthCameraKeys[i], *values[i]);
+  camera.unregistered_depth = depth;
+}
+
 PinholeCamera readCameraFile(const std::string& path) {
   // Checked first: FileStorage would log its own error on stderr, or say just "buf".
   if (!std::filesystem::is_regular_file(path))
@@ -167,6 +203,7 @@ PinholeCamera readCameraFile(const std::string& path) {
   integer("width", camera.width);
   integer("height", camera.height);
   real("depth_factor", camera.depth_factor);
+  readDepthCamera(storage, real, camera);
   // A key already reported as missing or not a number holds its default: report it once.
   const std::size_t unread = problems.size();
   for (auto& problem : invalidKeys(camera)) {
@@ -195,6 +232,19 @@ void saveCamera(const PinholeCamera& camera, const std::string& path) {
   storage << "fx" << camera.fx << "fy" << camera.fy << "cx" << camera.cx << "cy" << camera.cy;
   for (std::size_t i = 0; i < camera.distortion.size(); ++i) storage << kDistortionKeys[i] << camera.distortion[i];
   storage << "width" << camera.width << "height" << camera.height << "depth_factor" << camera.depth_factor;
+  if (const auto& depth = camera.unregistered_depth) {
+    const double values[10] = {depth->fx,
+                               depth->fy,
+                               depth->cx,
+                               depth->cy,
+                               depth->translation_m[0],
+                               depth->translation_m[1],
+                               depth->translation_m[2],
+                               depth->rotation_rad[0],
+                               depth->rotation_rad[1],
+                               depth->rotation_rad[2]};
+    for (std::size_t i = 0; i < 10; ++i) storage << kDepthCameraKeys[i] << values[i];
+  }
   const std::string text = storage.releaseAndGetString();
   writeAtomically(path, [&](const std::string& temporary) {
     std::ofstream out(temporary);

@@ -5,7 +5,9 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
+#include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
 namespace weighted_icp::simulation {
@@ -71,6 +73,13 @@ PinholeCamera zoomedCamera(const PinholeCamera& camera, double scale) {
   PinholeCamera zoomed = camera;
   zoomed.fx *= scale;
   zoomed.fy *= scale;
+  if (zoomed.unregistered_depth) {  // its image is zoomed about the colour camera's principal point too
+    DepthCamera& depth = *zoomed.unregistered_depth;
+    depth.fx *= scale;
+    depth.fy *= scale;
+    depth.cx = camera.cx + scale * (depth.cx - camera.cx);
+    depth.cy = camera.cy + scale * (depth.cy - camera.cy);
+  }
   return zoomed;
 }
 
@@ -87,6 +96,21 @@ cv::Mat zoomImage(const cv::Mat& image, const PinholeCamera& camera, double scal
   return zoomed;
 }
 
+namespace {
+/// Every pixel of the camera's (raw) image, row by row, undistorted (the pixel itself without distortion).
+std::vector<cv::Point2f> undistortedPixels(const PinholeCamera& camera) {
+  std::vector<cv::Point2f> pixels;
+  pixels.reserve(static_cast<std::size_t>(camera.width) * static_cast<std::size_t>(camera.height));
+  for (int v = 0; v < camera.height; ++v)
+    for (int u = 0; u < camera.width; ++u) pixels.emplace_back(static_cast<float>(u), static_cast<float>(v));
+  if (!camera.hasDistortion()) return pixels;
+  std::vector<cv::Point2f> undistorted;
+  cv::undistortPoints(pixels, undistorted, camera.cameraMatrix(), camera.distortionCoefficients(), cv::noArray(),
+                      camera.cameraMatrix());
+  return undistorted;
+}
+}  // namespace
+
 cv::Mat unregisteredDepth(const cv::Mat& depth, const PinholeCamera& camera, const Eigen::Isometry3d& depth_in_color) {
   if (depth.type() != CV_32F) throw std::invalid_argument("unregisteredDepth: depth must be CV_32F metres");
   if (depth.cols != camera.width || depth.rows != camera.height)
@@ -94,14 +118,20 @@ cv::Mat unregisteredDepth(const cv::Mat& depth, const PinholeCamera& camera, con
                                 std::to_string(depth.rows) + ", the camera " + std::to_string(camera.width) + "x" +
                                 std::to_string(camera.height));
   const Eigen::Isometry3d color_to_depth = depth_in_color.inverse();
+  // Depth pixel (u, v) is colour pixel (u, v), a raw (distorted) one: its ray is that of the undistorted pixel.
+  const std::vector<cv::Point2f> rays = undistortedPixels(camera);
+  PinholeCamera depth_camera = camera;  // the depth camera: the colour camera's intrinsics, no distortion
+  depth_camera.distortion = {};
   cv::Mat splatted(depth.size(), CV_32F, cv::Scalar(0.0f));
   for (int v = 0; v < depth.rows; ++v)
     for (int u = 0; u < depth.cols; ++u) {
       const float z = depth.at<float>(v, u);
       if (!(z > 0.0f) || !std::isfinite(z)) continue;
-      const Eigen::Vector3d in_depth = color_to_depth * camera.backProject(u, v, z);
+      const cv::Point2f& ray =
+          rays[static_cast<std::size_t>(v) * static_cast<std::size_t>(depth.cols) + static_cast<std::size_t>(u)];
+      const Eigen::Vector3d in_depth = color_to_depth * depth_camera.backProject(ray.x, ray.y, z);
       if (in_depth.z() <= 0.0) continue;
-      const Eigen::Vector2d pixel = camera.project(in_depth);
+      const Eigen::Vector2d pixel = depth_camera.project(in_depth);
       const int tu = static_cast<int>(std::lround(pixel.x())), tv = static_cast<int>(std::lround(pixel.y()));
       if (tu < 0 || tv < 0 || tu >= depth.cols || tv >= depth.rows) continue;
       float& target = splatted.at<float>(tv, tu);

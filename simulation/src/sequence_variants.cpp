@@ -68,12 +68,32 @@ void checkOptions(const SequenceVariantOptions& options) {
           "bursts need a length >= 1 and a period >= their length");
 }
 
-/// The camera the variant is read with: the kinds that change it, in order.
+/// The unregistered depth camera of the variant: the colour camera's intrinsics, no distortion, its pose.
+Eigen::Isometry3d depthInColor(const SequenceVariantOptions& options) {
+  Eigen::Isometry3d depth_in_color = Eigen::Isometry3d::Identity();
+  depth_in_color.linear() =
+      Eigen::AngleAxisd(options.depth_rotation_deg * M_PI / 180.0, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  depth_in_color.translation() = options.depth_offset_m;
+  return depth_in_color;
+}
+
+/// The camera the variant is read with: the kinds that change it, in order. An unregistered variant's camera file
+/// names its depth camera (as a real sensor's calibration would), so that the front end can register the depth.
 PinholeCamera variantCamera(const PinholeCamera& original, const SequenceVariantOptions& options) {
   PinholeCamera camera = original;
   for (const VariantKind kind : options.kinds) {
     if (kind == VariantKind::Focal) camera = zoomedCamera(camera, options.focal_length_px / camera.fx);
     if (kind == VariantKind::MillimetreDepth) camera.depth_factor = options.depth_factor;
+    if (kind == VariantKind::Unregistered && options.describe_depth_camera) {
+      DepthCamera depth{camera.fx, camera.fy, camera.cx, camera.cy, {}, {}};
+      const Eigen::Isometry3d pose = depthInColor(options);
+      const Eigen::AngleAxisd rotation(pose.linear());
+      for (int i = 0; i < 3; ++i) {
+        depth.translation_m[static_cast<std::size_t>(i)] = pose.translation()[i];
+        depth.rotation_rad[static_cast<std::size_t>(i)] = rotation.angle() * rotation.axis()[i];
+      }
+      camera.unregistered_depth = depth;
+    }
   }
   return camera;
 }
@@ -102,14 +122,9 @@ RgbdFrame applyKinds(RgbdFrame frame, std::size_t i, PinholeCamera camera, const
         camera = zoomedCamera(camera, scale);
         break;
       }
-      case VariantKind::Unregistered: {
-        Eigen::Isometry3d depth_in_color = Eigen::Isometry3d::Identity();
-        depth_in_color.linear() =
-            Eigen::AngleAxisd(options.depth_rotation_deg * M_PI / 180.0, Eigen::Vector3d::UnitY()).toRotationMatrix();
-        depth_in_color.translation() = options.depth_offset_m;
-        frame.depth = unregisteredDepth(frame.depth, camera, depth_in_color);
+      case VariantKind::Unregistered:
+        frame.depth = unregisteredDepth(frame.depth, camera, depthInColor(options));
         break;
-      }
       case VariantKind::MotionBlur:
         frame.color = motionBlur(frame.color, options.blur_length_px, rng.uniform(0.0, 180.0));
         break;

@@ -7,6 +7,8 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "weighted_icp/frontend/perception/depth_registration.h"
+
 namespace weighted_icp::frontend {
 
 std::string toString(TrackingStatus status) {
@@ -107,7 +109,13 @@ Frame Frontend::makeFrame(const RgbdFrame& image, bool& used_clahe) {
   return frame;
 }
 
-TrackingResult Frontend::track(const RgbdFrame& image) {
+TrackingResult Frontend::track(const RgbdFrame& input) {
+  // A sensor whose depth camera is not its colour camera: its depth moved into the colour pixels first (a depth
+  // image of another type or size is left to makeFrame's error, which names the frame).
+  RgbdFrame image = input;
+  if (camera_.unregistered_depth && input.depth.type() == CV_32F && input.depth.size() == input.color.size() &&
+      input.color.cols == camera_.width && input.color.rows == camera_.height)
+    image.depth = registerDepthToColor(input.depth, camera_);
   TrackingResult result;
   Frame frame = makeFrame(image, result.used_clahe);
   result.features = frame.size();

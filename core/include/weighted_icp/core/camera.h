@@ -5,11 +5,26 @@
 // job (weighted_icp/io/camera.h).
 
 #include <array>
+#include <optional>
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <opencv2/core.hpp>
 
 namespace weighted_icp {
+
+/// @brief The depth camera of a sensor whose depth images are not registered to its colour images (raw Kinect or
+/// Astra streams): its pinhole intrinsics (depth images are taken as undistorted) and its pose in the colour
+/// camera's frame.
+struct DepthCamera {
+  double fx = 0.0, fy = 0.0, cx = 0.0, cy = 0.0;
+  /// @brief x_colour = R x_depth + t: the translation t (metres) and R as a rotation vector (radians).
+  std::array<double, 3> translation_m{}, rotation_rad{};
+
+  /// @brief The depth camera's pose in the colour camera's frame (maps depth-camera coordinates to colour-camera
+  /// coordinates).
+  Eigen::Isometry3d depthInColor() const;
+};
 
 /// @brief A pinhole RGB-D camera: intrinsics, distortion and depth scale.
 struct PinholeCamera {
@@ -17,6 +32,9 @@ struct PinholeCamera {
   std::array<double, 5> distortion{};  // k1 k2 p1 p2 k3
   int width = 640, height = 480;
   double depth_factor = 5000.0;  // depth image value per metre
+  /// @brief Set when the depth images are not registered to the colour images: the front end then registers each
+  /// one (frontend::registerDepthToColor). Unset: depth pixel (u, v) is colour pixel (u, v).
+  std::optional<DepthCamera> unregistered_depth;
 
   /// @brief The 3x3 intrinsic matrix as OpenCV takes it.
   cv::Matx33d cameraMatrix() const;

@@ -53,11 +53,13 @@ cv::Mat zoomImage(const cv::Mat& image, const PinholeCamera& camera, double scal
 
 /// @brief Depth as an unregistered sensor delivers it: seen from a depth
 /// camera at `depth_in_color` (its pose in the colour camera's frame) with the
-/// same intrinsics, but indexed as if it were the colour camera's. Each pixel is
-/// lifted with its depth, moved into the depth camera and splatted (nearest
-/// pixel, nearest depth wins); one-pixel cracks of the resampling are filled
-/// with the farther neighbour. Lens distortion is ignored: over a shift of a few
-/// centimetres its effect is far below a pixel.
+/// colour camera's intrinsics and no lens distortion, but indexed as if it were
+/// the colour camera's. Each (raw, distorted) colour pixel is lifted along its
+/// undistorted ray with its depth, moved into the depth camera and splatted
+/// (nearest pixel, nearest depth wins); one-pixel cracks of the resampling are
+/// filled with the farther neighbour. frontend::registerDepthToColor, given
+/// that depth camera, undoes it (until 2026-11-26 the colour pixel's ray
+/// ignored the distortion, which no registration of a real sensor would undo).
 /// @param depth CV_32F metres (0 or NaN: no reading), `camera`'s size
 /// @param camera the colour camera's intrinsics
 /// @param depth_in_color the depth camera's pose in the colour camera's frame

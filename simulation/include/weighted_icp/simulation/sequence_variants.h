@@ -56,6 +56,9 @@ struct SequenceVariantOptions {
   /// camera sits about 2.5 cm beside its colour camera) and its rotation about y.
   Eigen::Vector3d depth_offset_m{0.025, 0.0, 0.0};
   double depth_rotation_deg = 0.5;
+  /// Unregistered: camera.yaml names the depth camera (PinholeCamera::unregistered_depth), as a real sensor's
+  /// calibration does, so the front end registers the depth; false writes the depth without its calibration.
+  bool describe_depth_camera = true;
   double blur_length_px = 9.0;
   double low_light_gain = 0.3;
   double low_light_gamma = 1.3;

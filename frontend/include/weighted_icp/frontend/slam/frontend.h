@@ -148,7 +148,9 @@ class Frontend {
   Frontend(Map& map, Backend& backend, PinholeCamera camera, FrontendOptions options = {});
 
   /// Throws std::invalid_argument for an empty image, mismatched colour and
-  /// depth sizes or a depth image that is not CV_32F.
+  /// depth sizes or a depth image that is not CV_32F. With the camera's
+  /// unregistered_depth set, the depth is first registered to the colour
+  /// camera (registerDepthToColor).
   TrackingResult track(const RgbdFrame& image);
 
   /// Applies a pose-graph correction posted to the map (Map::postCorrection)

@@ -1,0 +1,22 @@
+#pragma once
+// Depth images of a sensor whose depth camera is not its colour camera (raw
+// Kinect or Astra streams), moved into the colour camera's pixels, so that a
+// feature's depth is read where the feature is.
+
+#include <opencv2/core.hpp>
+
+#include "weighted_icp/core/camera.h"
+
+namespace weighted_icp::frontend {
+
+/// @brief The depth image as the colour camera would see it (cv::rgbd::registerDepth): every depth pixel is
+/// back-projected with the depth camera's intrinsics, moved by its pose in the colour camera's frame and projected
+/// with the colour camera's intrinsics and distortion (the raw colour pixels features are detected in); where two
+/// land on one pixel the nearer is kept, one-pixel cracks are filled, pixels nothing lands on have no depth (0).
+/// @param depth CV_32F metres from the depth camera, 0 or NaN where unmeasured, of the colour image's size
+/// @param camera the colour camera, with its unregistered_depth set; else std::invalid_argument, as for a depth
+/// image of another type or size
+/// @return CV_32F metres of the colour image's size, 0 where unmeasured
+cv::Mat registerDepthToColor(const cv::Mat& depth, const PinholeCamera& camera);
+
+}  // namespace weighted_icp::frontend

@@ -1,0 +1,100 @@
+// registerDepthToColor: the depth an unregistered sensor delivers (simulated by simulation::unregisteredDepth,
+// with fr1's lens distortion) moved back into the colour camera's pixels.
+#include <cmath>
+#include <stdexcept>
+
+#include <gtest/gtest.h>
+#include <opencv2/core.hpp>
+#include <opencv2/rgbd.hpp>
+
+#include "weighted_icp/core/camera.h"
+#include "weighted_icp/frontend/perception/depth_registration.h"
+#include "weighted_icp/simulation/image_degradations.h"
+
+namespace weighted_icp::frontend {
+namespace {
+
+/// A box 1 m away in front of a slanted wall (1.2 m at the left edge, 3.1 m at the right), as the colour camera
+/// sees it: a pixel shift changes the wall's depth too, not only at the box's edges.
+cv::Mat boxBeforeAWall(const PinholeCamera& camera) {
+  cv::Mat depth(camera.height, camera.width, CV_32F);
+  for (int v = 0; v < camera.height; ++v)
+    for (int u = 0; u < camera.width; ++u) depth.at<float>(v, u) = 1.2f + 0.003f * static_cast<float>(u);
+  depth(cv::Rect(250, 150, 160, 140)).setTo(1.0f);
+  return depth;
+}
+
+TEST(DepthRegistration, UndoesTheDepthCameraOffsetWithTheColourCamerasDistortion) {
+  PinholeCamera camera = tumCamera(1);  // k1 = 0.26: the registration must use the colour camera's distortion
+  Eigen::Isometry3d depth_in_color = Eigen::Isometry3d::Identity();
+  depth_in_color.linear() = Eigen::AngleAxisd(0.5 * M_PI / 180.0, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  depth_in_color.translation() = Eigen::Vector3d(0.025, 0.0, 0.0);
+  const cv::Mat truth = boxBeforeAWall(camera);
+  const cv::Mat raw = simulation::unregisteredDepth(truth, camera, depth_in_color);
+
+  DepthCamera sensor{camera.fx, camera.fy, camera.cx, camera.cy, {0.025, 0.0, 0.0}, {0.0, 0.5 * M_PI / 180.0, 0.0}};
+  camera.unregistered_depth = sensor;
+  const cv::Mat registered = registerDepthToColor(raw, camera);
+  ASSERT_EQ(registered.type(), CV_32F);
+  ASSERT_EQ(registered.size(), truth.size());
+  // Away from the image border (what the depth camera does not see) and the box's edges (occlusions):
+  std::size_t judged = 0, right_before = 0, right_after = 0, missing = 0;
+  for (int v = 40; v < camera.height - 40; ++v)
+    for (int u = 60; u < camera.width - 60; ++u) {
+      const bool near_edge =
+          std::abs(u - 250) < 25 || std::abs(u - 410) < 25 || std::abs(v - 150) < 25 || std::abs(v - 290) < 25;
+      if (near_edge) continue;
+      ++judged;
+      const float z = truth.at<float>(v, u), got = registered.at<float>(v, u);
+      missing += !(got > 0.0f);
+      right_after += std::abs(got - z) < 0.01f;
+      right_before += std::abs(raw.at<float>(v, u) - z) < 0.01f;
+    }
+  ASSERT_GT(judged, 100000u);
+  EXPECT_GT(static_cast<double>(right_after) / judged, 0.99) << missing << " missing";
+  EXPECT_LT(static_cast<double>(right_before) / judged, 0.99) << "the offset moved nothing: the test proves nothing";
+}
+
+TEST(DepthRegistration, GivesOpenCvsRegisteredDepths) {
+  PinholeCamera camera = tumCamera(1);
+  const DepthCamera sensor{540.0, 541.0, 322.0, 236.0, {0.025, 0.002, -0.001}, {0.003, 0.0087, -0.002}};
+  camera.unregistered_depth = sensor;
+  const cv::Mat raw = boxBeforeAWall(camera);
+  const cv::Mat ours = registerDepthToColor(raw, camera);
+  const cv::Matx33f depth_matrix(540.0f, 0.0f, 322.0f, 0.0f, 541.0f, 236.0f, 0.0f, 0.0f, 1.0f);
+  cv::Matx33f color_matrix;
+  cv::Mat(camera.cameraMatrix()).convertTo(color_matrix, CV_32F);
+  const Eigen::Matrix4d pose = sensor.depthInColor().matrix();
+  cv::Matx44f rt;
+  for (int r = 0; r < 4; ++r)
+    for (int c = 0; c < 4; ++c) rt(r, c) = static_cast<float>(pose(r, c));
+  cv::Mat coefficients, theirs;
+  camera.distortionCoefficients().convertTo(coefficients, CV_32F);
+  cv::rgbd::registerDepth(depth_matrix, color_matrix, coefficients, rt, raw, raw.size(), theirs, true);
+  std::size_t both = 0, agree = 0, only_one = 0;
+  for (int v = 0; v < raw.rows; ++v)
+    for (int u = 0; u < raw.cols; ++u) {
+      const float a = ours.at<float>(v, u), b = theirs.at<float>(v, u);
+      const bool has_a = a > 0.0f, has_b = b > 0.0f && std::isfinite(b);
+      only_one += has_a != has_b;
+      if (!(has_a && has_b)) continue;
+      ++both;
+      agree += std::abs(a - b) < 0.005f;  // the wall rises 3 mm a pixel: splats a pixel apart differ by that
+    }
+  ASSERT_GT(both, 250000u);
+  EXPECT_GT(static_cast<double>(agree) / both, 0.99);
+  EXPECT_LT(static_cast<double>(only_one) / both, 0.01);
+}
+
+TEST(DepthRegistration, RefusesACameraWithoutADepthCameraAndAnotherImage) {
+  PinholeCamera camera = tumCamera(3);
+  const cv::Mat depth(camera.height, camera.width, CV_32F, cv::Scalar(1.0f));
+  EXPECT_THROW(registerDepthToColor(depth, camera), std::invalid_argument);
+  camera.unregistered_depth = DepthCamera{camera.fx, camera.fy, camera.cx, camera.cy, {0.025, 0.0, 0.0}, {}};
+  EXPECT_THROW(registerDepthToColor(depth(cv::Rect(0, 0, 320, 240)).clone(), camera), std::invalid_argument);
+  cv::Mat millimetres(camera.height, camera.width, CV_16U, cv::Scalar(1000));
+  EXPECT_THROW(registerDepthToColor(millimetres, camera), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace weighted_icp::frontend
