@@ -4,7 +4,6 @@
 // to frame, default parameters), each scored by ATE RMSE against the ground truth.
 
 #include <chrono>
-#include <limits>
 #include <string>
 #include <vector>
 
@@ -12,6 +11,7 @@
 #include <opencv2/rgbd.hpp>
 
 #include "weighted_icp/core/statistics.h"
+#include "weighted_icp/frontend/perception/depth_registration.h"
 #include "weighted_icp/frontend/slam/rgbd_slam.h"
 #include "weighted_icp/metrics/trajectory_error.h"
 
@@ -57,26 +57,6 @@ inline Run runFrontend(const Sequence& sequence, const frontend::RgbdSlamOptions
 /// @brief cv::rgbd::RgbdOdometry frame to frame with default parameters; a
 /// frame it cannot register keeps the last pose (and counts as not tracked).
 /// @param sequence what to track
-/// cv::rgbd::registerDepth of an unregistered sensor's depth (camera.unregistered_depth set), 0 where unmeasured.
-inline cv::Mat openCvRegisteredDepth(const cv::Mat& depth, const PinholeCamera& camera) {
-  const DepthCamera& sensor = *camera.unregistered_depth;
-  const cv::Matx33f depth_matrix(static_cast<float>(sensor.fx), 0.0f, static_cast<float>(sensor.cx), 0.0f,
-                                 static_cast<float>(sensor.fy), static_cast<float>(sensor.cy), 0.0f, 0.0f, 1.0f);
-  cv::Matx33f color_matrix;
-  cv::Mat(camera.cameraMatrix()).convertTo(color_matrix, CV_32F);
-  const Eigen::Matrix4d pose = sensor.depthInColor().matrix();
-  cv::Matx44f depth_to_color;
-  for (int r = 0; r < 4; ++r)
-    for (int c = 0; c < 4; ++c) depth_to_color(r, c) = static_cast<float>(pose(r, c));
-  cv::Mat coefficients, measured = depth.clone(), registered;
-  camera.distortionCoefficients().convertTo(coefficients, CV_32F);
-  measured.setTo(std::numeric_limits<float>::quiet_NaN(), ~(depth > 0.0f));  // a float image's "no depth"
-  cv::rgbd::registerDepth(depth_matrix, color_matrix, coefficients, depth_to_color, measured, depth.size(), registered,
-                          true);
-  registered.setTo(0.0f, registered != registered);
-  return registered;
-}
-
 inline Run runOpenCvOdometry(const Sequence& sequence) {
   const cv::Mat camera_matrix(sequence.camera.cameraMatrix());
   cv::Ptr<cv::rgbd::RgbdOdometry> odometry = cv::rgbd::RgbdOdometry::create(camera_matrix);
@@ -89,8 +69,9 @@ inline Run runOpenCvOdometry(const Sequence& sequence) {
     cv::Mat gray;
     cv::cvtColor(frame.color, gray, cv::COLOR_BGR2GRAY);
     // Given the depth camera's calibration, OpenCV's user registers the depth with OpenCV's own registerDepth.
-    const cv::Mat depth =
-        sequence.camera.unregistered_depth ? openCvRegisteredDepth(frame.depth, sequence.camera) : frame.depth;
+    const cv::Mat depth = sequence.camera.unregistered_depth
+                              ? frontend::registerDepthWithOpenCv(frame.depth, sequence.camera)
+                              : frame.depth;
     current = cv::rgbd::OdometryFrame::create(gray, depth);
     bool tracked = !previous;
     if (previous) {

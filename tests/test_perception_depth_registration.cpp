@@ -5,7 +5,6 @@
 
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
-#include <opencv2/rgbd.hpp>
 
 #include "weighted_icp/core/camera.h"
 #include "weighted_icp/frontend/perception/depth_registration.h"
@@ -61,16 +60,7 @@ TEST(DepthRegistration, GivesOpenCvsRegisteredDepths) {
   camera.unregistered_depth = sensor;
   const cv::Mat raw = boxBeforeAWall(camera);
   const cv::Mat ours = registerDepthToColor(raw, camera);
-  const cv::Matx33f depth_matrix(540.0f, 0.0f, 322.0f, 0.0f, 541.0f, 236.0f, 0.0f, 0.0f, 1.0f);
-  cv::Matx33f color_matrix;
-  cv::Mat(camera.cameraMatrix()).convertTo(color_matrix, CV_32F);
-  const Eigen::Matrix4d pose = sensor.depthInColor().matrix();
-  cv::Matx44f rt;
-  for (int r = 0; r < 4; ++r)
-    for (int c = 0; c < 4; ++c) rt(r, c) = static_cast<float>(pose(r, c));
-  cv::Mat coefficients, theirs;
-  camera.distortionCoefficients().convertTo(coefficients, CV_32F);
-  cv::rgbd::registerDepth(depth_matrix, color_matrix, coefficients, rt, raw, raw.size(), theirs, true);
+  const cv::Mat theirs = registerDepthWithOpenCv(raw, camera);
   std::size_t both = 0, agree = 0, only_one = 0;
   for (int v = 0; v < raw.rows; ++v)
     for (int u = 0; u < raw.cols; ++u) {
@@ -90,6 +80,7 @@ TEST(DepthRegistration, RefusesACameraWithoutADepthCameraAndAnotherImage) {
   PinholeCamera camera = tumCamera(3);
   const cv::Mat depth(camera.height, camera.width, CV_32F, cv::Scalar(1.0f));
   EXPECT_THROW(registerDepthToColor(depth, camera), std::invalid_argument);
+  EXPECT_THROW(registerDepthWithOpenCv(depth, camera), std::invalid_argument);
   camera.unregistered_depth = DepthCamera{camera.fx, camera.fy, camera.cx, camera.cy, {0.025, 0.0, 0.0}, {}};
   EXPECT_THROW(registerDepthToColor(depth(cv::Rect(0, 0, 320, 240)).clone(), camera), std::invalid_argument);
   cv::Mat millimetres(camera.height, camera.width, CV_16U, cv::Scalar(1000));

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include <Eigen/Geometry>
+#include <opencv2/rgbd.hpp>
 
 namespace weighted_icp::frontend {
 
@@ -27,17 +28,42 @@ void distort(const PinholeCamera& camera, float& x, float& y) {
   y = yd;
 }
 
+/// Throws std::invalid_argument unless the camera has a depth camera and the depth is CV_32F of its size.
+void checkInputs(const char* function, const cv::Mat& depth, const PinholeCamera& camera) {
+  if (!camera.unregistered_depth)
+    throw std::invalid_argument(std::string(function) + ": the camera has no unregistered depth camera");
+  if (depth.type() != CV_32F || depth.cols != camera.width || depth.rows != camera.height)
+    throw std::invalid_argument(std::string(function) + ": depth must be CV_32F metres of " +
+                                std::to_string(camera.width) + "x" + std::to_string(camera.height) + ", found " +
+                                std::to_string(depth.cols) + "x" + std::to_string(depth.rows));
+}
+
 }  // namespace
 
+cv::Mat registerDepthWithOpenCv(const cv::Mat& depth, const PinholeCamera& camera) {
+  checkInputs("registerDepthWithOpenCv", depth, camera);
+  const DepthCamera& sensor = *camera.unregistered_depth;
+  const cv::Matx33f depth_matrix(static_cast<float>(sensor.fx), 0.0f, static_cast<float>(sensor.cx), 0.0f,
+                                 static_cast<float>(sensor.fy), static_cast<float>(sensor.cy), 0.0f, 0.0f, 1.0f);
+  cv::Matx33f color_matrix;
+  cv::Mat(camera.cameraMatrix()).convertTo(color_matrix, CV_32F);
+  const Eigen::Matrix4d pose = sensor.depthInColor().matrix();
+  cv::Matx44f depth_to_color;
+  for (int r = 0; r < 4; ++r)
+    for (int c = 0; c < 4; ++c) depth_to_color(r, c) = static_cast<float>(pose(r, c));
+  cv::Mat coefficients, measured = depth.clone(), registered;
+  camera.distortionCoefficients().convertTo(coefficients, CV_32F);
+  measured.setTo(std::numeric_limits<float>::quiet_NaN(), ~(depth > 0.0f));  // a float image's "no depth"
+  cv::rgbd::registerDepth(depth_matrix, color_matrix, coefficients, depth_to_color, measured, depth.size(), registered,
+                          true);
+  registered.setTo(0.0f, registered != registered);
+  return registered;
+}
+
 cv::Mat registerDepthToColor(const cv::Mat& depth, const PinholeCamera& camera) {
-  if (!camera.unregistered_depth)
-    throw std::invalid_argument("registerDepthToColor: the camera has no unregistered depth camera");
-  if (depth.type() != CV_32F || depth.cols != camera.width || depth.rows != camera.height)
-    throw std::invalid_argument("registerDepthToColor: depth must be CV_32F metres of " + std::to_string(camera.width) +
-                                "x" + std::to_string(camera.height) + ", found " + std::to_string(depth.cols) + "x" +
-                                std::to_string(depth.rows));
-  // By hand rather than cv::rgbd::registerDepth, which gives the same depths (tested) but took 19 ms a frame, as
-  // long as the rest of tracking (docs/frontend_generalisation.md).
+  checkInputs("registerDepthToColor", depth, camera);
+  // By hand rather than cv::rgbd::registerDepth (registerDepthWithOpenCv), which gives the same depths (tested) in
+  // 2.7 times the time: 14.8 ms a frame, as long as the rest of tracking (docs/frontend_generalisation.md).
   const DepthCamera& sensor = *camera.unregistered_depth;
   const Eigen::Isometry3f depth_to_color = sensor.depthInColor().cast<float>();
   const Eigen::Matrix3f rotation = depth_to_color.linear();

@@ -19,4 +19,10 @@ namespace weighted_icp::frontend {
 /// @return CV_32F metres of the colour image's size, 0 where unmeasured
 cv::Mat registerDepthToColor(const cv::Mat& depth, const PinholeCamera& camera);
 
+/// @brief The same registration by OpenCV's cv::rgbd::registerDepth (with its depth dilation), for comparison: the
+/// same depths within a few millimetres, about 2.7 times slower (docs/frontend_generalisation.md).
+/// @param depth as for registerDepthToColor
+/// @param camera as for registerDepthToColor
+cv::Mat registerDepthWithOpenCv(const cv::Mat& depth, const PinholeCamera& camera);
+
 }  // namespace weighted_icp::frontend
