@@ -25,12 +25,21 @@ constexpr std::uint64_t kStride = MiniMapGraph::kSessionIdStride;
 struct Prepared {
   KeyframeSnapshot snapshot;
   std::map<frontend::KeyframeId, BowVector> bows;
+  /// Distance travelled from the first keyframe to each (KeyframeSnapshot::pathLength from the first, all at once):
+  /// the path between two keyframes is the difference, which the link's prior asks for per candidate and loop.
+  std::map<frontend::KeyframeId, double> travelled;
 };
 
 Prepared prepare(const Session& session, const BinaryVocabulary& vocabulary) {
-  Prepared prepared{KeyframeSnapshot::of(*session.toMap()), {}};
-  for (const auto& [id, keyframe] : prepared.snapshot.keyframes)
+  Prepared prepared{KeyframeSnapshot::of(*session.toMap()), {}, {}};
+  const frontend::Keyframe* previous = nullptr;
+  double travelled = 0.0;
+  for (const auto& [id, keyframe] : prepared.snapshot.keyframes) {
     prepared.bows[id] = vocabulary.transform(keyframe.descriptors);
+    if (previous) travelled += (keyframe.pose_wc.translation() - previous->pose_wc.translation()).norm();
+    prepared.travelled[id] = travelled;
+    previous = &keyframe;
+  }
   return prepared;
 }
 
@@ -112,7 +121,8 @@ LoopPrior linkPrior(const Prepared& query, frontend::KeyframeId q, const Prepare
   double nearest_path = std::numeric_limits<double>::infinity();
   const LoopConstraint* nearest = &agreeing.front();
   for (const LoopConstraint& loop : agreeing) {
-    const double path = query.snapshot.pathLength(q, loop.query) + match.snapshot.pathLength(c, loop.match);
+    const double path = std::abs(query.travelled.at(q) - query.travelled.at(loop.query)) +
+                        std::abs(match.travelled.at(c) - match.travelled.at(loop.match));
     if (path < nearest_path) {
       nearest_path = path;
       nearest = &loop;
