@@ -5,15 +5,18 @@
 // bad frames, and "kinect": JPEG + mm depth + focal 585 together, the held-out
 // Kinect's format). Variants are written into --scratch (never into the source
 // tree) and read back as TUM folders with their camera.yaml, as a user would.
-// Prints Markdown: ATE RMSE with frames without a pose, and tracking times.
+// Prints Markdown: ATE RMSE with frames without a pose, tracking times, and how
+// often ours has the lower ATE over resamples of the poses (metrics::compareAte).
 //
 //   wicp_benchmark_cross_sequence --scratch DIR [--data DIR] [--max-frames N]
 //                                 [--synthetic-frames N] [--sequences LIST] [--variants LIST] [--runs LIST]
+//                                 [--trajectories DIR]
 
 #include <cmath>
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -24,6 +27,7 @@
 #include "rgbd_odometry_runs.h"
 #include "weighted_icp/frontend/slam/frontend_choices.h"
 #include "weighted_icp/io/camera.h"
+#include "weighted_icp/io/trajectory.h"
 #include "weighted_icp/io/tum_sequence.h"
 #include "weighted_icp/simulation/sequence_variants.h"
 
@@ -109,19 +113,42 @@ std::string cell(const Run& run, std::size_t frames) {
   return text.str();
 }
 
-void requireOutsideSourceTree(const fs::path& scratch) {
+/// How often the default's ATE is the lower one over resamples of the poses both have (metrics::compareAte):
+/// near 50 %, a difference the sequence cannot show.
+std::string versus(const Trajectory& truth, const std::optional<Trajectory>& ours,
+                   const std::optional<Trajectory>& opencv) {
+  if (!ours || !opencv) return "–";
+  try {
+    std::ostringstream text;
+    text << std::fixed << std::setprecision(0)
+         << 100.0 * metrics::compareAte(truth, *ours, *opencv).first_lower_fraction << " %";
+    return text.str();
+  } catch (const std::runtime_error&) {
+    return "–";  // fewer than 3 poses in common
+  }
+}
+
+void requireOutsideSourceTree(const std::string& option, const fs::path& folder) {
   const std::string source = fs::weakly_canonical(WEIGHTED_ICP_SOURCE_DIR).string() + "/";
-  const std::string target = fs::weakly_canonical(fs::absolute(scratch)).string() + "/";
+  const std::string target = fs::weakly_canonical(fs::absolute(folder)).string() + "/";
   if (target.rfind(source, 0) == 0)
-    throw po::error("--scratch " + scratch.string() + " is inside the source tree " + source +
-                    "; variants of shared data must not be written into the repository");
+    throw po::error("--" + option + " " + folder.string() + " is inside the source tree " + source +
+                    "; what is made of shared data must not be written into the repository");
+}
+
+/// "fr1_head, jpeg" -> "fr1_head_jpeg": a row's name as part of a file name.
+std::string fileStem(const std::string& row) {
+  std::string stem;
+  for (const char c : row)
+    if (c != ' ') stem += c == ',' ? '_' : c;
+  return stem;
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
   try {
-    std::string data = WEIGHTED_ICP_DATA_DIR, scratch,
+    std::string data = WEIGHTED_ICP_DATA_DIR, scratch, trajectories,
                 variants =
                     "jpeg,mm-depth,focal,unregistered,blur,low-light,"
                     "burst,kinect",
@@ -142,7 +169,10 @@ int main(int argc, char** argv) {
         ("runs", po::value(&runs)->default_value(runs), "comma-separated: default, relative-brisque, absolute, paper, no-gate, opencv")
         ("frontend-option", po::value(&choices)->composing(),
          "KEY=VALUE, repeatable: a front-end choice by wicp_rgbd_slam's option name (pnp=iterative, "
-         "descriptor=modified-brief, dense-odometry=prior, ...), applied to every run but opencv");
+         "descriptor=modified-brief, dense-odometry=prior, ...), applied to every run but opencv")
+        ("trajectories", po::value(&trajectories),
+         "also write every run's trajectory (TUM format) into this folder as SEQUENCE_RUN.txt, with the "
+         "ground truth as SEQUENCE_groundtruth.txt, to see where one loses (wicp_evaluate --plot)");
     // clang-format on
     po::variables_map vm;
     po::store(po::parse_command_line(argc, argv, description), vm);
@@ -151,7 +181,11 @@ int main(int argc, char** argv) {
       return 0;
     }
     po::notify(vm);
-    requireOutsideSourceTree(scratch);
+    requireOutsideSourceTree("scratch", scratch);
+    if (!trajectories.empty()) {
+      requireOutsideSourceTree("trajectories", trajectories);
+      fs::create_directories(trajectories);
+    }
     std::vector<Tracker> columns = trackers(runs);
     for (const std::string& choice : choices) {
       const std::size_t equals = choice.find('=');
@@ -193,24 +227,37 @@ int main(int argc, char** argv) {
 
     std::cout << "ATE RMSE in cm (frames without a pose)\n\n| sequence | frames |";
     for (const Tracker& tracker : columns) std::cout << ' ' << tracker.name << " |";
-    std::cout << " median / p90 ms, default | median / p90 ms, opencv |\n|---|---|";
-    for (std::size_t c = 0; c < columns.size() + 2; ++c) std::cout << "---|";
+    std::cout << " median / p90 ms, default | median / p90 ms, opencv | default lower than opencv |\n|---|---|";
+    for (std::size_t c = 0; c < columns.size() + 3; ++c) std::cout << "---|";
     std::cout << std::endl;
     for (const Base& base : bases)
       for (const std::string& variant : variant_names) {
         const Sequence sequence = prepare(base, variant, scratch);
         std::cout << "| " << sequence.name << " | " << sequence.frames.size() << " |";
         std::string timing[2] = {"–", "–"};
+        std::optional<Trajectory> ours, opencv;
+        if (!trajectories.empty())
+          io::writeTrajectory(sequence.truth, trajectories + "/" + fileStem(sequence.name) + "_groundtruth.txt");
         for (const Tracker& tracker : columns) {
           const Run run = tracker.opencv ? benchmarks::runOpenCvOdometry(sequence)
                                          : benchmarks::runFrontend(sequence, tracker.options);
           std::cout << ' ' << cell(run, sequence.frames.size()) << " |" << std::flush;
+          if (!trajectories.empty())
+            io::writeTrajectory(run.estimate,
+                                trajectories + "/" + fileStem(sequence.name) + "_" + tracker.name + ".txt");
           std::ostringstream ms;
           ms << std::fixed << std::setprecision(1) << run.medianMs() << " / " << run.p90Ms();
-          if (tracker.name == "default") timing[0] = ms.str();
-          if (tracker.opencv) timing[1] = ms.str();
+          if (tracker.name == "default") {
+            timing[0] = ms.str();
+            ours = run.estimate;
+          }
+          if (tracker.opencv) {
+            timing[1] = ms.str();
+            opencv = run.estimate;
+          }
         }
-        std::cout << ' ' << timing[0] << " | " << timing[1] << " |" << std::endl;
+        std::cout << ' ' << timing[0] << " | " << timing[1] << " | " << versus(sequence.truth, ours, opencv) << " |"
+                  << std::endl;
       }
     return 0;
   } catch (const po::error& e) {

@@ -30,6 +30,7 @@ struct Run {
   double ate_rmse_m = 0.0;  // NaN when fewer than 3 poses
   std::size_t tracked = 0;  // frames with a pose
   std::vector<double> ms;   // per frame
+  Trajectory estimate;      // the poses it gave
   double medianMs() const { return ms.empty() ? 0.0 : median(ms); }
   double p90Ms() const { return ms.empty() ? 0.0 : quantile(ms, 0.9); }
 };
@@ -48,9 +49,9 @@ inline Run runFrontend(const Sequence& sequence, const frontend::RgbdSlamOptions
   Run run;
   for (const auto& frame : sequence.frames) run.ms.push_back(slam.process(frame).tracking_ms);
   slam.finish();
-  const Trajectory estimate = slam.trajectory();
-  run.tracked = estimate.size();
-  run.ate_rmse_m = ateOrNan(sequence.truth, estimate);
+  run.estimate = slam.trajectory();
+  run.tracked = run.estimate.size();
+  run.ate_rmse_m = ateOrNan(sequence.truth, run.estimate);
   return run;
 }
 
@@ -62,8 +63,8 @@ inline Run runOpenCvOdometry(const Sequence& sequence) {
   cv::Ptr<cv::rgbd::RgbdOdometry> odometry = cv::rgbd::RgbdOdometry::create(camera_matrix);
   cv::Ptr<cv::rgbd::OdometryFrame> previous, current;
   Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-  Trajectory estimate;
   Run run;
+  Trajectory& estimate = run.estimate;
   for (const auto& frame : sequence.frames) {
     const auto start = std::chrono::steady_clock::now();
     cv::Mat gray;

@@ -6,10 +6,12 @@
 // Contract other tools rely on: with --json the last line of stdout is one
 // JSON object with pairs, ate_rmse_m, ate_mean_m, ate_median_m, ate_max_m,
 // alignment (4x4, estimate -> ground truth), rpe_pairs,
-// rpe_translation_rmse_m, rpe_rotation_rmse_deg (and more).
+// rpe_translation_rmse_m, rpe_rotation_rmse_deg (and more); with --versus also
+// versus_ate_rmse_m, common_poses, estimate_lower_fraction, error_correlation.
 
 #include <iomanip>
 #include <iostream>
+#include <optional>
 #include <sstream>
 
 #include <boost/program_options.hpp>
@@ -43,7 +45,7 @@ void printStatistics(const char* label, const ErrorStatistics& s, std::string (*
 
 int main(int argc, char** argv) {
   return tools::runTool("wicp_evaluate", [&] {
-    std::string groundtruth_path, estimate_path, rpe_unit_name = "s", plot_path;
+    std::string groundtruth_path, estimate_path, rpe_unit_name = "s", plot_path, versus_path;
     double max_difference = 0.02, rpe_delta = 1.0;
     po::options_description options(
         "wicp_evaluate GROUNDTRUTH.txt ESTIMATE.txt [options]\n"
@@ -59,6 +61,8 @@ int main(int argc, char** argv) {
         ("rpe-delta", tools::positiveValue(&rpe_delta)->default_value(rpe_delta), "RPE: compare poses this far apart")
         ("rpe-unit", po::value(&rpe_unit_name)->default_value(rpe_unit_name),
          "unit of --rpe-delta: s (seconds) or f (frames)")
+        ("versus", po::value(&versus_path), "another estimate of the same frames: is ESTIMATE's ATE lower beyond "
+                                            "the scatter of the poses? (a paired bootstrap over the poses both have)")
         ("json", "print the result as one JSON object on the last line of stdout")
         ("plot", po::value(&plot_path), "also draw both trajectories (top view, x/y/z against time) and the error "
                                         "along them into this PNG (needs matplotlib; a warning without it)");
@@ -84,6 +88,18 @@ int main(int argc, char** argv) {
     printStatistics("RPE translation", rpe.translation, metres);
     printStatistics("RPE rotation", rpe.rotation_deg, degrees);
     std::cout << "alignment (estimate -> ground truth):\n" << ate.alignment.matrix() << '\n';
+    std::optional<metrics::AteComparison> versus;
+    if (!versus_path.empty()) {
+      versus = metrics::compareAte(groundtruth, estimate, io::readTrajectory(versus_path), max_difference);
+      std::cout << "versus " << versus_path << ": over the " << versus->common_poses << " poses both have, ATE rmse "
+                << metres(versus->first_rmse_m) << " against " << metres(versus->second_rmse_m) << "; lower in "
+                << std::fixed << std::setprecision(1) << 100.0 * versus->first_lower_fraction << " % of "
+                << versus->resamples << " resamples of the poses ("
+                << (versus->first_lower_fraction >= 0.95   ? "lower beyond the scatter"
+                    : versus->first_lower_fraction <= 0.05 ? "higher beyond the scatter"
+                                                           : "no difference the poses can show")
+                << "); per-pose errors correlate " << std::setprecision(2) << versus->error_correlation << '\n';
+    }
     if (vm.count("json")) {
       tools::JsonObject json;
       json.add("groundtruth_poses", groundtruth.size())
@@ -106,6 +122,11 @@ int main(int argc, char** argv) {
           .add("rpe_rotation_mean_deg", rpe.rotation_deg.mean)
           .add("rpe_rotation_median_deg", rpe.rotation_deg.median)
           .add("rpe_rotation_max_deg", rpe.rotation_deg.max);
+      if (versus)
+        json.add("versus_ate_rmse_m", versus->second.translation.rmse)
+            .add("common_poses", versus->common_poses)
+            .add("estimate_lower_fraction", versus->first_lower_fraction)
+            .add("error_correlation", versus->error_correlation);
       std::cout << json.str() << std::endl;
     }
     if (!plot_path.empty())

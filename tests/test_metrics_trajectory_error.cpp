@@ -88,6 +88,56 @@ TEST(TrajectoryAte, NonFinitePosesAreRefused) {
   EXPECT_THROW(metrics::computeRpe(truth, estimate), std::invalid_argument);
 }
 
+namespace {
+/// `truth` with Gaussian noise of `sigma` metres on every coordinate, drawn from `seed`.
+Trajectory noisyCopy(const Trajectory& truth, double sigma, unsigned seed) {
+  Trajectory estimate = truth;
+  std::mt19937 random(seed);
+  std::normal_distribution<double> noise(0.0, sigma);
+  for (auto& stamped : estimate)
+    stamped.pose.translation() += Eigen::Vector3d(noise(random), noise(random), noise(random));
+  return estimate;
+}
+}  // namespace
+
+TEST(TrajectoryAteComparison, TellsAClearlyBetterEstimateFromOneOfTheSameQuality) {
+  const Trajectory truth = curvedTrajectory(40);
+  const Trajectory precise = moved(noisyCopy(truth, 0.002, 5), rigidMotion(1.0, 0.0, 0.5, 0.2, 0.0, -0.4));
+  const Trajectory coarse = noisyCopy(truth, 0.006, 6);
+  const metrics::AteComparison clear = metrics::compareAte(truth, precise, coarse);
+  EXPECT_EQ(clear.common_poses, truth.size());
+  EXPECT_NEAR(clear.first_rmse_m, metrics::computeAte(truth, precise).translation.rmse, 1e-12);
+  EXPECT_NEAR(clear.second_rmse_m, metrics::computeAte(truth, coarse).translation.rmse, 1e-12);
+  EXPECT_GT(clear.first_lower_fraction, 0.95);
+  EXPECT_LT(metrics::compareAte(truth, coarse, precise).first_lower_fraction, 0.05);  // the other way round
+  // Two draws of the same noise: neither is better beyond the scatter of 40 poses.
+  const metrics::AteComparison same =
+      metrics::compareAte(truth, noisyCopy(truth, 0.004, 7), noisyCopy(truth, 0.004, 8));
+  EXPECT_GT(same.first_lower_fraction, 0.05);
+  EXPECT_LT(same.first_lower_fraction, 0.95);
+  EXPECT_LT(std::abs(same.error_correlation), 0.5);  // independent noise
+  // An estimate against itself: every resample ties, half each, and the errors correlate fully.
+  const metrics::AteComparison itself = metrics::compareAte(truth, precise, precise);
+  EXPECT_DOUBLE_EQ(itself.first_lower_fraction, 0.5);
+  EXPECT_NEAR(itself.error_correlation, 1.0, 1e-9);
+  // Deterministic: the same inputs give the same fraction.
+  EXPECT_EQ(metrics::compareAte(truth, precise, coarse).first_lower_fraction, clear.first_lower_fraction);
+}
+
+TEST(TrajectoryAteComparison, ComparesOnlyThePosesBothHaveAndRefusesTooFew) {
+  const Trajectory truth = curvedTrajectory(40);
+  const Trajectory first(truth.begin(), truth.begin() + 30), second(truth.begin() + 20, truth.end());
+  EXPECT_EQ(metrics::compareAte(truth, first, second).common_poses, 10u);
+  const Trajectory late(truth.begin() + 28, truth.end());
+  try {
+    metrics::compareAte(truth, first, late);
+    FAIL() << "two common poses accepted";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("at least 3"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(metrics::compareAte(truth, first, second, 0.02, 0), std::invalid_argument);
+}
+
 TEST(TrajectoryRpe, ConstantWorldOffsetHasNoError) {
   const Trajectory truth = curvedTrajectory(100);
   const metrics::RelativePoseError rpe =

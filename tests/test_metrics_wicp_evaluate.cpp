@@ -122,6 +122,27 @@ TEST(WicpEvaluate, NoisyCopyHasTheNoiseAsError) {
   EXPECT_NE(run.out.find(centimetres.str()), std::string::npos) << run.out;
 }
 
+TEST(WicpEvaluate, VersusAnotherEstimateSaysWhetherTheDifferenceIsBeyondTheScatter) {
+  WEIGHTED_ICP_REQUIRE_FILE(kGroundTruth);
+  const fs::path dir = weighted_icp::testing::scratchDir("evaluate_versus");
+  const Trajectory groundtruth = io::readTrajectory(kGroundTruth.string());
+  writePerturbedCopy(groundtruth, 0.001, dir / "precise.txt");
+  writePerturbedCopy(groundtruth, 0.01, dir / "coarse.txt");
+  const ToolRun run = runEvaluate(
+      quoted(kGroundTruth) + " " + quoted(dir / "precise.txt") + " --versus " + quoted(dir / "coarse.txt") + " --json",
+      dir);
+  ASSERT_EQ(run.status, 0) << run.err;
+  const std::string json = lastLine(run.out);
+  EXPECT_EQ(jsonNumber(json, "common_poses"), jsonNumber(json, "pairs"));
+  EXPECT_GT(jsonNumber(json, "versus_ate_rmse_m"), 5.0 * jsonNumber(json, "ate_rmse_m"));
+  EXPECT_GT(jsonNumber(json, "estimate_lower_fraction"), 0.95);
+  EXPECT_NE(run.out.find("lower beyond the scatter"), std::string::npos) << run.out;
+  const ToolRun missing = runEvaluate(
+      quoted(kGroundTruth) + " " + quoted(dir / "precise.txt") + " --versus " + quoted(dir / "none.txt"), dir);
+  EXPECT_NE(missing.status, 0);
+  EXPECT_NE(missing.err.find("none.txt"), std::string::npos) << missing.err;
+}
+
 TEST(WicpEvaluate, RpeDeltaInFramesIsAccepted) {
   WEIGHTED_ICP_REQUIRE_FILE(kGroundTruth);
   const fs::path dir = weighted_icp::testing::scratchDir("evaluate_frames");

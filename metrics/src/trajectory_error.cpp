@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <limits>
+#include <random>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -33,7 +35,16 @@ Trajectory sortedByTime(Trajectory trajectory) {
 
 }  // namespace
 
-AbsoluteTrajectoryError computeAte(const Trajectory& groundtruth, const Trajectory& estimate, double max_difference) {
+namespace {
+
+/// The ATE's pose errors, each with the ground-truth pose it was paired with.
+struct AlignedErrors {
+  AbsoluteTrajectoryError ate;
+  std::vector<std::size_t> truth_index;  // per error
+  std::vector<double> errors;            // metres, after alignment
+};
+
+AlignedErrors alignedErrors(const Trajectory& groundtruth, const Trajectory& estimate, double max_difference) {
   io::requireFiniteTrajectory(groundtruth, "ground-truth");
   io::requireFiniteTrajectory(estimate, "estimated");
   const auto matches = io::associate(groundtruth, estimate, max_difference);
@@ -43,19 +54,101 @@ AbsoluteTrajectoryError computeAte(const Trajectory& groundtruth, const Trajecto
                              " s; the absolute trajectory error needs at least 3");
   const auto n = static_cast<Eigen::Index>(matches.size());
   Eigen::Matrix3Xd estimated_positions(3, n), true_positions(3, n);
+  AlignedErrors result;
   for (Eigen::Index k = 0; k < n; ++k) {
     const auto [g, e] = matches[static_cast<std::size_t>(k)];
     true_positions.col(k) = groundtruth[g].pose.translation();
     estimated_positions.col(k) = estimate[e].pose.translation();
+    result.truth_index.push_back(g);
   }
-  AbsoluteTrajectoryError result;
-  result.pairs = matches.size();
-  result.alignment.matrix() = Eigen::umeyama(estimated_positions, true_positions, false);
-  std::vector<double> errors(matches.size());
+  result.ate.pairs = matches.size();
+  result.ate.alignment.matrix() = Eigen::umeyama(estimated_positions, true_positions, false);
+  result.errors.resize(matches.size());
   for (Eigen::Index k = 0; k < n; ++k)
-    errors[static_cast<std::size_t>(k)] =
-        (result.alignment * estimated_positions.col(k) - true_positions.col(k)).norm();
-  result.translation = summarizeErrors(std::move(errors));
+    result.errors[static_cast<std::size_t>(k)] =
+        (result.ate.alignment * estimated_positions.col(k) - true_positions.col(k)).norm();
+  result.ate.translation = summarizeErrors(result.errors);
+  return result;
+}
+
+double rms(const std::vector<double>& values, const std::vector<std::size_t>& picks) {
+  double sum = 0.0;
+  for (const std::size_t k : picks) sum += values[k] * values[k];
+  return std::sqrt(sum / static_cast<double>(picks.size()));
+}
+
+double correlation(const std::vector<double>& a, const std::vector<double>& b) {
+  const double n = static_cast<double>(a.size());
+  double mean_a = 0.0, mean_b = 0.0;
+  for (std::size_t k = 0; k < a.size(); ++k) {
+    mean_a += a[k] / n;
+    mean_b += b[k] / n;
+  }
+  double ab = 0.0, aa = 0.0, bb = 0.0;
+  for (std::size_t k = 0; k < a.size(); ++k) {
+    ab += (a[k] - mean_a) * (b[k] - mean_b);
+    aa += (a[k] - mean_a) * (a[k] - mean_a);
+    bb += (b[k] - mean_b) * (b[k] - mean_b);
+  }
+  return aa > 0.0 && bb > 0.0 ? ab / std::sqrt(aa * bb) : std::numeric_limits<double>::quiet_NaN();
+}
+
+}  // namespace
+
+AbsoluteTrajectoryError computeAte(const Trajectory& groundtruth, const Trajectory& estimate, double max_difference) {
+  return alignedErrors(groundtruth, estimate, max_difference).ate;
+}
+
+AteComparison compareAte(const Trajectory& groundtruth, const Trajectory& first, const Trajectory& second,
+                         double max_difference, std::size_t resamples) {
+  if (resamples == 0) throw std::invalid_argument("compareAte: resamples must be > 0");
+  const AlignedErrors a = alignedErrors(groundtruth, first, max_difference);
+  const AlignedErrors b = alignedErrors(groundtruth, second, max_difference);
+  // The poses both were paired with, each estimate aligned on its own as the ATE is.
+  std::vector<double> errors_a, errors_b;
+  for (std::size_t i = 0, j = 0; i < a.truth_index.size() && j < b.truth_index.size();) {
+    if (a.truth_index[i] < b.truth_index[j]) {
+      ++i;
+    } else if (b.truth_index[j] < a.truth_index[i]) {
+      ++j;
+    } else {
+      errors_a.push_back(a.errors[i++]);
+      errors_b.push_back(b.errors[j++]);
+    }
+  }
+  if (errors_a.size() < 3)
+    throw std::runtime_error("only " + std::to_string(errors_a.size()) +
+                             " ground-truth poses are paired with both estimates; a comparison needs at least 3");
+  AteComparison result;
+  result.first = a.ate;
+  result.second = b.ate;
+  result.common_poses = errors_a.size();
+  std::vector<std::size_t> all(errors_a.size());
+  for (std::size_t k = 0; k < all.size(); ++k) all[k] = k;
+  result.first_rmse_m = rms(errors_a, all);
+  result.second_rmse_m = rms(errors_b, all);
+  result.error_correlation = correlation(errors_a, errors_b);
+  // Resampling whole poses keeps what both share at a pose (the ground truth's own error, a frame hard for both)
+  // on both sides of each comparison: only how the estimates differ decides. Trajectory errors drift slowly, so
+  // runs of consecutive poses are drawn (a moving-block bootstrap, blocks of n^(1/3) poses): single poses drawn
+  // alone would take 32 correlated poses for 32 independent ones and claim differences the sequence cannot show.
+  const std::size_t n = all.size();
+  const auto block = static_cast<std::size_t>(std::ceil(std::cbrt(static_cast<double>(n))));
+  std::mt19937 random(1);
+  std::uniform_int_distribution<std::size_t> start(0, n - block);
+  double first_lower = 0.0;
+  std::vector<std::size_t> sample;
+  sample.reserve(n + block);
+  for (std::size_t r = 0; r < resamples; ++r) {
+    sample.clear();
+    while (sample.size() < n)
+      for (std::size_t k = start(random), end = k + block; k < end; ++k) sample.push_back(k);
+    sample.resize(n);
+    const double rmse_a = rms(errors_a, sample), rmse_b = rms(errors_b, sample);
+    first_lower += rmse_a < rmse_b ? 1.0 : rmse_a == rmse_b ? 0.5 : 0.0;  // a tie counts for both
+  }
+  result.resamples = resamples;
+  result.first_lower_fraction = first_lower / static_cast<double>(resamples);
   return result;
 }
 

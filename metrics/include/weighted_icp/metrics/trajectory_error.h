@@ -31,6 +31,34 @@ struct AbsoluteTrajectoryError {
 AbsoluteTrajectoryError computeAte(const io::Trajectory& groundtruth, const io::Trajectory& estimate,
                                    double max_difference = 0.02);
 
+/// @brief Two estimates of one sequence compared pose by pose, to tell a real difference from the scatter of a
+/// short sequence: over the ground-truth poses both are paired with (each estimate aligned on its own, as computeAte
+/// does), how often the first has the lower RMSE when those poses are resampled with replacement, in runs of
+/// consecutive poses as trajectory errors drift (a paired moving-block bootstrap, blocks of n^(1/3) poses).
+struct AteComparison {
+  AbsoluteTrajectoryError first, second;           // each over all its pairs, as computeAte
+  std::size_t common_poses = 0;                    // ground-truth poses paired with both
+  double first_rmse_m = 0.0, second_rmse_m = 0.0;  // over the common poses
+  /// Pearson correlation of the two per-pose errors: near 1, both share most of their error (ground truth, hard
+  /// frames).
+  double error_correlation = 0.0;
+  std::size_t resamples = 0;
+  /// Fraction of resamples in which the first's RMSE is the lower: near 0.5, no difference the poses can show;
+  /// above 0.95 (below 0.05), the first (the second) is better beyond the scatter.
+  double first_lower_fraction = 0.0;
+};
+
+/// @brief Compares two estimates' absolute trajectory errors on the same ground truth (AteComparison), with a
+/// deterministic bootstrap. Throws as computeAte for either estimate, std::runtime_error when fewer than 3
+/// ground-truth poses are paired with both, std::invalid_argument for 0 resamples.
+/// @param groundtruth camera-to-world poses
+/// @param first an estimate, in any frame
+/// @param second another estimate of the same frames, in any frame
+/// @param max_difference as for computeAte
+/// @param resamples bootstrap resamples
+AteComparison compareAte(const io::Trajectory& groundtruth, const io::Trajectory& first, const io::Trajectory& second,
+                         double max_difference = 0.02, std::size_t resamples = 2000);
+
 /// @brief How the RPE's delta is counted.
 enum class DeltaUnit { Seconds, Frames };
 
