@@ -15,18 +15,49 @@ namespace weighted_icp::frontend {
 
 namespace {
 
-/// The colour camera's distortion (OpenCV's k1 k2 p1 p2 k3) applied to normalised coordinates.
-void distort(const PinholeCamera& camera, float& x, float& y) {
-  const auto& d = camera.distortion;
-  const float k1 = static_cast<float>(d[0]), k2 = static_cast<float>(d[1]), p1 = static_cast<float>(d[2]),
-              p2 = static_cast<float>(d[3]), k3 = static_cast<float>(d[4]);
-  const float r2 = x * x + y * y;
-  const float radial = 1.0f + r2 * (k1 + r2 * (k2 + r2 * k3));
-  const float xd = x * radial + 2.0f * p1 * x * y + p2 * (r2 + 2.0f * x * x);
-  const float yd = y * radial + p1 * (r2 + 2.0f * y * y) + 2.0f * p2 * x * y;
-  x = xd;
-  y = yd;
-}
+/// The colour camera's distortion (OpenCV's k1 k2 p1 p2 k3), applied to normalised coordinates.
+struct Distortion {
+  float k1, k2, p1, p2, k3;
+  explicit Distortion(const PinholeCamera& camera)
+      : k1(static_cast<float>(camera.distortion[0])),
+        k2(static_cast<float>(camera.distortion[1])),
+        p1(static_cast<float>(camera.distortion[2])),
+        p2(static_cast<float>(camera.distortion[3])),
+        k3(static_cast<float>(camera.distortion[4])) {}
+  void apply(float& x, float& y) const {
+    const float r2 = x * x + y * y;
+    const float radial = 1.0f + r2 * (k1 + r2 * (k2 + r2 * k3));
+    const float xd = x * radial + 2.0f * p1 * x * y + p2 * (r2 + 2.0f * x * x);
+    const float yd = y * radial + p1 * (r2 + 2.0f * y * y) + 2.0f * p2 * x * y;
+    x = xd;
+    y = yd;
+  }
+};
+
+/// Where the depth pixels of one row land in the colour image: pixel (target_u, target_v) at depth target_z. No
+/// branch and no aliasing, so that the compiler vectorises it (the scatter that follows cannot be).
+struct RowProjection {
+  const float* ray_x;  // per column
+  Eigen::Vector3f column_x, row_direction, translation;
+  float fx, fy, cx, cy;
+
+  template <bool kDistorted>
+  void project(const float* __restrict depth, std::size_t columns, const Distortion& distortion,
+               float* __restrict target_u, float* __restrict target_v, float* __restrict target_z) const {
+    for (std::size_t u = 0; u < columns; ++u) {
+      const float z = depth[u];
+      const float px = z * (ray_x[u] * column_x.x() + row_direction.x()) + translation.x();
+      const float py = z * (ray_x[u] * column_x.y() + row_direction.y()) + translation.y();
+      const float pz = z * (ray_x[u] * column_x.z() + row_direction.z()) + translation.z();
+      const float inverse_z = 1.0f / pz;
+      float x = px * inverse_z, y = py * inverse_z;
+      if constexpr (kDistorted) distortion.apply(x, y);
+      target_u[u] = fx * x + cx;
+      target_v[u] = fy * y + cy;
+      target_z[u] = pz;
+    }
+  }
+};
 
 /// Throws std::invalid_argument unless the camera has a depth camera and the depth is CV_32F of its size.
 void checkInputs(const char* function, const cv::Mat& depth, const PinholeCamera& camera) {
@@ -63,58 +94,65 @@ cv::Mat registerDepthWithOpenCv(const cv::Mat& depth, const PinholeCamera& camer
 cv::Mat registerDepthToColor(const cv::Mat& depth, const PinholeCamera& camera) {
   checkInputs("registerDepthToColor", depth, camera);
   // By hand rather than cv::rgbd::registerDepth (registerDepthWithOpenCv), which gives the same depths (tested) in
-  // 2.7 times the time: 14.8 ms a frame, as long as the rest of tracking (docs/frontend_generalisation.md).
+  // 16.8 ms against 1.9 ms on a frame of fr1 (8.2 against 1.5 ms without lens distortion, fr3):
+  // wicp_benchmark_matching --benchmark_filter=Register.
   const DepthCamera& sensor = *camera.unregistered_depth;
   const Eigen::Isometry3f depth_to_color = sensor.depthInColor().cast<float>();
   const Eigen::Matrix3f rotation = depth_to_color.linear();
   const Eigen::Vector3f translation = depth_to_color.translation();
-  std::vector<float> ray_x(static_cast<std::size_t>(depth.cols)), ray_y(static_cast<std::size_t>(depth.rows));
+  // A depth pixel's point in the colour camera is z * (R ray(u, v)) + t, and R ray(u, v) = x_u R_0 + (y_v R_1 + R_2):
+  // one column of R per pixel, the rest once per row.
+  std::vector<float> ray_x(static_cast<std::size_t>(depth.cols));
   for (int u = 0; u < depth.cols; ++u)
     ray_x[static_cast<std::size_t>(u)] = static_cast<float>((u - sensor.cx) / sensor.fx);
-  for (int v = 0; v < depth.rows; ++v)
-    ray_y[static_cast<std::size_t>(v)] = static_cast<float>((v - sensor.cy) / sensor.fy);
+  const Eigen::Vector3f column_x = rotation.col(0);
   const bool distorted = camera.hasDistortion();
+  const Distortion distortion(camera);
   const float fx = static_cast<float>(camera.fx), fy = static_cast<float>(camera.fy);
   const float cx = static_cast<float>(camera.cx), cy = static_cast<float>(camera.cy);
+  const float width = static_cast<float>(depth.cols), height = static_cast<float>(depth.rows);
   const float unseen = std::numeric_limits<float>::infinity();
-  cv::Mat registered(depth.size(), CV_32F, cv::Scalar(unseen));
+  cv::Mat registered(depth.size(), CV_32F);
+  std::fill(registered.ptr<float>(0), registered.ptr<float>(0) + registered.total(), unseen);  // continuous, new
+  // Per row, first every pixel's projection (no branch: the compiler vectorises it), then the scatter.
+  const std::size_t columns = static_cast<std::size_t>(depth.cols);
+  std::vector<float> target_u(columns), target_v(columns), target_z(columns);
   for (int v = 0; v < depth.rows; ++v) {
     const float* row = depth.ptr<float>(v);
-    for (int u = 0; u < depth.cols; ++u) {
-      const float z = row[u];
-      if (!(z > 0.0f) || !std::isfinite(z)) continue;
-      const Eigen::Vector3f point = rotation * Eigen::Vector3f(ray_x[static_cast<std::size_t>(u)] * z,
-                                                               ray_y[static_cast<std::size_t>(v)] * z, z) +
-                                    translation;
-      if (!(point.z() > 0.0f)) continue;
-      const float inverse_z = 1.0f / point.z();
-      float x = point.x() * inverse_z, y = point.y() * inverse_z;
-      if (distorted) distort(camera, x, y);
-      const float uc = fx * x + cx, vc = fy * y + cy;
-      if (!(uc > -1.0f && vc > -1.0f && uc < static_cast<float>(depth.cols) && vc < static_cast<float>(depth.rows)))
-        continue;
+    const Eigen::Vector3f row_direction =
+        static_cast<float>((v - sensor.cy) / sensor.fy) * rotation.col(1) + rotation.col(2);
+    const RowProjection projection{ray_x.data(), column_x, row_direction, translation, fx, fy, cx, cy};
+    if (distorted)
+      projection.project<true>(row, columns, distortion, target_u.data(), target_v.data(), target_z.data());
+    else
+      projection.project<false>(row, columns, distortion, target_u.data(), target_v.data(), target_z.data());
+    for (std::size_t u = 0; u < columns; ++u) {
+      const float z = row[u], pz = target_z[u], uc = target_u[u], vc = target_v[u];
+      // Unmeasured (0, NaN, infinite), behind the colour camera, or outside its image.
+      if (!(z > 0.0f) || !(z < unseen) || !(pz > 0.0f)) continue;
+      if (!(uc > -1.0f && vc > -1.0f && uc < width && vc < height)) continue;
       // The 2 x 2 pixels around the projection (as registerDepth's depth dilation): a depth image seen from a
       // little aside leaves no one-pixel cracks; where two surfaces land, the nearer one hides the farther.
       const int u0 = static_cast<int>(uc + 1.0f) - 1, v0 = static_cast<int>(vc + 1.0f) - 1;  // floor, as uc, vc > -1
-      const float z_color = point.z();
       if (u0 >= 0 && v0 >= 0 && u0 + 1 < depth.cols && v0 + 1 < depth.rows) {
         float* top = registered.ptr<float>(v0) + u0;
         float* bottom = registered.ptr<float>(v0 + 1) + u0;
-        top[0] = std::min(top[0], z_color);
-        top[1] = std::min(top[1], z_color);
-        bottom[0] = std::min(bottom[0], z_color);
-        bottom[1] = std::min(bottom[1], z_color);
+        top[0] = std::min(top[0], pz);
+        top[1] = std::min(top[1], pz);
+        bottom[0] = std::min(bottom[0], pz);
+        bottom[1] = std::min(bottom[1], pz);
         continue;
       }
       for (int tv = v0; tv <= v0 + 1; ++tv) {
         if (tv < 0 || tv >= depth.rows) continue;
         float* target = registered.ptr<float>(tv);
         for (int tu = u0; tu <= u0 + 1; ++tu)
-          if (tu >= 0 && tu < depth.cols) target[tu] = std::min(target[tu], z_color);
+          if (tu >= 0 && tu < depth.cols) target[tu] = std::min(target[tu], pz);
       }
     }
   }
-  registered.setTo(0.0f, registered == unseen);
+  for (float *value = registered.ptr<float>(0), *end = value + registered.total(); value != end; ++value)
+    if (*value == unseen) *value = 0.0f;
   return registered;
 }
 

@@ -20,7 +20,7 @@ namespace weighted_icp::frontend {
 cv::Mat registerDepthToColor(const cv::Mat& depth, const PinholeCamera& camera);
 
 /// @brief The same registration by OpenCV's cv::rgbd::registerDepth (with its depth dilation), for comparison: the
-/// same depths within a few millimetres, about 2.7 times slower (docs/frontend_generalisation.md).
+/// same depths within a few millimetres, 5 to 9 times slower (wicp_benchmark_matching --benchmark_filter=Register).
 /// @param depth as for registerDepthToColor
 /// @param camera as for registerDepthToColor
 cv::Mat registerDepthWithOpenCv(const cv::Mat& depth, const PinholeCamera& camera);
