@@ -2,6 +2,7 @@
 #include "weighted_icp/io/camera.h"
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <cmath>
 #include <filesystem>
@@ -9,6 +10,7 @@
 #include <limits>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
 #include <vector>
 
 #include "text_fields.h"
@@ -22,6 +24,20 @@ const char* const kDistortionKeys[5] = {"k1", "k2", "p1", "p2", "k3"};
 /// The unregistered depth camera's keys, all or none: intrinsics, then its pose in the colour camera's frame.
 const char* const kDepthCameraKeys[10] = {"depth_fx", "depth_fy", "depth_cx", "depth_cy", "depth_tx",
                                           "depth_ty", "depth_tz", "depth_rx", "depth_ry", "depth_rz"};
+/// The depth camera's values in the order of kDepthCameraKeys (pointers to const for a const DepthCamera).
+template <typename Depth>
+std::array<decltype(&std::declval<Depth&>().fx), 10> depthCameraValues(Depth& depth) {
+  return {&depth.fx,
+          &depth.fy,
+          &depth.cx,
+          &depth.cy,
+          &depth.translation_m[0],
+          &depth.translation_m[1],
+          &depth.translation_m[2],
+          &depth.rotation_rad[0],
+          &depth.rotation_rad[1],
+          &depth.rotation_rad[2]};
+}
 /// The depth camera may sit at most this far from the colour camera (metres) and turn at most pi.
 constexpr double kMaxDepthCameraOffset = 1.0;
 
@@ -146,17 +162,8 @@ void readDepthCamera(const cv::FileStorage& storage, const ReadReal& real, Pinho
   for (const char* key : kDepthCameraKeys) any |= !storage[key].empty();
   if (!any) return;
   DepthCamera depth;
-  double* const values[10] = {&depth.fx,
-                              &depth.fy,
-                              &depth.cx,
-                              &depth.cy,
-                              &depth.translation_m[0],
-                              &depth.translation_m[1],
-                              &depth.translation_m[2],
-                              &depth.rotation_rad[0],
-                              &depth.rotation_rad[1],
-                              &depth.rotation_rad[2]};
-  for (std::size_t i = 0; i < 10; ++i) real(kDepthCameraKeys[i], *values[i]);
+  const auto values = depthCameraValues(depth);
+  for (std::size_t i = 0; i < values.size(); ++i) real(kDepthCameraKeys[i], *values[i]);
   camera.unregistered_depth = depth;
 }
 
@@ -233,17 +240,8 @@ void saveCamera(const PinholeCamera& camera, const std::string& path) {
   for (std::size_t i = 0; i < camera.distortion.size(); ++i) storage << kDistortionKeys[i] << camera.distortion[i];
   storage << "width" << camera.width << "height" << camera.height << "depth_factor" << camera.depth_factor;
   if (const auto& depth = camera.unregistered_depth) {
-    const double values[10] = {depth->fx,
-                               depth->fy,
-                               depth->cx,
-                               depth->cy,
-                               depth->translation_m[0],
-                               depth->translation_m[1],
-                               depth->translation_m[2],
-                               depth->rotation_rad[0],
-                               depth->rotation_rad[1],
-                               depth->rotation_rad[2]};
-    for (std::size_t i = 0; i < 10; ++i) storage << kDepthCameraKeys[i] << values[i];
+    const auto values = depthCameraValues(*depth);
+    for (std::size_t i = 0; i < values.size(); ++i) storage << kDepthCameraKeys[i] << *values[i];
   }
   const std::string text = storage.releaseAndGetString();
   writeAtomically(path, [&](const std::string& temporary) {
