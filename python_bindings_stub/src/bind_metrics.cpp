@@ -1,4 +1,4 @@
-// ate() and rpe() for Python: the numbers wicp_evaluate prints, on files or arrays.
+// ate(), rpe() and compare_ate() for Python: the numbers wicp_evaluate prints, on files or arrays.
 #include <pybind11/stl.h>
 
 #include "arrays.h"
@@ -43,6 +43,21 @@ void bindMetrics(py::module_& m) {
       .def_readonly("translation", &metrics::RelativePoseError::translation, "Translation errors (metres).")
       .def_readonly("rotation_deg", &metrics::RelativePoseError::rotation_deg, "Rotation errors (degrees).");
 
+  py::class_<metrics::AteComparison>(m, "AteComparison",
+                                     "Two estimates' ATE compared pose by pose (wicp_evaluate --versus).")
+      .def_readonly("first", &metrics::AteComparison::first, "The first estimate's ATE over all its pairs.")
+      .def_readonly("second", &metrics::AteComparison::second, "The second estimate's ATE over all its pairs.")
+      .def_readonly("common_poses", &metrics::AteComparison::common_poses, "Ground-truth poses paired with both.")
+      .def_readonly("first_rmse", &metrics::AteComparison::first_rmse_m, "The first's RMSE over the common poses (m).")
+      .def_readonly("second_rmse", &metrics::AteComparison::second_rmse_m,
+                    "The second's RMSE over the common poses (m).")
+      .def_readonly("error_correlation", &metrics::AteComparison::error_correlation,
+                    "Pearson correlation of the two per-pose errors.")
+      .def_readonly("resamples", &metrics::AteComparison::resamples, "Bootstrap resamples.")
+      .def_readonly("first_lower_fraction", &metrics::AteComparison::first_lower_fraction,
+                    "Fraction of resamples in which the first's RMSE is the lower (ties count half): near 0.5 no "
+                    "difference the poses can show, above 0.95 the first is better beyond the scatter.");
+
   m.def(
       "ate",
       [](const py::object& groundtruth, const py::object& estimate, double max_difference) {
@@ -69,6 +84,20 @@ void bindMetrics(py::module_& m) {
       },
       py::arg("gt"), py::arg("est"), py::arg("delta") = 1.0, py::arg("unit") = "s",
       "Relative pose error over pose pairs delta apart (unit 's' seconds or 'f' frames), as wicp_evaluate.");
+  m.def(
+      "compare_ate",
+      [](const py::object& groundtruth, const py::object& first, const py::object& second, double max_difference,
+         std::size_t resamples) {
+        const Trajectory truth = toTrajectory(groundtruth, "gt");
+        const Trajectory a = toTrajectory(first, "first");
+        const Trajectory b = toTrajectory(second, "second");
+        py::gil_scoped_release unlocked;
+        return metrics::compareAte(truth, a, b, max_difference, resamples);
+      },
+      py::arg("gt"), py::arg("first"), py::arg("second"), py::arg("max_difference") = 0.02, py::arg("resamples") = 2000,
+      "Is first's ATE lower than second's beyond the scatter of the poses? A paired moving-block bootstrap over the "
+      "ground-truth poses both are paired with (deterministic), as wicp_evaluate --versus. Trajectories as ate() "
+      "takes them.");
   m.def(
       "read_trajectory", [](const py::object& path) { return toTumRows(toTrajectory(path, "path")); }, py::arg("path"),
       "A TUM trajectory file as an (N, 8) array (timestamp tx ty tz qx qy qz qw); ValueError naming file and line.");

@@ -1,4 +1,4 @@
-"""ate() and rpe(): wicp_evaluate's numbers, on files and on arrays."""
+"""ate(), rpe() and compare_ate(): wicp_evaluate's numbers, on files and on arrays."""
 
 from pathlib import Path
 
@@ -34,6 +34,25 @@ def test_ate_and_rpe_match_wicp_evaluate(tum_folder: Path, tmp_path: Path) -> No
     # Arrays read back from the files give the same numbers as the files.
     from_arrays = wi.ate(wi.read_trajectory(tum_folder / "groundtruth.txt"), wi.read_trajectory(est_path))
     assert from_arrays.rmse == ate.rmse
+
+
+def test_compare_ate_matches_wicp_evaluate_versus(tum_folder: Path, tmp_path: Path) -> None:
+    truth = wi.read_trajectory(tum_folder / "groundtruth.txt")
+    rng = np.random.default_rng(4)
+    precise, coarse = truth.copy(), truth.copy()
+    precise[:, 1:4] += rng.normal(0.0, 0.001, (len(truth), 3))
+    coarse[:, 1:4] += rng.normal(0.0, 0.01, (len(truth), 3))
+    wi.write_trajectory(precise, tmp_path / "precise.txt")
+    wi.write_trajectory(coarse, tmp_path / "coarse.txt")
+    gt = str(tum_folder / "groundtruth.txt")
+    tool = run_tool("wicp_evaluate", gt, str(tmp_path / "precise.txt"), "--versus", str(tmp_path / "coarse.txt"))
+    c = wi.compare_ate(gt, tmp_path / "precise.txt", tmp_path / "coarse.txt")
+    assert c.common_poses == tool["common_poses"] == c.first.pairs
+    assert c.first_lower_fraction == tool["estimate_lower_fraction"] and c.first_lower_fraction > 0.95
+    assert c.second.rmse == tool["versus_ate_rmse_m"] and c.first_rmse < c.second_rmse
+    assert wi.compare_ate(gt, tmp_path / "coarse.txt", tmp_path / "precise.txt").first_lower_fraction < 0.05
+    with pytest.raises(ValueError, match="resamples"):
+        wi.compare_ate(gt, precise, coarse, resamples=0)
 
 
 def test_poses_pair_form_equals_rows() -> None:

@@ -12,6 +12,7 @@ See docs/python.md in the source tree.
 from ._weighted_icp import (
     AbsoluteTrajectoryError,
     AlignmentResult,
+    AteComparison,
     Camera,
     ErrorStatistics,
     LandmarkMap,
@@ -21,6 +22,7 @@ from ._weighted_icp import (
     __version__,
     align,
     ate,
+    compare_ate,
     read_trajectory,
     rpe,
     run_tum,
@@ -34,6 +36,7 @@ from ._weighted_icp import (
 __all__ = [
     "AbsoluteTrajectoryError",
     "AlignmentResult",
+    "AteComparison",
     "Camera",
     "ErrorStatistics",
     "LandmarkMap",
@@ -43,6 +46,7 @@ __all__ = [
     "__version__",
     "align",
     "ate",
+    "compare_ate",
     "read_trajectory",
     "rpe",
     "run_tum",

@@ -147,8 +147,37 @@ class RelativePoseError:
     @property
     def rotation_deg(self) -> ErrorStatistics: ...
 
+class AteComparison:
+    """Two estimates' ATE compared pose by pose (wicp_evaluate --versus)."""
+
+    @property
+    def first(self) -> AbsoluteTrajectoryError: ...
+    @property
+    def second(self) -> AbsoluteTrajectoryError: ...
+    @property
+    def common_poses(self) -> int: ...
+    @property
+    def first_rmse(self) -> float: ...
+    @property
+    def second_rmse(self) -> float: ...
+    @property
+    def error_correlation(self) -> float: ...
+    @property
+    def resamples(self) -> int: ...
+    @property
+    def first_lower_fraction(self) -> float: ...
+
 def ate(gt: _TrajectoryLike, est: _TrajectoryLike, max_difference: float = 0.02) -> AbsoluteTrajectoryError:
     """Absolute trajectory error of est against gt."""
+
+def compare_ate(
+    gt: _TrajectoryLike,
+    first: _TrajectoryLike,
+    second: _TrajectoryLike,
+    max_difference: float = 0.02,
+    resamples: int = 2000,
+) -> AteComparison:
+    """Is first's ATE lower than second's beyond the scatter of the poses?"""
 
 def rpe(gt: _TrajectoryLike, est: _TrajectoryLike, delta: float = 1.0, unit: str = "s") -> RelativePoseError:
     """Relative pose error over pose pairs delta apart."""
