@@ -123,6 +123,7 @@ TrackingResult Frontend::track(const RgbdFrame& input) {
   if (dense_) dense_->setCurrent(image);
   followMapCorrection();
   frame_quality_.reset();
+  frame_decision_.reset();
   if (quality_gate_ && quality_gate_->assessesEveryFrame()) {
     // Cheap measures (and the paper's gate) see every frame: the history is the whole sequence.
     frame_quality_ = quality_gate_->assess(current_color_);
@@ -167,11 +168,24 @@ void Frontend::transitionTo(FrontendState next) {
 bool Frontend::refusedByQualityGate(TrackingResult& result, bool must_keep) {
   // The paper's mode dropped bad frames in track() already.
   if (!quality_gate_ || options_.quality.mode == QualityGateMode::PaperEveryFrame) return false;
-  QualityJudgement judgement = frame_quality_ ? *frame_quality_ : quality_gate_->assess(current_color_);
-  quality_gate_->decide(judgement, must_keep);
-  result.quality_score = judgement.score;
-  result.refused_by_quality_gate = judgement.refused;
+  // Asked once a frame: a second question (2D-2D failed after the gate kept the frame) gets the same answer, and
+  // the gate counts one refusal in a row, not two.
+  if (!frame_decision_) {
+    QualityJudgement judgement = frame_quality_ ? *frame_quality_ : quality_gate_->assess(current_color_);
+    quality_gate_->decide(judgement, must_keep);
+    frame_decision_ = judgement;
+  }
+  result.quality_score = frame_decision_->score;
+  result.refused_by_quality_gate = frame_decision_->refused;
   return result.refused_by_quality_gate;
+}
+
+TrackingResult Frontend::skipLowQuality(TrackingResult result, const std::string& reason) {
+  // A bad image (blur, noise) is not a lost track: skip it on the motion model's prediction, keep the motion.
+  predictPoseOf(result);
+  result.status = TrackingStatus::SkippedLowQuality;
+  result.reason = reason + "; quality score " + std::to_string(result.quality_score);
+  return result;
 }
 
 TrackingResult Frontend::trackFrame(Frame& frame, TrackingResult result) {
@@ -337,6 +351,10 @@ std::optional<Eigen::Isometry3d> Frontend::predictPose() {
 }
 
 TrackingResult Frontend::trackWithoutFeatures(Frame& frame, TrackingResult result, const std::string& why_not_3d) {
+  // An image the gate judges degraded (blur, noise) keeps the motion model's prediction: a 2D-2D or dense pose
+  // from it is worse (fr3 with bursts of blurred, noisy frames: a 2D-2D pose 4 cm off, then one 8 cm off). The
+  // fallbacks are for good images without depth.
+  if (refusedByQualityGate(result)) return skipLowQuality(result, why_not_3d);
   const DenseOdometryUse use = options_.dense_odometry.use;
   if (!dense_ || !(use == DenseOdometryUse::Fallback || use == DenseOdometryUse::PriorAndFallback))
     return trackRelative(frame, result, why_not_3d);
@@ -404,13 +422,8 @@ void Frontend::matchLastKeyframe(const Frame& frame, std::vector<Eigen::Vector2d
 }
 
 TrackingResult Frontend::lose(TrackingResult result, const std::string& reason) {
+  if (refusedByQualityGate(result)) return skipLowQuality(result, reason);
   predictPoseOf(result);
-  if (refusedByQualityGate(result)) {
-    // A bad image (blur, noise) is not a lost track: skip it, keep the motion.
-    result.status = TrackingStatus::SkippedLowQuality;
-    result.reason = reason + "; quality score " + std::to_string(result.quality_score);
-    return result;
-  }
   // A new segment starts at the next frame that can: from depth, it tracks the scene again at once, where
   // coasting on the prediction for a few frames kept the 2D-2D fallback going and drifted (fr3 blur: 3.7 -> 36 cm).
   transitionTo(FrontendState::Lost);

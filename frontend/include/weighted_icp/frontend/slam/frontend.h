@@ -221,6 +221,8 @@ class Frontend {
   void setPose(TrackingResult& result, const Eigen::Isometry3d& pose_wc) const;
   /// Scores `color` with the gate; true when it is refused (never when `must_keep`, in relative mode).
   bool refusedByQualityGate(TrackingResult& result, bool must_keep = false);
+  /// A frame the gate refused: SkippedLowQuality, posed by the motion model's prediction.
+  TrackingResult skipLowQuality(TrackingResult result, const std::string& reason);
   /// True when the camera moved or turned enough since the last keyframe, or too few of its points are tracked.
   bool needsKeyframe(const Eigen::Isometry3d& pose_wc, std::size_t tracked) const;
   // Issue #11: ROI matching and the keyframe homography (frontend_roi_matching.cpp).
@@ -278,6 +280,8 @@ class Frontend {
   cv::Mat current_color_;  // the image being tracked, for the quality gate
   /// Its assessment, when the gate sees every frame.
   std::optional<QualityJudgement> frame_quality_;
+  /// The gate's decision on the frame being tracked, once asked (refusedByQualityGate).
+  std::optional<QualityJudgement> frame_decision_;
 
   // Issue #11: state of the ablation options.
   /// The last keyframe's planes (world) and, per point it observes, its pixel and plane (-1: none).
