@@ -206,7 +206,8 @@ class Frontend {
   // Issue #11: dense odometry.
   /// The pose guess: the dense motion from the last posed frame when it is the prior, else constant velocity.
   std::optional<Eigen::Isometry3d> predictPose();
-  /// 3D-2D failed: the dense odometry's pose when it is the fallback and registers the frame, else 2D-2D.
+  /// 3D-2D failed: skipped on the prediction if the quality gate refuses the image; else the dense odometry's pose
+  /// when it is the fallback and registers the frame, else 2D-2D.
   TrackingResult trackWithoutFeatures(Frame& frame, TrackingResult result, const std::string& why_not_3d);
   /// Pixel pairs (last keyframe, frame) of the descriptor matches between the two.
   void matchLastKeyframe(const Frame& frame, std::vector<Eigen::Vector2d>& keyframe_pixels,
