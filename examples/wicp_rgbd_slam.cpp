@@ -7,9 +7,9 @@
 //   graph.txt       the mini-map graph (docs/mapping.md), loop edges included
 //   loops.txt       the accepted loops (keyframe timestamps, relative pose, inliers, fitness)
 //   loop_candidates.txt  every candidate place recognition proposed and its verdict (why a loop was not closed)
-//   session/        the session folder wicp_merge reads
-//   report.json     counts, timing, skipped frames, loops, ATE when ground truth exists
-//   groundtruth.txt the synthetic sequence's true poses (TUM format), for wicp_evaluate
+//   frames.txt      one line per frame: how it was tracked, with what, and why not (where to look when tracking is
+//   lost) session/        the session folder wicp_merge reads report.json     counts, timing, skipped frames, loops,
+//   ATE when ground truth exists groundtruth.txt the synthetic sequence's true poses (TUM format), for wicp_evaluate
 // Loops are closed by default (place recognition with the default vocabulary
 // trained at build time, geometric verification, pose graph); --no-loop-closure
 // turns that off.
@@ -36,6 +36,7 @@
 #include "tool_support.h"
 #include "weighted_icp/core/named_values.h"
 #include "weighted_icp/core/statistics.h"
+#include "weighted_icp/frontend/slam/frontend_choices.h"
 #include "weighted_icp/io/atomic_folder.h"
 #include "weighted_icp/io/cloud_io.h"
 #include "weighted_icp/io/map_format.h"
@@ -272,6 +273,25 @@ std::map<std::string, std::size_t> writeLoopCandidates(const fs::path& path, con
   return refusals;
 }
 
+/// frames.txt: one frame a line, `index timestamp status predicted keyframe features matches inliers dynamic
+/// quality_score tracking_ms reason`: how each frame was tracked (TrackingStatus), whether its pose is the motion
+/// model's prediction, and why a frame was skipped or lost.
+void writeFrames(const fs::path& path, const frontend::RgbdSlam& slam) {
+  std::ostringstream out;
+  out << "# index timestamp status predicted keyframe features matches inliers dynamic quality_score tracking_ms "
+         "reason\n";
+  const auto& frames = slam.frames();
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    const frontend::FrameRecord& frame = frames[i];
+    const frontend::TrackingResult& r = frame.result;
+    out << i << ' ' << std::fixed << std::setprecision(6) << frame.timestamp << ' ' << frontend::toString(r.status)
+        << ' ' << r.pose_predicted << ' ' << r.keyframe << ' ' << r.features << ' ' << r.matches << ' ' << r.inliers
+        << ' ' << r.dynamic << ' ' << std::setprecision(3) << r.quality_score << ' ' << std::setprecision(2)
+        << frame.tracking_ms << ' ' << (r.reason.empty() ? "-" : r.reason) << '\n';
+  }
+  tools::writeTextFile(path.string(), out.str());
+}
+
 /// Writes trajectory.txt, session.txt, minimaps/, map.ply, graph.txt and session/ into `dir`.
 void writeMaps(const fs::path& dir, const mapping::LoopClosingSlam& slam, const PinholeCamera& camera,
                std::size_t minimap_keyframes, const Trajectory& trajectory, const LandmarkMap& session,
@@ -368,6 +388,7 @@ int writeAndPublish(io::AtomicFolder& folder, const FrameSource& source, std::si
   writeLoops(folder.path() / "loops.txt", closing, timestamps);
   const std::map<std::string, std::size_t> refusals =
       writeLoopCandidates(folder.path() / "loop_candidates.txt", closing, timestamps, detector);
+  writeFrames(folder.path() / "frames.txt", slam);
   tools::JsonObject report = makeReport(source, frames, closing, counts, minimaps.size(), refusals);
   std::optional<metrics::AbsoluteTrajectoryError> ate;
   const Trajectory truth = source.groundTruth();
@@ -388,14 +409,15 @@ int writeAndPublish(io::AtomicFolder& folder, const FrameSource& source, std::si
             << minimaps.size() << " mini-maps, " << closing.loopStats().loops_accepted << " loop(s) closed"
             << refusedSummary(refusals) << "; median " << percentile(counts.tracking_ms, 0.5) << " ms/frame (p90 "
             << percentile(counts.tracking_ms, 0.9) << "); skipped " << counts.skipped << ", lost " << counts.lost
-            << " (" << counts.predicted << " of those posed by prediction)\n";
+            << " (" << counts.predicted << " of those posed by prediction"
+            << (counts.skipped + counts.lost > 0 ? "; why: frames.txt" : "") << ")\n";
   if (ate)
     std::cout << std::setprecision(2) << "ATE RMSE " << ate->translation.rmse * 100 << " cm over " << ate->pairs
               << " poses\n";
   std::cout
       << "wrote " << folder.target().string()
-      << "/{trajectory.txt, session.txt, minimaps/, map.ply, graph.txt, loops.txt, loop_candidates.txt, session/, "
-         "report.json}\n";
+      << "/{trajectory.txt, session.txt, minimaps/, map.ply, graph.txt, loops.txt, loop_candidates.txt, frames.txt, "
+         "session/, report.json}\n";
   return 0;
 }
 
@@ -424,7 +446,7 @@ int main(int argc, char** argv) {
   tools::installInterruptHandlers();
   return tools::runTool("wicp_rgbd_slam", [&] {
     std::string dataset, camera_spec, out_dir;
-    std::string vocabulary_path;
+    std::string vocabulary_path, describe = "original";
     mapping::LoopEdgeSource loop_edge = mapping::LoopEdgeSource::Pnp;
     std::size_t max_frames = 0, first_frame = 0;
     mapping::LoopClosingSlamOptions closing_options;
@@ -535,12 +557,20 @@ int main(int argc, char** argv) {
         ("equalization", tools::namedValue(&options.frontend.features.equalization, frontend::parseEqualizationMethod,
                                            name),
          "a frame with too few corners: CLAHE, global histogram equalisation (the front-end paper) or none")
+        ("describe", po::value(&describe)->default_value(describe),
+         "an equalised frame's corners described in the frame as it is (original) or in the equalised image "
+         "(equalized, before 2026-11-26)")
         ("pnp", tools::namedValue(&options.frontend.pnp.method, frontend::parsePnpMethod, name),
          "RANSAC PnP solver: ap3p (AP3P sets, EPnP) or iterative (the paper's iterative 5-point solution)");
     // clang-format on
     description.add(ablation);
     po::variables_map vm;
     if (!tools::parseCommandLine(argc, argv, description, vm)) return 0;
+    try {
+      frontend::setFrontendChoice(options.frontend, "describe", describe);
+    } catch (const std::invalid_argument& e) {
+      throw po::error(std::string("--") + e.what());
+    }
     options.frontend.quality_gate = !vm.count("no-quality-gate");
     options.backend.background_thread = !vm.count("deterministic");
     closing_options.loop_closing.background_thread = !vm.count("deterministic");

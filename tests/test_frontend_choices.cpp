@@ -24,6 +24,10 @@ TEST(FrontendChoices, EachKeySetsItsOption) {
   setFrontendChoice(options, "dense-odometry-kind", "icp");
   setFrontendChoice(options, "quality-gate", "absolute");
   setFrontendChoice(options, "matcher", "kd-tree");
+  EXPECT_FALSE(options.features.describe_equalized);
+  setFrontendChoice(options, "describe", "equalized");
+  EXPECT_TRUE(options.features.describe_equalized);
+  EXPECT_THROW(setFrontendChoice(options, "describe", "clahe"), std::invalid_argument);
   EXPECT_EQ(options.pnp.method, PnpMethod::Iterative);
   EXPECT_EQ(options.quality.measure, QualityMeasure::Brisque);
   EXPECT_EQ(options.features.descriptor, DescriptorKind::ModifiedBrief);
@@ -34,7 +38,7 @@ TEST(FrontendChoices, EachKeySetsItsOption) {
   EXPECT_EQ(options.dense_odometry.kind, DenseOdometryKind::Icp);
   EXPECT_EQ(options.quality.mode, QualityGateMode::Absolute);
   EXPECT_EQ(options.matcher.kind, MatcherKind::KdTree);
-  EXPECT_EQ(frontendChoiceKeys().size(), 10u);
+  EXPECT_EQ(frontendChoiceKeys().size(), 11u);
 }
 
 TEST(FrontendChoices, AWrongKeyOrValueIsNamed) {

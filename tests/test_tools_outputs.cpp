@@ -6,11 +6,13 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -124,6 +126,53 @@ TEST(WicpRgbdSlamFailures, GroundTruthWithoutCommonTimestampsIsAWarningAndTheRep
   const std::string report = readFile(out / "report.json");
   EXPECT_TRUE(contains(report, "\"ate_unavailable\":\"")) << report;
   EXPECT_FALSE(contains(report, "ate_rmse_m")) << report;
+}
+
+TEST(WicpRgbdSlamOutputs, FramesTxtSaysHowEveryFrameWasTrackedAndWhyOneWasNot) {
+  const fs::path scratch = scratchDir("slam_frames_txt");
+  const fs::path seq = exportSequence(scratch, 12);
+  // Frame 6's colour image black: no corners, so it cannot be tracked.
+  std::vector<fs::path> images;
+  for (const auto& entry : fs::directory_iterator(seq / "rgb")) images.push_back(entry.path());
+  std::sort(images.begin(), images.end());
+  ASSERT_EQ(images.size(), 12u);
+  const cv::Mat image = cv::imread(images[6].string(), cv::IMREAD_UNCHANGED);
+  ASSERT_TRUE(cv::imwrite(images[6].string(), cv::Mat::zeros(image.size(), image.type())));
+  const fs::path out = scratch / "out";
+  const ToolRun r = runBuiltTool("wicp_rgbd_slam", slamArgs(seq, out, "--no-loop-closure"), scratch);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_TRUE(contains(r.out, "why: frames.txt")) << r.out;
+  std::ifstream in(out / "frames.txt");
+  std::string line;
+  ASSERT_TRUE(std::getline(in, line));
+  EXPECT_EQ(line,
+            "# index timestamp status predicted keyframe features matches inliers dynamic quality_score tracking_ms "
+            "reason");
+  std::vector<std::string> statuses, reasons;
+  while (std::getline(in, line)) {
+    std::istringstream fields(line);
+    std::size_t index = 0, features = 0, matches = 0, inliers = 0, dynamic = 0;
+    int predicted = 0, keyframe = 0;
+    double timestamp = 0.0, score = 0.0, ms = 0.0;
+    std::string status, reason;
+    ASSERT_TRUE(fields >> index >> timestamp >> status >> predicted >> keyframe >> features >> matches >> inliers >>
+                dynamic >> score >> ms)
+        << line;
+    std::getline(fields, reason);
+    EXPECT_EQ(index, statuses.size()) << line;
+    EXPECT_GT(ms, 0.0) << line;
+    if (status == "tracked") {
+      EXPECT_GT(inliers, 0u) << line;
+      EXPECT_EQ(reason, " -") << line;
+    }
+    statuses.push_back(status);
+    reasons.push_back(reason);
+  }
+  ASSERT_EQ(statuses.size(), 12u);
+  EXPECT_EQ(statuses[0], "initialized");
+  EXPECT_NE(statuses[6], "tracked");
+  EXPECT_NE(reasons[6], " -");  // why, in words
+  EXPECT_EQ(statuses[5], "tracked");
 }
 
 TEST(WicpRgbdSlamOutputs, AReRunReplacesTheWholeFolderOnlyWithOverwrite) {

@@ -189,6 +189,8 @@ ExtractedFeatures FeatureExtractor::extract(const cv::Mat& gray) const {
     features.keypoints = detectBucketed(image);
     features.used_clahe = true;
   }
+  // Equalisation finds corners; descriptors compare with the map's, so by default they see the frame as it is.
+  if (!options_.describe_equalized) image = gray;
   assignOrientation(image, features.keypoints);
   // Feature2D::compute removes the keypoints it cannot describe, so the rows
   // stay aligned with the keypoints that remain.

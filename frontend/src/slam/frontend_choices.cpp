@@ -22,6 +22,12 @@ const std::vector<std::pair<std::string, Setter>>& setters() {
        [](FrontendOptions& o, const std::string& v) { o.dynamic_distance = parseDynamicDistanceKind(v); }},
       {"equalization",
        [](FrontendOptions& o, const std::string& v) { o.features.equalization = parseEqualizationMethod(v); }},
+      {"describe",
+       [](FrontendOptions& o, const std::string& v) {
+         if (v != "original" && v != "equalized")
+           throw std::invalid_argument("'" + v + "' (expected original or equalized)");
+         o.features.describe_equalized = v == "equalized";
+       }},
       {"pnp", [](FrontendOptions& o, const std::string& v) { o.pnp.method = parsePnpMethod(v); }},
       {"dense-odometry",
        [](FrontendOptions& o, const std::string& v) { o.dense_odometry.use = parseDenseOdometryUse(v); }},
