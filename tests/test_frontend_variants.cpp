@@ -113,12 +113,12 @@ TEST(FrontendVariants, ADegradedFrameThatCannotBeTrackedKeepsThePredictionNotA2d
   if (!haveData("tum_fr3_teddy_head")) GTEST_SKIP() << "no " << weighted_icp::testing::dataDir() / "tum_fr3_teddy_head";
   // fr3 with bursts of blurred, noisy frames, first 100: 3D-2D fails on some burst frames. The 2D-2D fallback, meant
   // for good images without depth, posed two of them 4 and 8 cm off (ATE 1.06 cm); the gate now refuses them first
-  // and they keep the motion model's prediction (0.44 cm; the clean original: 0.30 cm).
+  // and they keep the motion model's prediction (0.60 cm; the clean original: 0.30 cm).
   const VariantRun run = trackVariant("tum_fr3_teddy_head", 3, "burst", frontend::QualityGateMode::Relative, 100);
   EXPECT_EQ(run.without_pose, 0u);
   EXPECT_EQ(run.burst_fallback, 0u);
   EXPECT_GT(run.burst_refused, 0u);
-  EXPECT_LT(run.ate_m, 0.007);
+  EXPECT_LT(run.ate_m, 0.008);
 }
 
 }  // namespace
