@@ -194,12 +194,21 @@ TrackingResult Frontend::trackFrame(Frame& frame, TrackingResult result) {
   const double gate_px = predicted ? options_.match_gate_px : options_.match_gate_without_motion_px;
   if (!refreshLocalMap()) return lose(result, "the local map is empty");
 
-  const LocalMatches matched = matchLocalMap(frame, guess_wc, gate_px);
+  LocalMatches matched;
+  PoseEstimate estimate;
+  std::string failure = solvePnpAgainstLocalMap(frame, guess_wc, gate_px, matched, estimate);
+  if (!failure.empty() && gate_px < options_.match_gate_without_motion_px) {
+    // The prediction may be far off (the motion changed suddenly): matched again as if no motion were known.
+    LocalMatches wide;
+    PoseEstimate wide_estimate;
+    if (solvePnpAgainstLocalMap(frame, guess_wc, options_.match_gate_without_motion_px, wide, wide_estimate).empty()) {
+      matched = std::move(wide);
+      estimate = std::move(wide_estimate);
+      failure.clear();
+    }
+  }
   result.matches = matched.size();
-  if (matched.size() < static_cast<std::size_t>(options_.pnp.min_inliers))
-    return trackWithoutFeatures(frame, result, std::to_string(matched.size()) + " 3D-2D matches");
-  const PoseEstimate estimate = estimatePosePnp(matched.points_world, matched.pixels, camera_, guess_wc, options_.pnp);
-  if (!estimate.ok) return trackWithoutFeatures(frame, result, "PnP failed: " + estimate.failure);
+  if (!failure.empty()) return trackWithoutFeatures(frame, result, failure);
 
   const MovingPoints moving = rejectMovingPoints(frame, matched, estimate.pose_wc);
   std::vector<int> static_inliers;
@@ -215,6 +224,15 @@ TrackingResult Frontend::trackFrame(Frame& frame, TrackingResult result) {
   result.inliers = static_inliers.size();
   insertKeyframeIfNeeded(frame, result, matched, static_inliers, moving.pixels);
   return result;
+}
+
+std::string Frontend::solvePnpAgainstLocalMap(const Frame& frame, const Eigen::Isometry3d& guess_wc, double gate_px,
+                                              LocalMatches& matched, PoseEstimate& estimate) const {
+  matched = matchLocalMap(frame, guess_wc, gate_px);
+  if (matched.size() < static_cast<std::size_t>(options_.pnp.min_inliers))
+    return std::to_string(matched.size()) + " 3D-2D matches";
+  estimate = estimatePosePnp(matched.points_world, matched.pixels, camera_, guess_wc, options_.pnp);
+  return estimate.ok ? std::string() : "PnP failed: " + estimate.failure;
 }
 
 bool Frontend::refreshLocalMap() {

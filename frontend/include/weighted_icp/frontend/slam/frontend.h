@@ -206,6 +206,10 @@ class Frontend {
   // Issue #11: dense odometry.
   /// The pose guess: the dense motion from the last posed frame when it is the prior, else constant velocity.
   std::optional<Eigen::Isometry3d> predictPose();
+  /// Matches the frame to the local map within gate_px of where `guess_wc` projects each point and solves PnP;
+  /// returns why it failed, empty when it did not.
+  std::string solvePnpAgainstLocalMap(const Frame& frame, const Eigen::Isometry3d& guess_wc, double gate_px,
+                                      LocalMatches& matched, PoseEstimate& estimate) const;
   /// 3D-2D failed: skipped on the prediction if the quality gate refuses the image; else the dense odometry's pose
   /// when it is the fallback and registers the frame, else 2D-2D.
   TrackingResult trackWithoutFeatures(Frame& frame, TrackingResult result, const std::string& why_not_3d);
