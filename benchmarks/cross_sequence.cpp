@@ -76,9 +76,14 @@ std::vector<Tracker> trackers(const std::string& list) {
   return all;
 }
 
-/// "kinect" is the held-out Kinect's format; other names are sequence_variants.h kinds.
+/// "kinect" is the held-out Kinect's format; other names are sequence_variants.h kinds; "a+b" combines them
+/// (e.g. kinect+low-light).
 std::vector<simulation::VariantKind> kindsOf(const std::string& variant) {
-  return simulation::parseVariantKinds(variant == "kinect" ? "jpeg,mm-depth,focal" : variant);
+  std::string kinds;
+  std::stringstream parts(variant);
+  for (std::string part; std::getline(parts, part, '+');)
+    kinds += (kinds.empty() ? "" : ",") + (part == "kinect" ? std::string("jpeg,mm-depth,focal") : part);
+  return simulation::parseVariantKinds(kinds);
 }
 
 Sequence load(const fs::path& dir, const std::string& name) {
@@ -165,7 +170,7 @@ int main(int argc, char** argv) {
         ("max-frames", po::value(&max_frames)->default_value(max_frames), "frames per TUM sequence (0 = all)")
         ("synthetic-frames", po::value(&synthetic_frames)->default_value(synthetic_frames), "synthetic sequence length (0 = none)")
         ("sequences", po::value(&sequences)->default_value(sequences), "comma-separated: fr1_head, fr3_head, synthetic")
-        ("variants", po::value(&variants)->default_value(variants), "comma-separated variants (kinds of wicp_make_variant, or kinect)")
+        ("variants", po::value(&variants)->default_value(variants), "comma-separated variants (kinds of wicp_make_variant, or kinect; a+b combines two, e.g. kinect+blur)")
         ("runs", po::value(&runs)->default_value(runs), "comma-separated: default, relative-brisque, absolute, paper, no-gate, opencv")
         ("frontend-option", po::value(&choices)->composing(),
          "KEY=VALUE, repeatable: a front-end choice by wicp_rgbd_slam's option name (pnp=iterative, "
