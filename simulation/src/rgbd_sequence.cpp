@@ -14,33 +14,11 @@
 #include "random_source.h"
 #include "raycasting.h"
 #include "textures.h"
-
-// ThreadSanitizer: gcc defines __SANITIZE_THREAD__, clang answers __has_feature.
-#if defined(__SANITIZE_THREAD__)
-#define WEIGHTED_ICP_UNDER_TSAN 1
-#elif defined(__has_feature)
-#if __has_feature(thread_sanitizer)
-#define WEIGHTED_ICP_UNDER_TSAN 1
-#endif
-#endif
+#include "weighted_icp/core/parallel_for.h"
 
 namespace weighted_icp::simulation {
 
 namespace {
-
-/// @brief cv::parallel_for_, run serially in a ThreadSanitizer build: OpenCV's thread pool (TBB, built without
-/// TSan) synchronises in code TSan does not see, so every write of its workers would be reported as a race,
-/// hiding ours. The jobs are independent and seeded by index, so the result is the same either way.
-/// @param range the jobs
-/// @param body runs a sub-range of them
-template <typename Body>
-void parallelFor(const cv::Range& range, const Body& body) {
-#ifdef WEIGHTED_ICP_UNDER_TSAN
-  body(range);
-#else
-  cv::parallel_for_(range, body);
-#endif
-}
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kDegree = kPi / 180.0;

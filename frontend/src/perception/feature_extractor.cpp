@@ -2,12 +2,15 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <stdexcept>
 #include <string>
 #include <utility>
 
 #include <opencv2/imgproc.hpp>
+
+#include "weighted_icp/core/parallel_for.h"
 
 namespace weighted_icp::frontend {
 namespace {
@@ -91,11 +94,15 @@ std::vector<cv::KeyPoint> FeatureExtractor::detectBucketed(const cv::Mat& gray) 
     float response;
     int cell;
   };
-  std::vector<Candidate> candidates;
-  std::vector<cv::Point2f> corners;
-  std::vector<float> responses;
-  for (int row = 0; row < options_.grid_rows; ++row) {
-    for (int col = 0; col < options_.grid_cols; ++col) {
+  // The cells on OpenCV's thread pool, each into its own list, joined in cell order: the same candidates in the
+  // same order with any number of threads.
+  const int cells = options_.grid_rows * options_.grid_cols;
+  std::vector<std::vector<Candidate>> found(static_cast<std::size_t>(cells));
+  parallelFor(cv::Range(0, cells), [&](const cv::Range& range) {
+    std::vector<cv::Point2f> corners;
+    std::vector<float> responses;
+    for (int cell = range.start; cell < range.end; ++cell) {
+      const int row = cell / options_.grid_cols, col = cell % options_.grid_cols;
       const int x0 = interior.x + col * interior.width / options_.grid_cols;
       const int y0 = interior.y + row * interior.height / options_.grid_rows;
       const int x1 = interior.x + (col + 1) * interior.width / options_.grid_cols;
@@ -105,10 +112,12 @@ std::vector<cv::KeyPoint> FeatureExtractor::detectBucketed(const cv::Mat& gray) 
       cv::goodFeaturesToTrack(gray(cv::Rect(x0, y0, x1 - x0, y1 - y0)), corners, 0, options_.quality_level,
                               options_.min_distance_px, cv::noArray(), responses);
       for (std::size_t i = 0; i < corners.size() && responses[i] >= options_.min_corner_response; ++i)
-        candidates.push_back({corners[i] + cv::Point2f(static_cast<float>(x0), static_cast<float>(y0)), responses[i],
-                              row * options_.grid_cols + col});
+        found[static_cast<std::size_t>(cell)].push_back(
+            {corners[i] + cv::Point2f(static_cast<float>(x0), static_cast<float>(y0)), responses[i], cell});
     }
-  }
+  });
+  std::vector<Candidate> candidates;
+  for (const auto& in_cell : found) candidates.insert(candidates.end(), in_cell.begin(), in_cell.end());
   // Strongest first over the whole frame; ties in the order found, so the
   // result does not depend on the sort implementation.
   std::stable_sort(candidates.begin(), candidates.end(),
@@ -159,9 +168,20 @@ std::vector<cv::KeyPoint> FeatureExtractor::detectBucketed(const cv::Mat& gray) 
       responses_taken.push_back(candidates[i].response);
     }
   if (options_.subpixel && !points.empty()) {
+    // Each corner is refined on its own, so in chunks on the thread pool with the same result.
     std::vector<cv::Point2f> refined = points;
-    cv::cornerSubPix(gray, refined, cv::Size(3, 3), cv::Size(-1, -1),
-                     cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 10, 0.01));
+    constexpr int kChunk = 64;
+    const int chunks = (static_cast<int>(refined.size()) + kChunk - 1) / kChunk;
+    parallelFor(cv::Range(0, chunks), [&](const cv::Range& range) {
+      for (int chunk = range.start; chunk < range.end; ++chunk) {
+        const auto first = refined.begin() + chunk * kChunk;
+        const auto last = refined.begin() + std::min<std::ptrdiff_t>((chunk + 1) * kChunk, refined.size());
+        std::vector<cv::Point2f> part(first, last);
+        cv::cornerSubPix(gray, part, cv::Size(3, 3), cv::Size(-1, -1),
+                         cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 10, 0.01));
+        std::copy(part.begin(), part.end(), first);
+      }
+    });
     // Refinement is for the fraction of a pixel; a corner it would move
     // further is not a clean corner, and keeps its detected position (so the
     // minimum distance holds to within 2 x kMaxSubpixelShift).
