@@ -7,9 +7,10 @@
 //   graph.txt       the mini-map graph (docs/mapping.md), loop edges included
 //   loops.txt       the accepted loops (keyframe timestamps, relative pose, inliers, fitness)
 //   loop_candidates.txt  every candidate place recognition proposed and its verdict (why a loop was not closed)
-//   frames.txt      one line per frame: how it was tracked, with what, and why not (where to look when tracking is
-//   lost) session/        the session folder wicp_merge reads report.json     counts, timing, skipped frames, loops,
-//   ATE when ground truth exists groundtruth.txt the synthetic sequence's true poses (TUM format), for wicp_evaluate
+//   frames.txt      one line per frame: how it was tracked, and why not (where to look when tracking is lost)
+//   session/        the session folder wicp_merge reads
+//   report.json     counts, timing, skipped frames, loops, ATE when ground truth exists
+//   groundtruth.txt the synthetic sequence's true poses (TUM format), for wicp_evaluate
 // Loops are closed by default (place recognition with the default vocabulary
 // trained at build time, geometric verification, pose graph); --no-loop-closure
 // turns that off.

@@ -5,6 +5,7 @@
 #include <charconv>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <random>
 #include <stdexcept>
 #include <string>
@@ -93,46 +94,14 @@ double correlation(const std::vector<double>& a, const std::vector<double>& b) {
   return aa > 0.0 && bb > 0.0 ? ab / std::sqrt(aa * bb) : std::numeric_limits<double>::quiet_NaN();
 }
 
-}  // namespace
-
-AbsoluteTrajectoryError computeAte(const Trajectory& groundtruth, const Trajectory& estimate, double max_difference) {
-  return alignedErrors(groundtruth, estimate, max_difference).ate;
-}
-
-AteComparison compareAte(const Trajectory& groundtruth, const Trajectory& first, const Trajectory& second,
-                         double max_difference, std::size_t resamples) {
-  if (resamples == 0) throw std::invalid_argument("compareAte: resamples must be > 0");
-  const AlignedErrors a = alignedErrors(groundtruth, first, max_difference);
-  const AlignedErrors b = alignedErrors(groundtruth, second, max_difference);
-  // The poses both were paired with, each estimate aligned on its own as the ATE is.
-  std::vector<double> errors_a, errors_b;
-  for (std::size_t i = 0, j = 0; i < a.truth_index.size() && j < b.truth_index.size();) {
-    if (a.truth_index[i] < b.truth_index[j]) {
-      ++i;
-    } else if (b.truth_index[j] < a.truth_index[i]) {
-      ++j;
-    } else {
-      errors_a.push_back(a.errors[i++]);
-      errors_b.push_back(b.errors[j++]);
-    }
-  }
-  if (errors_a.size() < 3)
-    throw std::runtime_error("only " + std::to_string(errors_a.size()) +
-                             " ground-truth poses are paired with both estimates; a comparison needs at least 3");
-  AteComparison result;
-  result.first = a.ate;
-  result.second = b.ate;
-  result.common_poses = errors_a.size();
-  std::vector<std::size_t> all(errors_a.size());
-  for (std::size_t k = 0; k < all.size(); ++k) all[k] = k;
-  result.first_rmse_m = rms(errors_a, all);
-  result.second_rmse_m = rms(errors_b, all);
-  result.error_correlation = correlation(errors_a, errors_b);
-  // Resampling whole poses keeps what both share at a pose (the ground truth's own error, a frame hard for both)
-  // on both sides of each comparison: only how the estimates differ decides. Trajectory errors drift slowly, so
-  // runs of consecutive poses are drawn (a moving-block bootstrap, blocks of n^(1/3) poses): single poses drawn
-  // alone would take 32 correlated poses for 32 independent ones and claim differences the sequence cannot show.
-  const std::size_t n = all.size();
+/// The fraction of resamples of the poses in which errors_a's RMSE is the lower (ties count half). Resampling whole
+/// poses keeps what both share at a pose (the ground truth's own error, a frame hard for both) on both sides of each
+/// comparison: only how the estimates differ decides. Trajectory errors drift slowly, so runs of consecutive poses
+/// are drawn (a moving-block bootstrap, blocks of n^(1/3) poses): single poses drawn alone would take 32 correlated
+/// poses for 32 independent ones and claim differences the sequence cannot show. Seeded: deterministic.
+double firstLowerFraction(const std::vector<double>& errors_a, const std::vector<double>& errors_b,
+                          std::size_t resamples) {
+  const std::size_t n = errors_a.size();
   const auto block = static_cast<std::size_t>(std::ceil(std::cbrt(static_cast<double>(n))));
   std::mt19937 random(1);
   std::uniform_int_distribution<std::size_t> start(0, n - block);
@@ -145,10 +114,46 @@ AteComparison compareAte(const Trajectory& groundtruth, const Trajectory& first,
       for (std::size_t k = start(random), end = k + block; k < end; ++k) sample.push_back(k);
     sample.resize(n);
     const double rmse_a = rms(errors_a, sample), rmse_b = rms(errors_b, sample);
-    first_lower += rmse_a < rmse_b ? 1.0 : rmse_a == rmse_b ? 0.5 : 0.0;  // a tie counts for both
+    first_lower += rmse_a < rmse_b ? 1.0 : rmse_a == rmse_b ? 0.5 : 0.0;
   }
+  return first_lower / static_cast<double>(resamples);
+}
+
+}  // namespace
+
+AbsoluteTrajectoryError computeAte(const Trajectory& groundtruth, const Trajectory& estimate, double max_difference) {
+  return alignedErrors(groundtruth, estimate, max_difference).ate;
+}
+
+AteComparison compareAte(const Trajectory& groundtruth, const Trajectory& first, const Trajectory& second,
+                         double max_difference, std::size_t resamples) {
+  if (resamples == 0) throw std::invalid_argument("compareAte: resamples must be > 0");
+  const AlignedErrors a = alignedErrors(groundtruth, first, max_difference);
+  const AlignedErrors b = alignedErrors(groundtruth, second, max_difference);
+  // The poses both were paired with, each estimate aligned on its own as the ATE is, in the time order of the
+  // first's pairs (io::associate sorts them by the ground truth's timestamps).
+  std::map<std::size_t, double> second_at;
+  for (std::size_t j = 0; j < b.truth_index.size(); ++j) second_at.emplace(b.truth_index[j], b.errors[j]);
+  std::vector<double> errors_a, errors_b;
+  for (std::size_t i = 0; i < a.truth_index.size(); ++i)
+    if (const auto found = second_at.find(a.truth_index[i]); found != second_at.end()) {
+      errors_a.push_back(a.errors[i]);
+      errors_b.push_back(found->second);
+    }
+  if (errors_a.size() < 3)
+    throw std::runtime_error("only " + std::to_string(errors_a.size()) +
+                             " ground-truth poses are paired with both estimates; a comparison needs at least 3");
+  AteComparison result;
+  result.first = a.ate;
+  result.second = b.ate;
+  result.common_poses = errors_a.size();
+  std::vector<std::size_t> all(errors_a.size());
+  for (std::size_t k = 0; k < all.size(); ++k) all[k] = k;
+  result.first_rmse_m = rms(errors_a, all);
+  result.second_rmse_m = rms(errors_b, all);
+  result.error_correlation = correlation(errors_a, errors_b);
+  result.first_lower_fraction = firstLowerFraction(errors_a, errors_b, resamples);
   result.resamples = resamples;
-  result.first_lower_fraction = first_lower / static_cast<double>(resamples);
   return result;
 }
 

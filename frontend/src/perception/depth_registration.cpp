@@ -59,6 +59,40 @@ struct RowProjection {
   }
 };
 
+/// Writes one row's projections into `registered` (infinity where nothing landed yet): each measured depth pixel
+/// onto the 2 x 2 colour pixels around where it lands (as registerDepth's depth dilation: a depth image seen from a
+/// little aside leaves no one-pixel cracks), the nearer depth kept where two surfaces land on one pixel.
+/// @param depth the row's depths (0, NaN or infinite: unmeasured)
+/// @param target_u,target_v,target_z where each lands (RowProjection)
+/// @param registered CV_32F of the colour image's size
+void splatRow(const float* depth, const float* target_u, const float* target_v, const float* target_z,
+              cv::Mat& registered) {
+  const float width = static_cast<float>(registered.cols), height = static_cast<float>(registered.rows);
+  const float unseen = std::numeric_limits<float>::infinity();
+  for (int u = 0; u < registered.cols; ++u) {
+    const float z = depth[u], pz = target_z[u], uc = target_u[u], vc = target_v[u];
+    // Unmeasured, behind the colour camera, or outside its image.
+    if (!(z > 0.0f) || !(z < unseen) || !(pz > 0.0f)) continue;
+    if (!(uc > -1.0f && vc > -1.0f && uc < width && vc < height)) continue;
+    const int u0 = static_cast<int>(uc + 1.0f) - 1, v0 = static_cast<int>(vc + 1.0f) - 1;  // floor, as uc, vc > -1
+    if (u0 >= 0 && v0 >= 0 && u0 + 1 < registered.cols && v0 + 1 < registered.rows) {
+      float* top = registered.ptr<float>(v0) + u0;
+      float* bottom = registered.ptr<float>(v0 + 1) + u0;
+      top[0] = std::min(top[0], pz);
+      top[1] = std::min(top[1], pz);
+      bottom[0] = std::min(bottom[0], pz);
+      bottom[1] = std::min(bottom[1], pz);
+      continue;
+    }
+    for (int tv = v0; tv <= v0 + 1; ++tv) {
+      if (tv < 0 || tv >= registered.rows) continue;
+      float* target = registered.ptr<float>(tv);
+      for (int tu = u0; tu <= u0 + 1; ++tu)
+        if (tu >= 0 && tu < registered.cols) target[tu] = std::min(target[tu], pz);
+    }
+  }
+}
+
 /// Throws std::invalid_argument unless the camera has a depth camera and the depth is CV_32F of its size.
 void checkInputs(const char* function, const cv::Mat& depth, const PinholeCamera& camera) {
   if (!camera.unregistered_depth)
@@ -110,7 +144,6 @@ cv::Mat registerDepthToColor(const cv::Mat& depth, const PinholeCamera& camera) 
   const Distortion distortion(camera);
   const float fx = static_cast<float>(camera.fx), fy = static_cast<float>(camera.fy);
   const float cx = static_cast<float>(camera.cx), cy = static_cast<float>(camera.cy);
-  const float width = static_cast<float>(depth.cols), height = static_cast<float>(depth.rows);
   const float unseen = std::numeric_limits<float>::infinity();
   cv::Mat registered(depth.size(), CV_32F);
   std::fill(registered.ptr<float>(0), registered.ptr<float>(0) + registered.total(), unseen);  // continuous, new
@@ -126,30 +159,7 @@ cv::Mat registerDepthToColor(const cv::Mat& depth, const PinholeCamera& camera) 
       projection.project<true>(row, columns, distortion, target_u.data(), target_v.data(), target_z.data());
     else
       projection.project<false>(row, columns, distortion, target_u.data(), target_v.data(), target_z.data());
-    for (std::size_t u = 0; u < columns; ++u) {
-      const float z = row[u], pz = target_z[u], uc = target_u[u], vc = target_v[u];
-      // Unmeasured (0, NaN, infinite), behind the colour camera, or outside its image.
-      if (!(z > 0.0f) || !(z < unseen) || !(pz > 0.0f)) continue;
-      if (!(uc > -1.0f && vc > -1.0f && uc < width && vc < height)) continue;
-      // The 2 x 2 pixels around the projection (as registerDepth's depth dilation): a depth image seen from a
-      // little aside leaves no one-pixel cracks; where two surfaces land, the nearer one hides the farther.
-      const int u0 = static_cast<int>(uc + 1.0f) - 1, v0 = static_cast<int>(vc + 1.0f) - 1;  // floor, as uc, vc > -1
-      if (u0 >= 0 && v0 >= 0 && u0 + 1 < depth.cols && v0 + 1 < depth.rows) {
-        float* top = registered.ptr<float>(v0) + u0;
-        float* bottom = registered.ptr<float>(v0 + 1) + u0;
-        top[0] = std::min(top[0], pz);
-        top[1] = std::min(top[1], pz);
-        bottom[0] = std::min(bottom[0], pz);
-        bottom[1] = std::min(bottom[1], pz);
-        continue;
-      }
-      for (int tv = v0; tv <= v0 + 1; ++tv) {
-        if (tv < 0 || tv >= depth.rows) continue;
-        float* target = registered.ptr<float>(tv);
-        for (int tu = u0; tu <= u0 + 1; ++tu)
-          if (tu >= 0 && tu < depth.cols) target[tu] = std::min(target[tu], pz);
-      }
-    }
+    splatRow(row, target_u.data(), target_v.data(), target_z.data(), registered);
   }
   for (float *value = registered.ptr<float>(0), *end = value + registered.total(); value != end; ++value)
     if (*value == unseen) *value = 0.0f;

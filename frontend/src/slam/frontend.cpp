@@ -194,17 +194,27 @@ TrackingResult Frontend::trackFrame(Frame& frame, TrackingResult result) {
   const double gate_px = predicted ? options_.match_gate_px : options_.match_gate_without_motion_px;
   if (!refreshLocalMap()) return lose(result, "the local map is empty");
 
+  const std::vector<cv::DMatch> candidates = localDescriptorMatches(frame, guess_wc, gate_px);
   LocalMatches matched;
   PoseEstimate estimate;
-  std::string failure = solvePnpAgainstLocalMap(frame, guess_wc, gate_px, matched, estimate);
-  if (!failure.empty() && gate_px < options_.match_gate_without_motion_px) {
-    // The prediction may be far off (the motion changed suddenly): matched again as if no motion were known.
+  std::string failure = solvePnpAgainstLocalMap(frame, candidates, guess_wc, gate_px, matched, estimate);
+  const double wide_px = options_.match_gate_without_motion_px;
+  if (!failure.empty() && gate_px < wide_px) {
+    // The prediction may be far off (the motion changed suddenly): the gate of a frame without known motion. Only
+    // regions of interest depend on the gate; a search everywhere is not repeated.
+    const bool everywhere = options_.match_region == MatchRegion::Everywhere;
+    const std::vector<cv::DMatch> searched_again =
+        everywhere ? std::vector<cv::DMatch>{} : localDescriptorMatches(frame, guess_wc, wide_px);
     LocalMatches wide;
     PoseEstimate wide_estimate;
-    if (solvePnpAgainstLocalMap(frame, guess_wc, options_.match_gate_without_motion_px, wide, wide_estimate).empty()) {
+    const std::string wide_failure = solvePnpAgainstLocalMap(frame, everywhere ? candidates : searched_again, guess_wc,
+                                                             wide_px, wide, wide_estimate);
+    if (wide_failure.empty()) {
       matched = std::move(wide);
       estimate = std::move(wide_estimate);
       failure.clear();
+    } else {
+      failure += "; within " + std::to_string(static_cast<int>(wide_px)) + " px: " + wide_failure;
     }
   }
   result.matches = matched.size();
@@ -226,9 +236,10 @@ TrackingResult Frontend::trackFrame(Frame& frame, TrackingResult result) {
   return result;
 }
 
-std::string Frontend::solvePnpAgainstLocalMap(const Frame& frame, const Eigen::Isometry3d& guess_wc, double gate_px,
-                                              LocalMatches& matched, PoseEstimate& estimate) const {
-  matched = matchLocalMap(frame, guess_wc, gate_px);
+std::string Frontend::solvePnpAgainstLocalMap(const Frame& frame, const std::vector<cv::DMatch>& candidates,
+                                              const Eigen::Isometry3d& guess_wc, double gate_px, LocalMatches& matched,
+                                              PoseEstimate& estimate) const {
+  matched = matchLocalMap(frame, candidates, guess_wc, gate_px);
   if (matched.size() < static_cast<std::size_t>(options_.pnp.min_inliers))
     return std::to_string(matched.size()) + " 3D-2D matches";
   estimate = estimatePosePnp(matched.points_world, matched.pixels, camera_, guess_wc, options_.pnp);
@@ -246,12 +257,12 @@ bool Frontend::refreshLocalMap() {
   return !local_map_.ids.empty();
 }
 
-Frontend::LocalMatches Frontend::matchLocalMap(const Frame& frame, const Eigen::Isometry3d& guess_wc,
-                                               double gate_px) const {
+Frontend::LocalMatches Frontend::matchLocalMap(const Frame& frame, const std::vector<cv::DMatch>& candidates,
+                                               const Eigen::Isometry3d& guess_wc, double gate_px) const {
   const LocalMap& local = local_map_;
   const Eigen::Isometry3d guess_cw = guess_wc.inverse();
   LocalMatches matched;
-  for (const cv::DMatch& match : localDescriptorMatches(frame, guess_wc, gate_px)) {
+  for (const cv::DMatch& match : candidates) {
     const MapPointId id = local.ids[match.trainIdx];
     const auto votes = dynamic_votes_.find(id);
     if (votes != dynamic_votes_.end() && votes->second >= options_.dynamic_votes_to_exclude) continue;

@@ -186,8 +186,10 @@ class Frontend {
   TrackingResult trackFrame(Frame& frame, TrackingResult result);
   /// Takes and indexes the local map again if the map changed; false when it is empty.
   bool refreshLocalMap();
-  /// Descriptor matches against the local map, minus excluded moving points and those the guess projects too far.
-  LocalMatches matchLocalMap(const Frame& frame, const Eigen::Isometry3d& guess_wc, double gate_px) const;
+  /// The descriptor matches `candidates` (localDescriptorMatches) against the local map, minus excluded moving
+  /// points and those the guess projects farther than gate_px.
+  LocalMatches matchLocalMap(const Frame& frame, const std::vector<cv::DMatch>& candidates,
+                             const Eigen::Isometry3d& guess_wc, double gate_px) const;
   /// Flags the matches with depth whose displacement betrays a moving point, and votes against their map points.
   MovingPoints rejectMovingPoints(const Frame& frame, const LocalMatches& matched, const Eigen::Isometry3d& pose_wc);
   /// Huber refinement of the pose on the static inliers, with their depths as well as pixels.
@@ -206,10 +208,11 @@ class Frontend {
   // Issue #11: dense odometry.
   /// The pose guess: the dense motion from the last posed frame when it is the prior, else constant velocity.
   std::optional<Eigen::Isometry3d> predictPose();
-  /// Matches the frame to the local map within gate_px of where `guess_wc` projects each point and solves PnP;
-  /// returns why it failed, empty when it did not.
-  std::string solvePnpAgainstLocalMap(const Frame& frame, const Eigen::Isometry3d& guess_wc, double gate_px,
-                                      LocalMatches& matched, PoseEstimate& estimate) const;
+  /// Keeps the descriptor matches `candidates` within gate_px of where `guess_wc` projects each point
+  /// (matchLocalMap) and solves PnP on them; returns why it failed, empty when it did not.
+  std::string solvePnpAgainstLocalMap(const Frame& frame, const std::vector<cv::DMatch>& candidates,
+                                      const Eigen::Isometry3d& guess_wc, double gate_px, LocalMatches& matched,
+                                      PoseEstimate& estimate) const;
   /// 3D-2D failed: skipped on the prediction if the quality gate refuses the image; else the dense odometry's pose
   /// when it is the fallback and registers the frame, else 2D-2D.
   TrackingResult trackWithoutFeatures(Frame& frame, TrackingResult result, const std::string& why_not_3d);
