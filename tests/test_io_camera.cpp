@@ -163,6 +163,12 @@ TEST(Camera, TextOpenCvCannotParseIsRefusedByLine) {
   EXPECT_NE(orphan_error.find(orphan.string() + ":3: not a camera file: an indented line not below a key"),
             std::string::npos)
       << orphan_error;
+  // XML with NUL bytes in an attribute (fuzz/fuzz_camera, 2026-11-26: OpenCV's parser dereferenced null on it).
+  const fs::path binary = dir / "binary.xml";
+  writeFile(binary, std::string("<?xml veRsion=\0\0\0\"0.1\"?>\n<opencv_storage>\n</opencv_storage>\n", 60));
+  const std::string binary_error = errorOf(binary.string());
+  EXPECT_NE(binary_error.find(binary.string() + ":1: not a camera file: a NUL byte"), std::string::npos)
+      << binary_error;
   // What OpenCV writes is of the plain layout, indented matrices of other keys included.
   const fs::path opencv = dir / "opencv.yaml";
   writeFile(opencv,

@@ -126,6 +126,9 @@ void requirePlainYamlLayout(const std::string& path) {
   while (std::getline(in, line)) {
     ++number;
     if (!line.empty() && line.back() == '\r') line.pop_back();
+    // A camera file is text: OpenCV's XML parser dereferenced null on a NUL byte (fuzz/fuzz_camera, 2026-11-26).
+    if (line.find('\0') != std::string::npos)
+      throw std::runtime_error(path + ":" + std::to_string(number) + ": not a camera file: a NUL byte (binary data)");
     if (first) {
       const std::size_t start = line.find_first_not_of(" \t");
       if (start == std::string::npos) continue;
