@@ -160,6 +160,40 @@ TEST(DescriptorMatcher, LshMatchesDoNotDependOnOpenCvsRandomStateOrThread) {
   EXPECT_EQ(cv::theRNG().state, state);
 }
 
+// The query is searched in parallel jobs of rows: the matches must be those of
+// one search over the whole query (checked for brute force against OpenCV's own
+// matcher, whose answer is exact), whatever the number of threads.
+TEST(DescriptorMatcher, SearchesInParallelJobsWithTheMatchesOfOneSearch) {
+  const FramePair p{1, 0, 5};
+  WEIGHTED_ICP_REQUIRE_FILE(weighted_icp::testing::tumHeadDir(p.freiburg) / "rgb.txt");
+  const cv::Mat& query = features(p.freiburg, p.query).descriptors;
+  const cv::Mat& reference = features(p.freiburg, p.reference).descriptors;
+  ASSERT_GT(query.rows, 512) << "the query must span several jobs";
+
+  DescriptorMatcherOptions options = withKind(MatcherKind::BruteForce);
+  options.cross_check_unique = false;
+  std::vector<std::vector<cv::DMatch>> nearest;
+  cv::BFMatcher(cv::NORM_HAMMING).knnMatch(query, reference, nearest, 2);
+  std::vector<cv::DMatch> expected;
+  for (const std::vector<cv::DMatch>& two : nearest)
+    if (two.size() == 2 && two[0].distance < options.ratio * two[1].distance &&
+        two[0].distance <= static_cast<float>(options.max_hamming_distance))
+      expected.push_back(two[0]);
+  ASSERT_GT(expected.size(), 100u);
+  const std::vector<cv::DMatch> all = matchPair(p, options);
+  EXPECT_TRUE(sameMatches(all, expected)) << all.size() << " vs " << expected.size();
+  EXPECT_GT(all.back().queryIdx, 384) << "matches from the last jobs keep their query rows";
+
+  const int threads = cv::getNumThreads();
+  for (const MatcherKind kind : {MatcherKind::FlannLsh, MatcherKind::BruteForce, MatcherKind::KdTree}) {
+    const std::vector<cv::DMatch> pooled = matchPair(p, withKind(kind));
+    cv::setNumThreads(1);
+    const std::vector<cv::DMatch> serial = matchPair(p, withKind(kind));
+    cv::setNumThreads(threads);
+    EXPECT_TRUE(sameMatches(pooled, serial)) << frontend::matcherKindName(kind);
+  }
+}
+
 /// Rows that each differ from one random row in about 16 of 256 bits
 /// (seeded): neighbours close enough for LSH to hash some of them together,
 /// so that a query has a second nearest for the ratio test.

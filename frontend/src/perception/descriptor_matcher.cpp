@@ -6,6 +6,7 @@
 #include <opencv2/flann.hpp>
 
 #include "weighted_icp/core/named_values.h"
+#include "weighted_icp/core/parallel_for.h"
 
 namespace weighted_icp::frontend {
 namespace {
@@ -45,6 +46,11 @@ cv::Ptr<cv::DescriptorMatcher> buildMatcher(const DescriptorMatcherOptions& o, c
   return matcher;
 }
 
+// Query rows per parallel job: each row's search is independent of the others,
+// so any split gives the same nearest pairs; 128 rows keep a job's cost (about
+// 1 ms with LSH on a 2000-row local map) well above the pool's overhead.
+constexpr int kQueryRowsPerJob = 128;
+
 }  // namespace
 
 DescriptorMatcher::DescriptorMatcher(DescriptorMatcherOptions options) : options_(options) {
@@ -80,19 +86,7 @@ std::vector<cv::DMatch> DescriptorMatcher::match(const cv::Mat& query) const {
                                 " bytes, reference rows " + std::to_string(reference_cols_));
   if (reference_rows_ < 2) return {};  // no second nearest for the ratio test
 
-  std::vector<std::vector<cv::DMatch>> nearest;
-  if (kd_tree_) {
-    nearest.resize(static_cast<std::size_t>(query.rows));
-    for (int q = 0; q < query.rows; ++q) {
-      const TwoNearest two = kd_tree_->nearestTwo(query.ptr<std::uint8_t>(q));
-      if (two.second < 0) continue;
-      nearest[static_cast<std::size_t>(q)] = {cv::DMatch(q, two.best, static_cast<float>(two.best_distance)),
-                                              cv::DMatch(q, two.second, static_cast<float>(two.second_distance))};
-    }
-  } else {
-    matcher_->knnMatch(query, nearest, 2);
-  }
-
+  const std::vector<std::vector<cv::DMatch>> nearest = nearestTwo(query);
   std::vector<cv::DMatch> matches;
   for (const std::vector<cv::DMatch>& candidates : nearest) {
     if (candidates.size() < 2) continue;
@@ -104,6 +98,36 @@ std::vector<cv::DMatch> DescriptorMatcher::match(const cv::Mat& query) const {
 
   if (options_.cross_check_unique) matches = keepBestMatchPerReference(matches, reference_rows_);
   return matches;  // knnMatch returns one list per query row, in order
+}
+
+std::vector<std::vector<cv::DMatch>> DescriptorMatcher::nearestTwo(const cv::Mat& query) const {
+  std::vector<std::vector<cv::DMatch>> nearest(static_cast<std::size_t>(query.rows));
+  const int jobs = (query.rows + kQueryRowsPerJob - 1) / kQueryRowsPerJob;
+  // The searches only read the index (FLANN's LSH k-NN search and the KD-tree
+  // keep no state between queries; the OpenCV matcher's train() is a no-op
+  // once trained), so jobs share it and write disjoint rows of the result.
+  parallelFor(cv::Range(0, jobs), [&](const cv::Range& range) {
+    for (int job = range.start; job < range.end; ++job) {
+      const int first = job * kQueryRowsPerJob;
+      const int last = std::min(query.rows, first + kQueryRowsPerJob);
+      if (kd_tree_) {
+        for (int q = first; q < last; ++q) {
+          const TwoNearest two = kd_tree_->nearestTwo(query.ptr<std::uint8_t>(q));
+          if (two.second < 0) continue;
+          nearest[static_cast<std::size_t>(q)] = {cv::DMatch(q, two.best, static_cast<float>(two.best_distance)),
+                                                  cv::DMatch(q, two.second, static_cast<float>(two.second_distance))};
+        }
+        continue;
+      }
+      std::vector<std::vector<cv::DMatch>> rows;
+      matcher_->knnMatch(query.rowRange(first, last), rows, 2);
+      for (std::size_t r = 0; r < rows.size(); ++r) {
+        for (cv::DMatch& m : rows[r]) m.queryIdx += first;  // chunk row -> query row
+        nearest[static_cast<std::size_t>(first) + r] = std::move(rows[r]);
+      }
+    }
+  });
+  return nearest;
 }
 
 std::vector<cv::DMatch> keepBestMatchPerReference(const std::vector<cv::DMatch>& matches, int reference_rows) {

@@ -60,6 +60,10 @@ class DescriptorMatcher {
   int referenceSize() const { return reference_rows_; }
 
  private:
+  /// Each query row's two nearest reference rows (fewer where the index has
+  /// none), searched in parallel jobs of query rows; the same for any number of threads.
+  std::vector<std::vector<cv::DMatch>> nearestTwo(const cv::Mat& query) const;
+
   DescriptorMatcherOptions options_;
   cv::Ptr<cv::DescriptorMatcher> matcher_;  // null until a non-empty reference is set
   BinaryKdTree::Ptr kd_tree_;               // instead of matcher_ for MatcherKind::KdTree
