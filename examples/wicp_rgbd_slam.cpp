@@ -34,6 +34,7 @@
 #include "dataset_camera.h"
 #include "interrupt.h"
 #include "plotting.h"
+#include "synthetic_scene_options.h"
 #include "tool_support.h"
 #include "weighted_icp/core/named_values.h"
 #include "weighted_icp/core/statistics.h"
@@ -507,21 +508,9 @@ int main(int argc, char** argv) {
                                  ->default_value(synthetic.frames),
          "synthetic: frames (1-100000)")
         ("seed", tools::rangedValue(&synthetic.seed, std::uint64_t{0})->default_value(synthetic.seed), "synthetic: seed")
-        ("moving-object", po::bool_switch(&synthetic.moving_object), "synthetic: a box moves through the view")
-        ("dim", po::bool_switch(&synthetic.dim_lighting), "synthetic: dim, low-contrast, noisy images")
-        ("frames-per-loop", tools::rangedValue(&synthetic.frames_per_loop, 10.0, 1e6)
-                                ->default_value(synthetic.frames_per_loop),
-         "synthetic: frames to go once round; fewer than --synthetic-frames makes a loop (10-1e6)")
         ("depth-noise", tools::rangedValue(&synthetic.depth_noise_coefficient, 0.0, 1.0)
                             ->default_value(synthetic.depth_noise_coefficient),
          "synthetic: depth noise sigma_z = COEFF * z^2 (0-1)")
-        ("depth-distortion", tools::rangedValue(&synthetic.depth_distortion, -0.1, 0.1)->default_value(0.0),
-         "synthetic: a fixed depth error, depth times 1 + D r^2 (r: distance from the image centre over the focal "
-         "length), as a structured-light sensor's; the odometry drifts steadily (-0.1-0.1)")
-        ("repeated-texture", po::bool_switch(&synthetic.repeated_texture),
-         "synthetic: every surface shows the same texture tile (perceptual aliasing)")
-        ("room-scale", tools::rangedValue(&synthetic.room_scale, 1.0, 4.0)->default_value(1.0),
-         "synthetic: stretch the room's floor plan and the camera's path by this (farther, noisier walls) (1-4)")
         ("focal-error", tools::rangedValue(&synthetic.focal_length_error, -0.2, 0.2)->default_value(0.0),
          "synthetic: the tracker is given fx, fy off by this fraction (an uncalibrated camera; the images are "
          "rendered with the true ones) (-0.2-0.2)")
@@ -530,6 +519,7 @@ int main(int argc, char** argv) {
         ("cy-error", tools::rangedValue(&synthetic.principal_point_error_y_px, -80.0, 80.0)->default_value(0.0),
          "synthetic: the tracker is given cy off by this many pixels (-80-80)");
     // clang-format on
+    tools::addSyntheticSceneOptions(description, synthetic, "synthetic: ");
     // The papers' techniques, each an option off by default (issue #11; docs/frontend_ablation.md). Each name is
     // read by the library's parser, so the names and the error listing them exist once.
     const auto name = [](auto value) { return frontend::toString(value); };

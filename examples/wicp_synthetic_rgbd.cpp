@@ -10,6 +10,7 @@
 
 #include <boost/program_options.hpp>
 
+#include "synthetic_scene_options.h"
 #include "tool_support.h"
 #include "weighted_icp/simulation/rgbd_sequence.h"
 #include "weighted_icp/simulation/tum_export.h"
@@ -35,17 +36,13 @@ int main(int argc, char** argv) {
         ("seed", tools::rangedValue(&options.seed, std::uint64_t{0})->default_value(options.seed),
          "random seed (textures, path phases, noise)")
         ("fps", tools::positiveValue(&options.fps, 1e6)->default_value(options.fps), "frames per second (timestamps)")
-        ("moving-object", po::bool_switch(&options.moving_object), "carry a textured box across the view now and then")
-        ("dim", po::bool_switch(&options.dim_lighting), "dim, low-contrast, noisy images")
         ("no-depth-noise", po::bool_switch(&no_depth_noise), "exact depth (up to the 16-bit resolution)")
         ("depth-noise-coefficient", tools::rangedValue(&options.depth_noise_coefficient, 0.0, 1.0)
                                         ->default_value(options.depth_noise_coefficient),
          "depth noise sigma = coefficient * z^2 (metres)")
-        ("depth-distortion", tools::rangedValue(&options.depth_distortion, -0.1, 0.1)->default_value(0.0),
-         "a fixed depth error: depth times 1 + D r^2, r the distance from the image centre over the focal length "
-         "(-0.1-0.1)")
         ("overwrite", po::bool_switch(&overwrite), "replace DIR if it exists and is not empty");
     // clang-format on
+    tools::addSyntheticSceneOptions(description, options);
     po::variables_map vm;
     if (!tools::parseCommandLine(argc, argv, description, vm)) return 0;
     options.depth_noise = !no_depth_noise;

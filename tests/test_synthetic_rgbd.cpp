@@ -574,4 +574,43 @@ TEST(SyntheticRgbdTool, WritesASequenceAndRejectsBadOptions) {
   EXPECT_NE(run.err.find("/proc"), std::string::npos) << run.err;
 }
 
+// The scene options wicp_rgbd_slam runs (room, loop, texture) render the same scene to disk, so that a loop
+// sequence can be turned into a variant (wicp_make_variant) and run from its folder.
+TEST(SyntheticRgbdTool, RendersTheSceneOptionsWicpRgbdSlamTakes) {
+  const fs::path tool = binaryDir() / "examples" / "wicp_synthetic_rgbd";
+  if (!fs::exists(tool)) GTEST_SKIP() << "build the wicp_synthetic_rgbd target first (" << tool << ")";
+  const fs::path scratch = scratchDir("synthetic_rgbd_tool_scene");
+  const std::string out = "'" + (scratch / "room").string() + "'";
+  ToolRun run =
+      runTool("--out " + out + " --frames 3 --seed 4 --room-scale 2 --frames-per-loop 40 --repeated-texture", scratch);
+  ASSERT_EQ(run.status, 0) << run.err;
+
+  simulation::SyntheticRgbdOptions options;
+  options.frames = 3;
+  options.seed = 4;
+  options.room_scale = 2.0;
+  options.frames_per_loop = 40.0;
+  options.repeated_texture = true;
+  const simulation::SyntheticRgbdSequence expected(options);
+  options.room_scale = 1.0;
+  options.repeated_texture = false;
+  const simulation::SyntheticRgbdSequence plain(options);
+  const io::TumSequence read = io::TumSequence::open((scratch / "room").string());
+  ASSERT_EQ(read.size(), 3u);
+  for (std::size_t i = 0; i < 3; ++i) {
+    const auto pose = read.groundTruthAt(read.frame(i).rgb_timestamp);
+    ASSERT_TRUE(pose.has_value());
+    EXPECT_TRUE(pose->isApprox(expected.cameraToWorld(i), 1e-9)) << "frame " << i;
+  }
+  // The options took effect: the stretched path and the tiled texture differ from the plain scene's.
+  EXPECT_GT((expected.cameraToWorld(2).translation() - plain.cameraToWorld(2).translation()).norm(), 0.1);
+  const cv::Mat color = cv::imread(read.frame(1).rgb_path, cv::IMREAD_UNCHANGED);
+  EXPECT_EQ(cv::norm(color, expected.frame(1).rgbd.color, cv::NORM_INF), 0.0);
+  EXPECT_GT(cv::norm(color, plain.frame(1).rgbd.color, cv::NORM_L1), 0.0);
+
+  run = runTool("--out '" + (scratch / "bad").string() + "' --room-scale 5", scratch);
+  EXPECT_EQ(run.status, 2);
+  EXPECT_NE(run.err.find("--room-scale"), std::string::npos) << run.err;
+}
+
 }  // namespace
