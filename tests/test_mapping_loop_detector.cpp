@@ -57,6 +57,8 @@ TEST(LoopDetector, ClosesTheLoopOfARevisitingSequenceWithoutMakingItWorse) {
   const auto verified = std::count_if(with.candidates.begin(), with.candidates.end(),
                                       [](const mapping::LoopCandidateRecord& c) { return c.refused_by.empty(); });
   EXPECT_EQ(static_cast<std::size_t>(verified), with.stats.loops_detected);
+  EXPECT_EQ(with.detector.verified, with.stats.loops_detected);
+  EXPECT_GE(with.detector.queries, with.detector.verified);
   const std::set<std::string> checks = {
       "descriptor_matches", "pnp",     "pnp_inliers", "icp_landmarks", "icp_degenerate", "icp_correction",
       "icp_inliers",        "overlap", "fitness",     "drift",         "culled"};

@@ -23,7 +23,7 @@ BowLoopDetector::BowLoopDetector(BinaryVocabulary::ConstPtr vocabulary, const Pi
       options_(std::move(options)) {}
 
 std::optional<LoopConstraint> BowLoopDetector::detect(const frontend::Map& map, frontend::KeyframeId query) {
-  ++stats_.queries;
+  ++queries_;
   const KeyframeSnapshot snapshot = KeyframeSnapshot::of(map);
   const auto keyframe = snapshot.keyframes.find(query);
   // Bundle adjustment may have culled it since insertion: nothing to query, nothing to add.
@@ -32,7 +32,6 @@ std::optional<LoopConstraint> BowLoopDetector::detect(const frontend::Map& map, 
   std::optional<LoopConstraint> loop;
   // Candidates come best first; the first verified one is the loop.
   for (const PlaceCandidate& candidate : recognizer_.detect(query, bow, snapshot.covisible(query))) {
-    ++stats_.candidates;
     if (!snapshot.keyframes.count(candidate.keyframe)) {
       candidates_.push_back({query, candidate.keyframe, candidate.normalised_score, "culled",
                              "bundle adjustment culled the keyframe since it was added"});
@@ -43,13 +42,20 @@ std::optional<LoopConstraint> BowLoopDetector::detect(const frontend::Map& map, 
     LoopVerification result = verifier_.verify(snapshot, query, snapshot, candidate.keyframe, prior);
     candidates_.push_back({query, candidate.keyframe, candidate.normalised_score, result.refused_by, result.reason});
     if (!result.accepted) continue;
-    ++stats_.verified;
     result.constraint.score = candidate.normalised_score;
     loop = result.constraint;
     break;
   }
   recognizer_.add(query, std::move(bow));
   return loop;
+}
+
+LoopDetectorStats BowLoopDetector::stats() const {
+  LoopDetectorStats stats;
+  stats.queries = queries_;
+  stats.candidates = candidates_.size();
+  for (const LoopCandidateRecord& record : candidates_) stats.verified += record.refused_by.empty() ? 1 : 0;
+  return stats;
 }
 
 LoopDetector asLoopDetector(const BowLoopDetector::Ptr& detector) {

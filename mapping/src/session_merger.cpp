@@ -46,29 +46,43 @@ Prepared prepare(const Session& session, const BinaryVocabulary& vocabulary) {
 /// Gives the prior of a candidate (query keyframe, match keyframe), or none.
 using PriorOf = std::function<std::optional<LoopPrior>(frontend::KeyframeId, frontend::KeyframeId)>;
 
-/// Verified loops from `query`'s keyframes to `match`'s (query = query keyframe, match = match keyframe, local ids),
-/// at most one per query keyframe; the keyframes in `skip` are not queried.
-std::vector<LoopConstraint> verifiedLoops(const Prepared& query, const Prepared& match,
-                                          const BinaryVocabulary::ConstPtr& vocabulary, const LoopVerifier& verifier,
-                                          const SessionMergeOptions& options, const PriorOf& prior_of,
-                                          const std::string& pass, const std::set<frontend::KeyframeId>& skip = {}) {
+/// For each of `query`'s keyframes, `match`'s keyframes ranked by place recognition, best first (at most
+/// `candidates_per_keyframe`). Computed once per pair of sessions: both verification passes read it.
+using Rankings = std::map<frontend::KeyframeId, std::vector<PlaceCandidate>>;
+
+Rankings rankAgainst(const Prepared& query, const Prepared& match, const BinaryVocabulary::ConstPtr& vocabulary,
+                     const SessionMergeOptions& options) {
   PlaceRecognitionOptions recognition;
   recognition.exclude_recent = 0;  // the other session's ids are unrelated to the query's
   PlaceRecognizer recognizer(vocabulary, recognition);
   for (const auto& [id, bow] : match.bows) recognizer.add(id, bow);
-  std::vector<LoopConstraint> loops;
-  const std::size_t total = query.bows.size() - skip.size();
-  std::size_t done = 0;
+  Rankings rankings;
   for (const auto& [id, bow] : query.bows) {
+    // An id no keyframe of `match` has, so that no candidate is excluded as "recent".
+    std::vector<PlaceCandidate> ranked = recognizer.rank(kStride + id, bow, {});
+    if (ranked.size() > options.candidates_per_keyframe) ranked.resize(options.candidates_per_keyframe);
+    rankings.emplace(id, std::move(ranked));
+  }
+  return rankings;
+}
+
+/// Verified loops from `query`'s keyframes to `match`'s (query = query keyframe, match = match keyframe, local ids),
+/// at most one per query keyframe, its candidates tried in `rankings`' order; the keyframes in `skip` are not queried.
+std::vector<LoopConstraint> verifiedLoops(const Prepared& query, const Prepared& match, const Rankings& rankings,
+                                          const LoopVerifier& verifier, const SessionMergeOptions& options,
+                                          const PriorOf& prior_of, const std::string& pass,
+                                          const std::set<frontend::KeyframeId>& skip = {}) {
+  std::vector<LoopConstraint> loops;
+  const std::size_t total = rankings.size() - skip.size();
+  std::size_t done = 0;
+  for (const auto& [id, ranked] : rankings) {
     if (skip.count(id)) continue;
     if (options.progress) options.progress(pass, done++, total);
-    // An id no keyframe of `match` has, so that no candidate is excluded as "recent".
-    const auto ranked = recognizer.rank(kStride + id, bow, {});
-    for (std::size_t c = 0; c < ranked.size() && c < options.candidates_per_keyframe; ++c) {
+    for (const PlaceCandidate& candidate : ranked) {
       LoopVerification result =
-          verifier.verify(query.snapshot, id, match.snapshot, ranked[c].keyframe, prior_of(id, ranked[c].keyframe));
+          verifier.verify(query.snapshot, id, match.snapshot, candidate.keyframe, prior_of(id, candidate.keyframe));
       if (!result.accepted) continue;
-      result.constraint.score = ranked[c].score;
+      result.constraint.score = candidate.score;
       loops.push_back(result.constraint);
       break;
     }
@@ -156,15 +170,14 @@ bool consistent(const Prepared& query, const PinholeCamera& query_camera, const 
 /// holds, with the link's prior (linkPrior), so that the plain-ICP check of a loop within a session applies and
 /// loops far from the first ones bring the drift between them to the pose graph. Without a prior, the sparse
 /// clouds of a larger room made the weighted check refuse most true loops (LoopVerifier::verify).
-std::vector<LoopConstraint> loopsWithLinkPrior(const Prepared& query, const Prepared& match,
+std::vector<LoopConstraint> loopsWithLinkPrior(const Prepared& query, const Prepared& match, const Rankings& rankings,
                                                const std::vector<LoopConstraint>& agreeing,
-                                               const BinaryVocabulary::ConstPtr& vocabulary,
                                                const LoopVerifier& verifier, const SessionMergeOptions& options,
                                                const std::string& pass) {
   std::set<frontend::KeyframeId> linked;
   for (const LoopConstraint& loop : agreeing) linked.insert(loop.query);
   return verifiedLoops(
-      query, match, vocabulary, verifier, options,
+      query, match, rankings, verifier, options,
       [&](frontend::KeyframeId q, frontend::KeyframeId c) {
         return std::optional<LoopPrior>(linkPrior(query, q, match, c, agreeing, options.link_drift));
       },
@@ -183,8 +196,9 @@ void linkSessions(const std::vector<Prepared>& prepared, const BinaryVocabulary:
       for (std::size_t m = 0; m < prepared.size() && !link.merged; ++m) {
         if (m == s || !merge.sessions[m].merged) continue;
         const std::string pass = "session " + std::to_string(s) + " against " + std::to_string(m);
+        const Rankings rankings = rankAgainst(prepared[s], prepared[m], vocabulary, options);
         const auto loops = verifiedLoops(
-            prepared[s], prepared[m], vocabulary, verifier, options,
+            prepared[s], prepared[m], rankings, verifier, options,
             [](frontend::KeyframeId, frontend::KeyframeId) { return std::nullopt; }, pass);
         Eigen::Isometry3d s_in_m = Eigen::Isometry3d::Identity();
         const auto agreeing = agreeingLoops(loops, prepared[s], prepared[m], options, s_in_m);
@@ -198,7 +212,7 @@ void linkSessions(const std::vector<Prepared>& prepared, const BinaryVocabulary:
         link.world_in_first = merge.sessions[m].world_in_first * s_in_m;
         std::vector<LoopConstraint> joined = agreeing;
         if (options.loops_with_link_prior) {
-          const auto added = loopsWithLinkPrior(prepared[s], prepared[m], agreeing, vocabulary, verifier, options,
+          const auto added = loopsWithLinkPrior(prepared[s], prepared[m], rankings, agreeing, verifier, options,
                                                 pass + " with the link as prior");
           link.loops_with_link_prior = added.size();
           joined.insert(joined.end(), added.begin(), added.end());

@@ -42,7 +42,7 @@ struct LoopCandidateRecord {
   std::string reason;
 };
 
-/// @brief What the detector did so far (for reports and tests).
+/// @brief What the detector did so far (for reports and tests); the candidate counts are those of candidates().
 struct LoopDetectorStats {
   /// @brief Keyframes queried.
   std::size_t queries = 0;
@@ -70,10 +70,12 @@ class BowLoopDetector {
   /// @return The best-scoring verified loop (score = place recognition's normalised score), or nothing.
   std::optional<LoopConstraint> detect(const frontend::Map& map, frontend::KeyframeId query);
 
-  /// @brief Counters so far.
-  const LoopDetectorStats& stats() const { return stats_; }
+  /// @brief Counters so far (read it when detect() is not running, as candidates()).
+  LoopDetectorStats stats() const;
   /// @brief Every candidate so far, in the order verified (a query's candidates best first), with its verdict:
-  /// why a run closed no loop. Read it when detect() is not running (after the loop closer has finished).
+  /// why a run closed no loop. Read it when detect() is not running (after the loop closer has finished). It grows
+  /// by at most PlaceRecognitionOptions::max_places records a keyframe and is kept whole for the run's
+  /// loop_candidates.txt.
   const std::vector<LoopCandidateRecord>& candidates() const { return candidates_; }
 
   /// @brief "BowLoopDetector".
@@ -84,7 +86,7 @@ class BowLoopDetector {
   PlaceRecognizer recognizer_;
   LoopVerifier verifier_;
   LoopDetectorOptions options_;
-  LoopDetectorStats stats_;
+  std::size_t queries_ = 0;
   std::vector<LoopCandidateRecord> candidates_;
 };
 
