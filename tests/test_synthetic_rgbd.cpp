@@ -23,6 +23,7 @@
 
 #include "test_support.h"
 #include "tool_runner.h"
+#include "weighted_icp/io/camera.h"
 #include "weighted_icp/io/tum_sequence.h"
 #include "weighted_icp/simulation/rgbd_sequence.h"
 #include "weighted_icp/simulation/tum_export.h"
@@ -502,6 +503,13 @@ TEST(SyntheticRgbd, WritesTheTumLayout) {
     EXPECT_EQ(translation, frame.camera_to_world.translation());
     EXPECT_TRUE(rotation.toRotationMatrix().isApprox(frame.camera_to_world.linear(), 1e-12));
   }
+
+  // The camera is written with it (fr1's intrinsics without fr1's lens distortion: not the fr1 preset).
+  const PinholeCamera camera = io::loadCamera((dir / "camera.yaml").string());
+  EXPECT_EQ(camera.fx, sequence.options().camera.fx);
+  EXPECT_EQ(camera.cy, sequence.options().camera.cy);
+  EXPECT_EQ(camera.depth_factor, sequence.options().camera.depth_factor);
+  for (int k = 0; k < 5; ++k) EXPECT_EQ(camera.distortion[k], sequence.options().camera.distortion[k]) << k;
 
   // The project's own reader agrees.
   const io::TumSequence read = io::TumSequence::open(dir.string());

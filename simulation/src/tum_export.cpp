@@ -1,7 +1,7 @@
 // A synthetic RGB-D sequence written in the TUM RGB-D layout (see
 // tum_export.h): images and lists frame by frame into io::AtomicFolder's
 // temporary folder beside the target, the ground truth through io's trajectory
-// writer, then one rename.
+// writer, the camera through io's camera writer, then one rename.
 
 #include "weighted_icp/simulation/tum_export.h"
 
@@ -15,6 +15,7 @@
 
 #include "weighted_icp/core/rgbd_frame.h"
 #include "weighted_icp/io/atomic_folder.h"
+#include "weighted_icp/io/camera.h"
 #include "weighted_icp/io/trajectory.h"
 
 namespace weighted_icp::simulation {
@@ -76,6 +77,9 @@ void writeTumSequence(const SyntheticRgbdSequence& sequence, const std::string& 
                       const std::function<void(std::size_t)>& frame_written) {
   io::AtomicFolder folder(dir, overwrite);  // refuses a non-empty dir before rendering anything
   writeFrames(sequence, folder.path(), frame_written);
+  // The camera the images were rendered with: the synthetic camera has fr1's intrinsics but no lens distortion,
+  // so the folder must not be read as fr1 (whose distortion the tracker would then remove from exact images).
+  io::saveCamera(sequence.options().camera, (folder.path() / "camera.yaml").string());
   folder.publish();
 }
 

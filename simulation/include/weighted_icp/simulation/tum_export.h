@@ -14,7 +14,8 @@ namespace weighted_icp::simulation {
 /// @brief Writes the sequence in the TUM RGB-D layout: rgb/ and depth/ (PNG,
 /// named by timestamp with microseconds), rgb.txt and depth.txt (the same
 /// timestamps), groundtruth.txt (camera-to-world, written by
-/// io::writeTrajectory: reads back the exact poses at the listed timestamps).
+/// io::writeTrajectory: reads back the exact poses at the listed timestamps)
+/// and camera.yaml (the rendering camera, io::saveCamera), which the tools read.
 /// The folder appears complete or not at all: it is written beside `dir` under
 /// a temporary name and renamed at the end.
 /// @param sequence what to render
