@@ -3,9 +3,10 @@
 //
 // Contract other tools rely on: with --json the last line of stdout is one
 // JSON object with transformation (4x4, as 4 rows), fitness_score,
-// iterations, converged, degenerate (+ reason), correspondences and time_ms
-// (alignment only). Exit codes: 0 converged, 1 error, 2 bad command line,
-// 3 not converged, 4 degenerate problem (ICP not run).
+// iterations, converged, stopped_at_iteration_limit, degenerate (+ reason),
+// correspondences and time_ms (alignment only). Exit codes: 0 converged, 1
+// error, 2 bad command line, 3 not converged (or stopped at the iteration
+// limit before its criteria were met), 4 degenerate problem (ICP not run).
 
 #include <iomanip>
 #include <iostream>
@@ -45,7 +46,8 @@ bool parseCommand(int argc, char** argv, AlignCommand& c) {
   po::options_description options(
       "wicp_align --source A.txt --target B.txt [options]\n"
       "Aligns landmark map A onto B (paper map format).\n"
-      "Exit status: 0 converged, 1 error, 2 bad command line, 3 ICP did not converge, 4 degenerate problem\n"
+      "Exit status: 0 converged, 1 error, 2 bad command line, 3 ICP did not converge (or stopped at --max-iterations "
+      "before its criteria were met), 4 degenerate problem\n"
       "(fewer than 3 landmarks, all identical or collinear, or k at least the target's landmarks: not run).\n"
       "Options");
   // One option per line reads as a table: not reflowed.
@@ -122,13 +124,17 @@ AlignmentResult runAlignment(const AlignCommand& c, const AlignInputs& in, const
   return both.alignment;
 }
 
+/// @brief Converged by its criteria, not only stopped at the iteration limit (which PCL counts as converged).
+bool settled(const AlignmentResult& result) { return result.converged && !result.stopped_at_iteration_limit; }
+
 /// @brief The human-readable summary on stdout.
 void printSummary(const AlignCommand& c, const AlignInputs& in, const AlignmentResult& result) {
   std::cout << "source " << in.source.landmarks.size() << " landmarks, target " << in.target.landmarks.size()
             << " landmarks, strategy " << toString(c.strategy) << ", k " << c.settings.k << '\n'
             << (result.degenerate ? "degenerate: " + result.reason + "; not aligned\n" : std::string()) << "converged "
-            << (result.converged ? "yes" : "no") << " after " << result.iterations << " iterations";
+            << (settled(result) ? "yes" : "no") << " after " << result.iterations << " iterations";
   if (c.settings.refine) std::cout << " + " << result.refine_iterations << " refinement";
+  if (result.stopped_at_iteration_limit) std::cout << " (stopped at the iteration limit before its criteria were met)";
   std::cout << ", fitness score " << result.fitness_score << ", " << result.correspondences << " correspondences, "
             << std::fixed << std::setprecision(1) << result.time_ms << " ms\n"
             << std::defaultfloat << "transformation (source -> target):\n"
@@ -143,6 +149,7 @@ void printJson(const AlignCommand& c, const AlignInputs& in, const AlignmentResu
       .add("iterations", result.iterations)
       .add("refine_iterations", result.refine_iterations)
       .add("converged", result.converged)
+      .add("stopped_at_iteration_limit", result.stopped_at_iteration_limit)
       .add("degenerate", result.degenerate);
   if (result.degenerate) json.add("reason", result.reason);
   json.add("correspondences", result.correspondences)
@@ -170,6 +177,6 @@ int main(int argc, char** argv) {
                            command.source_path + " onto " + command.target_path + " (" + toString(command.strategy) +
                                ", k " + std::to_string(command.settings.k) + ")");
     if (result.degenerate) return 4;
-    return result.converged ? 0 : 3;
+    return settled(result) ? 0 : 3;
   });
 }

@@ -77,6 +77,22 @@ TEST(WicpAlign, NoStopRuleRunsLongerToTheSamePose) {
   EXPECT_LT(difference.cwiseAbs().maxCoeff(), 1e-5);
 }
 
+// PCL counts reaching the iteration limit as converged; wicp_align does not: exit 3, and the JSON says why.
+TEST(WicpAlign, StoppingAtTheIterationLimitIsNotConvergence) {
+  WEIGHTED_ICP_REQUIRE_FILE(weighted_icp::testing::realMapPath());
+  const fs::path scratch = weighted_icp::testing::scratchDir("wicp_align_iteration_limit");
+  const std::string map = weighted_icp::testing::realMapPath().string();
+  const std::string args = "--source " + map + " --target " + map + " --displace \"0.3 0.2 0 0 0 30\" --json";
+  const ToolRun cut = run("wicp_align", args + " --max-iterations 2", scratch);
+  EXPECT_EQ(cut.status, 3) << cut.out << cut.err;
+  EXPECT_NE(lastLine(cut.out).find("\"stopped_at_iteration_limit\":true"), std::string::npos) << cut.out;
+  EXPECT_NE(cut.out.find("converged no after 2 iterations (stopped at the iteration limit"), std::string::npos)
+      << cut.out;
+  const ToolRun full = run("wicp_align", args, scratch);
+  EXPECT_EQ(full.status, 0) << full.out << full.err;
+  EXPECT_NE(lastLine(full.out).find("\"stopped_at_iteration_limit\":false"), std::string::npos) << full.out;
+}
+
 TEST(WicpAlign, BadInputGivesAClearErrorAndANonZeroExit) {
   const fs::path scratch = weighted_icp::testing::scratchDir("wicp_align_errors");
   const fs::path bad = scratch / "bad.txt";

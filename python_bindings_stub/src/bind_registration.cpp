@@ -117,6 +117,9 @@ void bindRegistration(py::module_& m) {
       .def_readonly("refine_iterations", &AlignmentResult::refine_iterations,
                     "Iterations of the nearest-neighbour refinement (0 when refine was off).")
       .def_readonly("converged", &AlignmentResult::converged, "Whether the last stage run converged.")
+      .def_readonly("stopped_at_iteration_limit", &AlignmentResult::stopped_at_iteration_limit,
+                    "The last stage stopped at its iteration limit before its criteria were met (PCL still "
+                    "reports converged).")
       .def_readonly("correspondences", &AlignmentResult::correspondences, "Pairs used by the last iteration.")
       .def_readonly("time_ms", &AlignmentResult::time_ms, "Time of the ICP stages (milliseconds).")
       .def_readonly("degenerate", &AlignmentResult::degenerate,

@@ -44,6 +44,7 @@ def test_align_gives_the_numbers_of_wicp_align(halves: tuple, strategy: str) -> 
     assert r.fitness_score == tool["fitness_score"]
     assert r.iterations == tool["iterations"]
     assert r.converged == tool["converged"]
+    assert r.stopped_at_iteration_limit == tool["stopped_at_iteration_limit"]
     assert r.correspondences == tool["correspondences"]
     # The same through the maps and the strategy's name.
     by_map = wi.align(a, b, strategy=strategy, k=5)

@@ -172,6 +172,9 @@ AlignmentResult LandmarkAligner::align(const LandmarkCloud::ConstPtr& source, co
 
   result.transformation = icp.getFinalTransformation();
   result.converged = icp.hasConverged();
+  result.stopped_at_iteration_limit =
+      icp.criteria().getConvergenceState() ==
+      pcl::registration::DefaultConvergenceCriteria<double>::CONVERGENCE_CRITERIA_ITERATIONS;
   result.correspondences = icp.lastCorrespondenceCount();
   result.fitness_score = icp.getFitnessScore();
   return result;

@@ -44,9 +44,13 @@ struct AlignmentResult {
   /// PCL's fitness score: mean squared distance from each transformed source
   /// point to its nearest target point, unweighted. NaN when degenerate.
   double fitness_score = 0.0;
-  int iterations = 0;               // weighted stage
-  int refine_iterations = 0;        // refinement stage, 0 when not run
-  bool converged = false;           // of the last stage run
+  int iterations = 0;         // weighted stage
+  int refine_iterations = 0;  // refinement stage, 0 when not run
+  bool converged = false;     // of the last stage run (PCL's hasConverged(): true at the iteration limit too)
+  /// The last stage stopped because it reached its iteration limit, not because its criteria (transformation,
+  /// fitness, repeated correspondences) were met; PCL still reports that as converged. A caller that needs a
+  /// settled pose tests converged && !stopped_at_iteration_limit (wicp_align's exit 3 does).
+  bool stopped_at_iteration_limit = false;
   std::size_t correspondences = 0;  // used by the last iteration
   double time_ms = 0.0;
   /// The problem has no unique rigid solution, so ICP was not run (the
