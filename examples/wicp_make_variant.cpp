@@ -9,8 +9,8 @@
 
 #include <boost/program_options.hpp>
 
-#include "dataset_camera.h"
 #include "tool_support.h"
+#include "weighted_icp/io/camera.h"
 #include "weighted_icp/simulation/sequence_variants.h"
 
 namespace po = boost::program_options;
@@ -71,7 +71,7 @@ int main(int argc, char** argv) {
 
     const simulation::VariantSource source =
         dataset.empty() ? simulation::syntheticVariantSource(synthetic)
-                        : simulation::tumVariantSource(dataset, tools::datasetCamera(dataset, camera_spec));
+                        : simulation::tumVariantSource(dataset, io::datasetCamera(dataset, camera_spec));
     tools::Progress progress("writing", source.size);
     const simulation::VariantSummary summary = simulation::writeSequenceVariant(
         source, options, out_dir, vm.count("overwrite") > 0, [&](std::size_t) { progress.step(); });

@@ -31,7 +31,6 @@
 
 #include <boost/program_options.hpp>
 
-#include "dataset_camera.h"
 #include "interrupt.h"
 #include "plotting.h"
 #include "synthetic_scene_options.h"
@@ -40,6 +39,7 @@
 #include "weighted_icp/core/statistics.h"
 #include "weighted_icp/frontend/slam/frontend_choices.h"
 #include "weighted_icp/io/atomic_folder.h"
+#include "weighted_icp/io/camera.h"
 #include "weighted_icp/io/cloud_io.h"
 #include "weighted_icp/io/map_format.h"
 #include "weighted_icp/io/trajectory.h"
@@ -573,7 +573,7 @@ int main(int argc, char** argv) {
     if (dataset.empty()) {
       source = std::make_unique<SyntheticSource>(synthetic);
     } else {
-      source = std::make_unique<TumSource>(dataset, tools::datasetCamera(dataset, camera_spec));
+      source = std::make_unique<TumSource>(dataset, io::datasetCamera(dataset, camera_spec));
     }
     const std::size_t frames = max_frames > 0 ? std::min(max_frames, source->size()) : source->size();
     if (first_frame >= frames)

@@ -12,7 +12,6 @@
 
 #include <boost/program_options.hpp>
 
-#include "dataset_camera.h"
 #include "tool_support.h"
 #include "weighted_icp/io/camera.h"
 #include "weighted_icp/io/tum_sequence.h"
@@ -48,7 +47,7 @@ struct Keyframes {
 Keyframes tumKeyframes(const std::string& dir, std::size_t every) {
   const io::TumSequence sequence = io::TumSequence::open(dir);
   if (!sequence.hasGroundTruth()) throw std::runtime_error(dir + ": no groundtruth.txt (needed for the poses)");
-  const PinholeCamera camera = tools::datasetCamera(dir, "");
+  const PinholeCamera camera = io::datasetCamera(dir, "");
   mapping::PosedKeyframeBuilder builder(camera);
   for (std::size_t i = 0; i < sequence.size(); i += every) {
     const auto pose = sequence.groundTruthAt(sequence.frame(i).rgb_timestamp);

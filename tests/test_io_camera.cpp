@@ -215,3 +215,33 @@ TEST(Camera, ImplausibleValuesAreRefusedWithTheirKeysAndRanges) {
   camera.depth_factor = 1e7;  // refused when saving too, so a saved camera loads back
   EXPECT_THROW(io::saveCamera(camera, (dir / "saved.yaml").string()), std::runtime_error);
 }
+
+// The camera a TUM folder is read with: the one asked for, else its camera.yaml, else its name; a folder that does
+// not exist is named as such (not as a camera the tools cannot guess).
+TEST(Camera, ADatasetsCameraIsAskedForOrItsOwnOrNamedByTheFolder) {
+  const auto dir = weighted_icp::testing::scratchDir("camera_of_dataset");
+  const fs::path named = dir / "rgbd_dataset_freiburg3_teddy", own = dir / "recording", plain = dir / "plain";
+  for (const fs::path& folder : {named, own, plain}) fs::create_directories(folder);
+  writeFile((own / "camera.yaml").string(), kCompleteYaml);
+
+  EXPECT_EQ(io::datasetCamera(named.string(), "").fx, tumCamera(3).fx);
+  EXPECT_EQ(io::datasetCamera(own.string(), "").fx, 500.5);
+  EXPECT_EQ(io::datasetCamera(own.string(), "fr2").fx, tumCamera(2).fx);  // asked for: before the folder's own
+  EXPECT_EQ(io::datasetCamera(named.string() + "/", "").fx, tumCamera(3).fx);
+
+  const auto error = [](const std::string& dataset, const std::string& how) {
+    try {
+      io::datasetCamera(dataset, "", how);
+    } catch (const std::runtime_error& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  const std::string unnamed = error(plain.string(), "--camera");
+  EXPECT_NE(unnamed.find(plain.string()), std::string::npos) << unnamed;
+  EXPECT_NE(unnamed.find("--camera fr1|fr2|fr3|FILE.yaml"), std::string::npos) << unnamed;
+  EXPECT_NE(error(plain.string(), "camera=").find("pass camera="), std::string::npos);
+  const std::string missing = error((dir / "tum_fr1_xyz_hed").string(), "--camera");  // a typo, named like fr1
+  EXPECT_NE(missing.find("tum_fr1_xyz_hed: no such folder"), std::string::npos) << missing;
+  EXPECT_NE(error((dir / "kinn").string(), "--camera").find("kinn: no such folder"), std::string::npos);
+}

@@ -1,4 +1,4 @@
-// Camera files: TUM presets by name, OpenCV FileStorage YAML read and written.
+// Camera files: TUM presets by name, OpenCV FileStorage YAML read and written, and which one a TUM folder has.
 #include "weighted_icp/io/camera.h"
 
 #include <algorithm>
@@ -254,6 +254,34 @@ void saveCamera(const PinholeCamera& camera, const std::string& path) {
     out.close();
     if (!out) throw std::runtime_error("cannot write " + path);
   });
+}
+
+namespace {
+
+/// The TUM sensor a folder is named after (rgbd_dataset_freiburg3_teddy, tum_fr1_xyz_head): its own name only
+/// ("data/", "data/." and "data" alike), not its parents'. Empty when it names none.
+std::string sensorOfFolderName(const std::string& dir) {
+  const std::string name = std::filesystem::weakly_canonical(std::filesystem::absolute(dir)).filename().string();
+  for (const char* sensor : {"1", "2", "3"})
+    if (name.find(std::string("freiburg") + sensor) != std::string::npos ||
+        name.find(std::string("fr") + sensor) != std::string::npos)
+      return std::string("fr") + sensor;
+  return {};
+}
+
+}  // namespace
+
+PinholeCamera datasetCamera(const std::string& dataset, const std::string& spec, const std::string& how_to_pass) {
+  if (!std::filesystem::is_directory(dataset)) throw std::runtime_error(dataset + ": no such folder");
+  if (!spec.empty()) return loadCamera(spec);
+  const std::filesystem::path own = std::filesystem::path(dataset) / "camera.yaml";
+  if (std::filesystem::is_regular_file(own)) return loadCamera(own.string());
+  const std::string sensor = sensorOfFolderName(dataset);
+  if (sensor.empty())
+    throw std::runtime_error("cannot tell the camera of " + dataset +
+                             " from its name and it has no camera.yaml; pass " + how_to_pass +
+                             " fr1|fr2|fr3|FILE.yaml");
+  return loadCamera(sensor);
 }
 
 }  // namespace weighted_icp::io

@@ -55,17 +55,6 @@ TrackResult toTrackResult(const frontend::FrameRecord& record) {
   return out;
 }
 
-/// The camera of a TUM folder from its name (freiburg1 / fr1 ...), as wicp_rgbd_slam guesses it.
-PinholeCamera cameraOfFolder(const std::string& folder) {
-  const std::string name = fs::weakly_canonical(fs::absolute(folder)).filename().string();
-  for (int sensor : {1, 2, 3})
-    if (name.find("freiburg" + std::to_string(sensor)) != std::string::npos ||
-        name.find("fr" + std::to_string(sensor)) != std::string::npos)
-      return tumCamera(sensor);
-  throw py::value_error("cannot tell the camera of " + folder +
-                        " from its name; pass camera='fr1'|'fr2'|'fr3'|FILE.yaml");
-}
-
 PinholeCamera toCamera(const py::handle& camera) {
   if (py::isinstance<PinholeCamera>(camera)) return camera.cast<PinholeCamera>();
   if (py::isinstance<py::str>(camera)) return io::loadCamera(camera.cast<std::string>());
@@ -355,7 +344,13 @@ void bindFrontend(py::module_& m) {
       "run_tum",
       [](const std::string& folder, const py::object& camera, std::size_t max_frames, const py::object& progress,
          std::size_t minimap_keyframes, bool deterministic, const std::map<std::string, std::string>& options) {
-        const PinholeCamera cam = camera.is_none() ? cameraOfFolder(folder) : toCamera(camera);
+        // Python's convention: a folder or camera the caller got wrong is a ValueError, as before.
+        PinholeCamera cam;
+        try {
+          cam = camera.is_none() ? io::datasetCamera(folder, "", "camera=") : toCamera(camera);
+        } catch (const std::runtime_error& e) {
+          throw py::value_error(e.what());
+        }
         auto slam = makeSlam(py::cast(cam), minimap_keyframes, "flann", true, deterministic, options);
         slam->run(folder, max_frames, progress);
         return slam;
@@ -363,7 +358,8 @@ void bindFrontend(py::module_& m) {
       py::arg("folder"), py::arg("camera") = py::none(), py::arg("max_frames") = 0, py::arg("progress") = py::none(),
       py::arg("minimap_keyframes") = 10, py::arg("deterministic") = false,
       py::arg("options") = std::map<std::string, std::string>{},
-      "A new RgbdSlam run over a TUM folder; the camera, when not given, from the folder's name (fr1 ...); "
+      "A new RgbdSlam run over a TUM folder; the camera, when not given, the folder's camera.yaml, else from its name "
+      "(fr1 ...); "
       "options as RgbdSlam's.");
 }
 

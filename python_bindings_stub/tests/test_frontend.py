@@ -54,6 +54,19 @@ def test_run_tum_guesses_the_camera_and_stops_on_a_callback_error(tum_folder: Pa
     assert len(slam.tracking_ms) == 3
 
 
+def test_run_tum_names_a_missing_folder_and_reads_a_folders_camera_file(tmp_path: Path) -> None:
+    with pytest.raises(ValueError, match="kinn: no such folder"):
+        wi.run_tum(str(tmp_path / "kinn"))
+    with pytest.raises(ValueError, match="pass camera="):
+        wi.run_tum(str(tmp_path))  # exists, but neither camera.yaml nor a TUM name
+    (tmp_path / "camera.yaml").write_text(
+        "%YAML:1.0\nfx: 585.\nfy: 585.\ncx: 320.\ncy: 240.\nk1: 0.\nk2: 0.\np1: 0.\np2: 0.\nk3: 0.\n"
+        "width: 640\nheight: 480\ndepth_factor: 1000.\n")
+    # The folder's camera is read (as wicp_rgbd_slam reads it); it has no frames, which is the next error.
+    with pytest.raises(RuntimeError, match="rgb.txt"):
+        wi.run_tum(str(tmp_path))
+
+
 def test_track_refuses_wrong_images() -> None:
     slam = wi.RgbdSlam("fr1")
     rgb = np.zeros((480, 640, 3), dtype=np.uint8)

@@ -27,4 +27,15 @@ PinholeCamera loadCamera(const std::string& preset_or_path);
 /// @param path the file to write
 void saveCamera(const PinholeCamera& camera, const std::string& path);
 
+/// @brief The camera to read the TUM folder `dataset` with: `spec` when given (fr1|fr2|fr3|FILE.yaml), else the
+/// folder's own camera.yaml (what wicp_make_variant and wicp_synthetic_rgbd write), else the TUM sensor named in
+/// the folder's name (rgbd_dataset_freiburg3_teddy, tum_fr1_xyz_head). Throws std::runtime_error naming the
+/// folder when it does not exist, saying how to pass the camera when none applies, or naming the camera file and
+/// its invalid keys.
+/// @param dataset the TUM folder
+/// @param spec the camera asked for, empty when none
+/// @param how_to_pass how the caller's user passes a camera, for the error ("--camera" for the tools)
+PinholeCamera datasetCamera(const std::string& dataset, const std::string& spec,
+                            const std::string& how_to_pass = "--camera");
+
 }  // namespace weighted_icp::io
