@@ -76,7 +76,7 @@ TEST(ToolOptions, OutOfRangeNumbersAreCommandLineErrorsNamingTheOption) {
       {"wicp_global_sweep", "--synthetic --yaws 0,x", "--yaws: 'x' is not a finite number"},
       {"wicp_global_sweep", "--synthetic --xy 1", "--xy: '1' is not x:y"},
       {"wicp_global_sweep", "--synthetic --overlaps 0", "--overlaps: each must be in (0, 1]"},
-      {"wicp_global_sweep", "--synthetic --method foo", "--method must be global, coarse, icp or truth (got foo)"},
+      {"wicp_global_sweep", "--synthetic --method foo", "--method must be global, coarse, icp, truth, fpfh or fpfh-trimmed (got foo)"},
       {"wicp_global_sweep", "", "give exactly one of --map FILE and --synthetic"},
   };
   for (const auto& c : cases) {
