@@ -34,6 +34,7 @@ struct AlignCommand {
   bool pcl_stopping_only = false;
   bool json = false;
   WeightStrategy strategy = WeightStrategy::Covariance;
+  Displacement displacement;  // --displace, parsed with the command line
 };
 
 /// @brief The two maps as aligned: the source already displaced.
@@ -83,8 +84,19 @@ bool parseCommand(int argc, char** argv, AlignCommand& c) {
   // clang-format on
   po::variables_map vm;
   if (!tools::parseCommandLine(argc, argv, options, vm)) return false;
+  tools::requireOutputFolderOf(c.plot_path, "--plot");
   c.settings.stop_on_repeated_correspondences = !c.pcl_stopping_only;
-  c.strategy = parseWeightStrategy(c.strategy_name);
+  // A bad value is a command-line error (exit 2), as a bad number is, not a failure of the run.
+  try {
+    c.strategy = parseWeightStrategy(c.strategy_name);
+  } catch (const std::invalid_argument& e) {
+    throw po::error(std::string("--strategy: ") + e.what());
+  }
+  try {
+    if (!c.displacement_text.empty()) c.displacement = Displacement::parse(c.displacement_text);
+  } catch (const std::invalid_argument& e) {
+    throw po::error(std::string("--displace: ") + e.what());
+  }
   c.settings.k = neighboursFor(c.strategy, c.settings.k);
   if (c.global) c.settings.refine = true;
   return true;
@@ -101,11 +113,8 @@ LandmarkMap readMap(const std::string& path, std::size_t min_observations) {
 
 /// @brief Reads both maps and moves the source by --displace.
 AlignInputs readInputs(const AlignCommand& c) {
-  // A bad --displace is a command-line error: reported before any file is read.
-  const Displacement displacement =
-      c.displacement_text.empty() ? Displacement{} : Displacement::parse(c.displacement_text);
   AlignInputs in{readMap(c.source_path, c.min_observations), readMap(c.target_path, c.min_observations)};
-  in.source.transform(displacement.toIsometry());
+  in.source.transform(c.displacement.toIsometry());
   return in;
 }
 
@@ -149,10 +158,10 @@ void printJson(const AlignCommand& c, const AlignInputs& in, const AlignmentResu
       .add("iterations", result.iterations)
       .add("refine_iterations", result.refine_iterations)
       .add("converged", result.converged)
-      .add("stopped_at_iteration_limit", result.stopped_at_iteration_limit)
       .add("degenerate", result.degenerate);
   if (result.degenerate) json.add("reason", result.reason);
-  json.add("correspondences", result.correspondences)
+  json.add("stopped_at_iteration_limit", result.stopped_at_iteration_limit)
+      .add("correspondences", result.correspondences)
       .add("time_ms", result.time_ms)
       .add("strategy", toString(c.strategy))
       .add("k", static_cast<std::size_t>(c.settings.k))

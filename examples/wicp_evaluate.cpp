@@ -71,6 +71,7 @@ int main(int argc, char** argv) {
     positional.add("groundtruth", 1).add("estimate", 1);
     po::variables_map vm;
     if (!tools::parseCommandLine(argc, argv, options, vm, &positional)) return 0;
+    tools::requireOutputFolderOf(plot_path, "--plot");
     if (rpe_unit_name != "s" && rpe_unit_name != "f")
       throw po::validation_error(po::validation_error::invalid_option_value, "rpe-unit", rpe_unit_name);
     const metrics::DeltaUnit rpe_unit = rpe_unit_name == "s" ? metrics::DeltaUnit::Seconds : metrics::DeltaUnit::Frames;

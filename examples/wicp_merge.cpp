@@ -160,7 +160,7 @@ int main(int argc, char** argv) {
     if (!tools::parseCommandLine(argc, argv, description, vm)) return 0;
     if (folders.size() < 2) throw po::error("give at least two --session folders");
     options.loops_with_link_prior = vm.count("agreeing-loops-only") == 0;
-    io::AtomicFolder folder(out_dir, vm.count("overwrite") > 0);
+    io::AtomicFolder folder = tools::openOutputFolder(out_dir, vm.count("overwrite") > 0);
     const auto vocabulary = loadVocabulary(vocabulary_path);
     std::vector<mapping::Session> sessions;
     for (const std::string& path : folders) sessions.push_back(mapping::loadSession(path));

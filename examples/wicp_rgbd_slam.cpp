@@ -477,7 +477,8 @@ int main(int argc, char** argv) {
         ("first-frame", tools::rangedValue(&first_frame, std::size_t{0})->default_value(0),
          "start at frame N (e.g. one run of a sequence cut in two for wicp_merge)")
         ("max-frames", tools::rangedValue(&max_frames, std::size_t{0})->default_value(0),
-         "stop before frame N (0 = at the end)")
+         "stop before frame N, counted from the sequence's start as --first-frame is (0 = at the end): "
+         "--first-frame 40 --max-frames 60 runs frames 40 to 59")
         ("minimap-keyframes", tools::rangedValue(&options.minimap_keyframes, std::size_t{1}, std::size_t{100000})
                                   ->default_value(options.minimap_keyframes),
          "keyframes per mini-map (1-100000)")
@@ -577,8 +578,11 @@ int main(int argc, char** argv) {
     }
     const std::size_t frames = max_frames > 0 ? std::min(max_frames, source->size()) : source->size();
     if (first_frame >= frames)
-      throw po::error("--first-frame " + std::to_string(first_frame) + " leaves no frame (the run has " +
-                      std::to_string(frames) + ")");
+      throw po::error("--first-frame " + std::to_string(first_frame) + " leaves no frame: the run stops before frame " +
+                      std::to_string(frames) +
+                      (max_frames > 0 && max_frames < source->size()
+                           ? " (--max-frames counts from the sequence's start)"
+                           : " (the sequence's length)"));
     // Loaded before the long run, so a bad vocabulary costs nothing.
     // Kept beside the loop closer's copy: its candidates are read for loop_candidates.txt after the run.
     mapping::BowLoopDetector::Ptr bow_detector;

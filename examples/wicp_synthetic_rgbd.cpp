@@ -50,7 +50,11 @@ int main(int argc, char** argv) {
     const simulation::SyntheticRgbdSequence sequence(options);
     tools::Progress progress("rendering", sequence.size());
     const auto start = std::chrono::steady_clock::now();
-    simulation::writeTumSequence(sequence, out_dir, overwrite, [&](std::size_t) { progress.step(); });
+    try {
+      simulation::writeTumSequence(sequence, out_dir, overwrite, [&](std::size_t) { progress.step(); });
+    } catch (...) {
+      tools::rethrowWithOverwriteHint(overwrite);
+    }
     progress.finish();
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     std::cout << "wrote " << sequence.size() << " frames to " << out_dir << " (" << std::fixed << std::setprecision(1)

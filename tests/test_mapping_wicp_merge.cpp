@@ -251,6 +251,16 @@ TEST(WicpMerge, ARunOfAnotherPlaceIsReportedAsNoOverlapAndBadSessionsAreRefused)
   run = runBuiltTool("wicp_merge", "--session " + (a / "session").string() + " --out " + (scratch / "m4").string(),
                      scratch);
   EXPECT_EQ(run.status, 2);
+
+  // An earlier merge is not replaced without --overwrite, and the error says how.
+  run = runBuiltTool("wicp_merge",
+                     "--session " + (a / "session").string() + " --session " + (far / "session").string() + " --out " +
+                         (scratch / "m").string(),
+                     scratch);
+  EXPECT_EQ(run.status, 1);
+  EXPECT_NE(run.err.find("not empty"), std::string::npos) << run.err;
+  EXPECT_NE(run.err.find("(--overwrite replaces it)"), std::string::npos) << run.err;
+  EXPECT_EQ(io::readTrajectory((scratch / "m" / "trajectory.txt").string()).size(), 20u);
 }
 
 // Perceptual aliasing across sessions: in a room whose every surface shows the same texture, runs of places that

@@ -562,6 +562,7 @@ TEST(SyntheticRgbdTool, WritesASequenceAndRejectsBadOptions) {
   run = runTool("--out " + out + " --frames 2", scratch);  // exists: refused
   EXPECT_EQ(run.status, 1);
   EXPECT_NE(run.err.find("not empty"), std::string::npos) << run.err;
+  EXPECT_NE(run.err.find("(--overwrite replaces it)"), std::string::npos) << run.err;
   EXPECT_EQ(readListFile(scratch / "sequence" / "rgb.txt").size(), 3u);
   run = runTool("--out " + out + " --frames 2 --overwrite", scratch);
   EXPECT_EQ(run.status, 0) << run.err;

@@ -57,6 +57,10 @@ TEST(ToolOptions, OutOfRangeNumbersAreCommandLineErrorsNamingTheOption) {
       {"wicp_map", "cut a --out b --frames-per-minimap 0", "--frames-per-minimap must be at least 1 (got 0)"},
       {"wicp_map", "convert a b --min-observations -3", "--min-observations must be at least 0 (got -3)"},
       {"wicp_evaluate", "a b --rpe-delta -1", "--rpe-delta must be greater than 0 (got -1)"},
+      {"wicp_evaluate", "a b --plot /nonexistent_wicp_dir/ate.png",
+       "--plot /nonexistent_wicp_dir/ate.png: no folder /nonexistent_wicp_dir to write it in"},
+      {"wicp_align", "--source a --target b --plot /nonexistent_wicp_dir/align.png",
+       "--plot /nonexistent_wicp_dir/align.png: no folder /nonexistent_wicp_dir to write it in"},
       {"wicp_evaluate", "a b --max-difference nan", "--max-difference must be greater than 0 (got nan)"},
       {"wicp_rgbd_slam", "--out x --max-frames -1", "--max-frames must be at least 0 (got -1)"},
       {"wicp_rgbd_slam", "--out x --minimap-keyframes -1", "--minimap-keyframes must be between 1 and 100000"},
@@ -76,7 +80,8 @@ TEST(ToolOptions, OutOfRangeNumbersAreCommandLineErrorsNamingTheOption) {
       {"wicp_global_sweep", "--synthetic --yaws 0,x", "--yaws: 'x' is not a finite number"},
       {"wicp_global_sweep", "--synthetic --xy 1", "--xy: '1' is not x:y"},
       {"wicp_global_sweep", "--synthetic --overlaps 0", "--overlaps: each must be in (0, 1]"},
-      {"wicp_global_sweep", "--synthetic --method foo", "--method must be global, coarse, icp, truth, fpfh or fpfh-trimmed (got foo)"},
+      {"wicp_global_sweep", "--synthetic --method foo",
+       "--method must be global, coarse, icp, truth, fpfh or fpfh-trimmed (got foo)"},
       {"wicp_global_sweep", "", "give exactly one of --map FILE and --synthetic"},
   };
   for (const auto& c : cases) {

@@ -216,14 +216,29 @@ void writeTextFile(const std::string& path, const std::string& content) {
   });
 }
 
-io::AtomicFolder openOutputFolder(const std::string& out_dir, bool overwrite) {
+void requireOutputFolderOf(const std::string& path, const std::string& option) {
+  if (path.empty()) return;
+  const std::filesystem::path folder = std::filesystem::path(path).parent_path();
+  if (!folder.empty() && !std::filesystem::is_directory(folder))
+    throw boost::program_options::error(option + " " + path + ": no folder " + folder.string() + " to write it in");
+}
+
+void rethrowWithOverwriteHint(bool overwrite) {
   try {
-    return io::AtomicFolder(out_dir, overwrite);
+    throw;
   } catch (const std::runtime_error& e) {
     const std::string what = e.what();
     if (!overwrite && what.find("not empty") != std::string::npos)
       throw std::runtime_error(what + " (--overwrite replaces it)");
     throw;
+  }
+}
+
+io::AtomicFolder openOutputFolder(const std::string& out_dir, bool overwrite) {
+  try {
+    return io::AtomicFolder(out_dir, overwrite);
+  } catch (...) {
+    rethrowWithOverwriteHint(overwrite);
   }
 }
 

@@ -197,6 +197,11 @@ class JsonObject {
 /// Writes a text file atomically (temporary file, then rename).
 void writeTextFile(const std::string& path, const std::string& content);
 
+/// @brief Inside a catch block: rethrows the exception being handled, adding "(--overwrite replaces it)" to an
+/// io::AtomicFolder's refusal of a non-empty folder when --overwrite was not given.
+/// @param overwrite the --overwrite switch
+[[noreturn]] void rethrowWithOverwriteHint(bool overwrite);
+
 /// @brief A tool's --out folder, opened before the long work so that a refused folder costs nothing: outputs go
 /// into the returned folder's path() and appear together at publish(); a run that fails or is interrupted
 /// publishes nothing. A non-empty folder is refused (std::runtime_error naming it and --overwrite) unless
@@ -204,6 +209,12 @@ void writeTextFile(const std::string& path, const std::string& content);
 /// @param out_dir the --out option's value
 /// @param overwrite the --overwrite switch
 io::AtomicFolder openOutputFolder(const std::string& out_dir, bool overwrite);
+
+/// @brief Refuses, as a bad command line (boost::program_options::error, exit 2), an output file option whose
+/// folder does not exist, before any work is done (a picture asked for is not silently left out at the end).
+/// @param path the option's value (a file; empty: not asked for, nothing checked)
+/// @param option the option's name, e.g. "--plot"
+void requireOutputFolderOf(const std::string& path, const std::string& option);
 
 /// @brief A data file that ships with the tools (the default vocabulary): next to the running executable (the
 /// build tree), else in <prefix>/share/weighted_icp/ beside its bin/ (the install tree).
