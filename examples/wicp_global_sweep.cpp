@@ -119,6 +119,7 @@ std::vector<Pair> makePairs(const LandmarkMap& map, const std::vector<double>& o
 /// @brief What the command line asks for.
 struct GlobalSweepCommand {
   std::string map_path, method = "global", perturb_text;
+  double fpfh_radius_scale = 1.0;
   bool synthetic = false, disjoint = false, halves = false, verbose = false;
   std::uint64_t seed = 1;
   std::size_t landmarks = 8000, min_observations = 2;
@@ -162,6 +163,8 @@ bool parseCommand(int argc, char** argv, GlobalSweepCommand& c) {
        "rotations (1-3600)")
       ("vote-cell", tools::positiveValue(&g.vote_cell)->default_value(g.vote_cell), "vote cell (m)")
       ("perturb", po::value(&c.perturb_text), "method truth: start this far from the truth")
+      ("fpfh-radius-scale", tools::rangedValue(&c.fpfh_radius_scale, 0.1, 100.0)->default_value(c.fpfh_radius_scale),
+       "methods fpfh*: multiply the normal (2 cells) and feature (5 cells) radii by this (0.1-100)")
       ("verbose,v", po::bool_switch(&c.verbose), "one line per case");
   // clang-format on
   po::variables_map vm;
@@ -200,7 +203,12 @@ class FpfhCoarseAligner {
  public:
   using Cloud = GlobalAlignment::Cloud;
 
-  FpfhCoarseAligner(double cell, const Cloud& target) : cell_(cell), target_(describe(target)) {}
+  /// @param cell the voxel sample's cell
+  /// @param radius_scale multiplies the normal and feature radii (1: the tutorial's ratios), to check that a
+  ///        result is not an artefact of one choice
+  /// @param target the target cloud
+  FpfhCoarseAligner(double cell, double radius_scale, const Cloud& target)
+      : cell_(cell), radius_scale_(radius_scale), target_(describe(target)) {}
 
   /// @brief The transformation taking `source` onto the target (identity when RANSAC found none), its time and
   /// the fraction of source samples it found a counterpart for.
@@ -248,17 +256,17 @@ class FpfhCoarseAligner {
     pcl::PointCloud<pcl::Normal>::Ptr normals(new pcl::PointCloud<pcl::Normal>);
     pcl::NormalEstimation<pcl::PointXYZ, pcl::Normal> normal_estimation;
     normal_estimation.setInputCloud(described.points);
-    normal_estimation.setRadiusSearch(2.0 * cell_);
+    normal_estimation.setRadiusSearch(2.0 * radius_scale_ * cell_);
     normal_estimation.compute(*normals);
     pcl::FPFHEstimation<pcl::PointXYZ, pcl::Normal, pcl::FPFHSignature33> fpfh;
     fpfh.setInputCloud(described.points);
     fpfh.setInputNormals(normals);
-    fpfh.setRadiusSearch(5.0 * cell_);
+    fpfh.setRadiusSearch(5.0 * radius_scale_ * cell_);
     fpfh.compute(*described.features);
     return described;
   }
 
-  double cell_;
+  double cell_, radius_scale_;
   Described target_;
 };
 
@@ -270,14 +278,15 @@ struct PairAligners {
 
   std::unique_ptr<FpfhCoarseAligner> fpfh;  // only for --method fpfh and fpfh-trimmed
 
-  PairAligners(const GlobalAlignmentSettings& settings, const LandmarkCloud::Ptr& target, bool with_fpfh)
+  PairAligners(const GlobalAlignmentSettings& settings, const LandmarkCloud::Ptr& target, bool with_fpfh,
+               double fpfh_radius_scale)
       : global(settings), icp(refinedIcp()), trimmed(settings) {
     global.setTarget(target);
     icp.setTarget(target);
     GlobalAlignment::Cloud target_xyz;
     pcl::copyPointCloud(*target, target_xyz);
     trimmed.setTarget(target_xyz);
-    if (with_fpfh) fpfh = std::make_unique<FpfhCoarseAligner>(sampleCell(settings), target_xyz);
+    if (with_fpfh) fpfh = std::make_unique<FpfhCoarseAligner>(sampleCell(settings), fpfh_radius_scale, target_xyz);
   }
 
   /// GlobalAlignment's sample cell (its default: a third of the vote cell).
@@ -351,7 +360,7 @@ CaseOutcome alignCase(const GlobalSweepCommand& c, PairAligners& aligners, const
 /// @brief Every displacement of the grid on one pair; prints the pair's line and returns its outcomes.
 std::vector<CaseOutcome> sweepPair(const GlobalSweepCommand& c, const Pair& pair) {
   PairAligners aligners(c.settings, toLandmarkCloud(pair.target, CovarianceWeight{}),
-                        c.method == "fpfh" || c.method == "fpfh-trimmed");
+                        c.method == "fpfh" || c.method == "fpfh-trimmed", c.fpfh_radius_scale);
   std::vector<CaseOutcome> outcomes;
   for (const double yaw : c.yaws)
     for (const auto& [x, y] : c.xys) {
