@@ -220,10 +220,13 @@ TEST(WicpMerge, ARunOfAnotherPlaceIsReportedAsNoOverlapAndBadSessionsAreRefused)
   const fs::path scratch = scratchDir("merge_no_overlap");
   const fs::path a = slamRun(scratch, "a", 0, 20, "--no-loop-closure");
   const fs::path far = slamRun(scratch, "far", 400, 420, "--no-loop-closure");  // the other side of the room
-  ToolRun run = runBuiltTool("wicp_merge",
-                             "--session " + (a / "session").string() + " --session " + (far / "session").string() +
-                                 " --out " + (scratch / "m").string(),
-                             scratch);
+  const auto merge = [&](const fs::path& second, const std::string& out) {
+    return runBuiltTool("wicp_merge",
+                        "--session " + (a / "session").string() + " --session " + second.string() + " --out " +
+                            (scratch / out).string(),
+                        scratch);
+  };
+  ToolRun run = merge(far / "session", "m");
   ASSERT_EQ(run.status, 0) << run.err;
   const std::string report = readAll(scratch / "m" / "report.json");
   EXPECT_NE(report.find("\"session_1_merged\":false"), std::string::npos) << report;
@@ -231,19 +234,20 @@ TEST(WicpMerge, ARunOfAnotherPlaceIsReportedAsNoOverlapAndBadSessionsAreRefused)
   EXPECT_EQ(io::readTrajectory((scratch / "m" / "trajectory.txt").string()).size(), 20u);
   EXPECT_FALSE(fs::exists(scratch / "m" / "trajectory_session_1.txt"));
 
-  run = runBuiltTool("wicp_merge",
-                     "--session " + (a / "session").string() + " --session " + (scratch / "missing").string() +
-                         " --out " + (scratch / "m2").string(),
-                     scratch);
+  // An earlier merge is not replaced without --overwrite, and the error says how.
+  run = merge(far / "session", "m");
+  EXPECT_EQ(run.status, 1);
+  EXPECT_NE(run.err.find("not empty"), std::string::npos) << run.err;
+  EXPECT_NE(run.err.find("(--overwrite replaces it)"), std::string::npos) << run.err;
+  EXPECT_EQ(io::readTrajectory((scratch / "m" / "trajectory.txt").string()).size(), 20u);
+
+  run = merge(scratch / "missing", "m2");
   EXPECT_EQ(run.status, 1);
   EXPECT_NE(run.err.find("missing"), std::string::npos) << run.err;
   EXPECT_FALSE(fs::exists(scratch / "m2"));
 
   std::ofstream(far / "session" / "keyframes.txt", std::ios::app) << "keyframe what\n";
-  run = runBuiltTool("wicp_merge",
-                     "--session " + (a / "session").string() + " --session " + (far / "session").string() + " --out " +
-                         (scratch / "m3").string(),
-                     scratch);
+  run = merge(far / "session", "m3");
   EXPECT_EQ(run.status, 1);
   EXPECT_NE(run.err.find("keyframes.txt:"), std::string::npos) << run.err;
   EXPECT_FALSE(fs::exists(scratch / "m3"));
@@ -251,16 +255,6 @@ TEST(WicpMerge, ARunOfAnotherPlaceIsReportedAsNoOverlapAndBadSessionsAreRefused)
   run = runBuiltTool("wicp_merge", "--session " + (a / "session").string() + " --out " + (scratch / "m4").string(),
                      scratch);
   EXPECT_EQ(run.status, 2);
-
-  // An earlier merge is not replaced without --overwrite, and the error says how.
-  run = runBuiltTool("wicp_merge",
-                     "--session " + (a / "session").string() + " --session " + (far / "session").string() + " --out " +
-                         (scratch / "m").string(),
-                     scratch);
-  EXPECT_EQ(run.status, 1);
-  EXPECT_NE(run.err.find("not empty"), std::string::npos) << run.err;
-  EXPECT_NE(run.err.find("(--overwrite replaces it)"), std::string::npos) << run.err;
-  EXPECT_EQ(io::readTrajectory((scratch / "m" / "trajectory.txt").string()).size(), 20u);
 }
 
 // Perceptual aliasing across sessions: in a room whose every surface shows the same texture, runs of places that
