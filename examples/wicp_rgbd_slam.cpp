@@ -440,6 +440,23 @@ mapping::BowLoopDetector::Ptr makeDetector(const std::string& vocabulary_option,
   return std::make_shared<mapping::BowLoopDetector>(std::move(vocabulary), camera, std::move(options));
 }
 
+/// @brief Refuses an option the chosen source would ignore (a bad command line): the synthetic sequence's options
+/// with --dataset, --camera without it (the synthetic sequence has its own camera; --focal-error and the others
+/// miscalibrate what the tracker is given).
+void requireOptionsOfTheSource(const po::variables_map& vm, bool dataset) {
+  static const char* const kSyntheticOnly[] = {
+      "synthetic-frames", "seed",        "moving-object",    "dim",
+      "frames-per-loop",  "depth-noise", "depth-distortion", "repeated-texture",
+      "room-scale",       "focal-error", "cx-error",         "cy-error"};
+  if (dataset) {
+    for (const char* name : kSyntheticOnly)
+      if (vm.count(name) && !vm[name].defaulted())
+        throw po::error(std::string("--") + name + " applies to the synthetic sequence, not to --dataset");
+  } else if (vm.count("camera")) {
+    throw po::error("--camera applies to --dataset only: the synthetic sequence has its own camera");
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -569,6 +586,7 @@ int main(int argc, char** argv) {
     closing_options.loop_closure = !vm.count("no-loop-closure");
     if (!closing_options.loop_closure && !vocabulary_path.empty())
       throw po::error("--vocabulary has no use with --no-loop-closure");
+    requireOptionsOfTheSource(vm, !dataset.empty());
 
     std::unique_ptr<FrameSource> source;
     if (dataset.empty()) {

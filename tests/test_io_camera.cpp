@@ -203,6 +203,9 @@ TEST(Camera, ImplausibleValuesAreRefusedWithTheirKeysAndRanges) {
   for (const char* key : {"fx", "fy", "cx", "cy", "depth_factor"})
     EXPECT_NE(error.find(std::string(key) + " must be between"), std::string::npos) << key << ": " << error;
   EXPECT_EQ(error.find("width "), std::string::npos) << error;
+  // Each with the line it is on.
+  EXPECT_NE(error.find("line 2: fx must be between"), std::string::npos) << error;
+  EXPECT_NE(error.find("line 13: depth_factor must be between"), std::string::npos) << error;
 
   // The edges of the ranges are accepted: a principal point just outside the
   // image, a 1 px focal length, a depth factor of 1e6.

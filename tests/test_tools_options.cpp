@@ -67,6 +67,10 @@ TEST(ToolOptions, OutOfRangeNumbersAreCommandLineErrorsNamingTheOption) {
       {"wicp_rgbd_slam", "--out x --seed -1", "--seed must be at least 0 (got -1)"},
       {"wicp_rgbd_slam", "--out x --synthetic-frames -1", "--synthetic-frames must be between 1 and 100000 (got -1)"},
       {"wicp_rgbd_slam", "--out x --global-ba -1", "--global-ba must be between 0 and 1000 (got -1)"},
+      // An option the chosen source would ignore is refused, not ignored.
+      {"wicp_rgbd_slam", "--out x --camera fr3", "--camera applies to --dataset only"},
+      {"wicp_rgbd_slam", "--out x --dataset d --room-scale 2", "--room-scale applies to the synthetic sequence"},
+      {"wicp_rgbd_slam", "--out x --dataset d --dim", "--dim applies to the synthetic sequence"},
       {"wicp_synthetic_rgbd", "--out x --frames -3", "--frames must be between 1 and 100000 (got -3)"},
       {"wicp_synthetic_rgbd", "--out x --fps 0", "--fps must be greater than 0"},
       {"wicp_synthetic_rgbd", "--out x --depth-noise-coefficient -1", "--depth-noise-coefficient must be between 0"},

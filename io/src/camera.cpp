@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <map>
 #include <sstream>
 #include <stdexcept>
 #include <utility>
@@ -105,9 +106,29 @@ std::vector<KeyProblem> invalidKeys(const PinholeCamera& camera) {
   return problems;
 }
 
-std::string describe(const std::vector<KeyProblem>& problems) {
+/// The line each "key:" of a plain YAML camera file is on (its first), so that a value out of range is reported
+/// with its line; keys of an XML or JSON file are not found (no line given).
+std::map<std::string, std::size_t> keyLines(const std::string& path) {
+  std::map<std::string, std::size_t> lines;
+  std::ifstream in(path, std::ios::binary);
+  std::string line;
+  for (std::size_t number = 1; std::getline(in, line); ++number) {
+    const std::size_t colon = line.find(':');
+    if (colon == std::string::npos || colon == 0 || line[0] == ' ' || line[0] == '#' || line[0] == '%') continue;
+    lines.emplace(line.substr(0, colon), number);
+  }
+  return lines;
+}
+
+/// "line N: key what; ..." (the line where the file has the key; none for a missing key).
+std::string describe(const std::vector<KeyProblem>& problems, const std::map<std::string, std::size_t>& lines = {}) {
   std::string text;
-  for (const auto& problem : problems) text += (text.empty() ? "" : "; ") + problem.key + " " + problem.what;
+  for (const auto& problem : problems) {
+    const auto line = lines.find(problem.key);
+    text += (text.empty() ? "" : "; ") +
+            (line == lines.end() ? std::string() : "line " + std::to_string(line->second) + ": ") + problem.key + " " +
+            problem.what;
+  }
   return text;
 }
 
@@ -221,7 +242,7 @@ PinholeCamera readCameraFile(const std::string& path) {
     for (std::size_t i = 0; i < unread; ++i) reported |= problems[i].key == problem.key;
     if (!reported) problems.push_back(std::move(problem));
   }
-  if (!problems.empty()) throw std::runtime_error(path + ": invalid camera: " + describe(problems));
+  if (!problems.empty()) throw std::runtime_error(path + ": invalid camera: " + describe(problems, keyLines(path)));
   return camera;
 }
 
