@@ -57,8 +57,9 @@ TEST(AtomicFolder, RefusesANonEmptyTargetWithoutOverwrite) {
   try {
     io::AtomicFolder folder(target.string(), false);
     FAIL() << "a non-empty folder was accepted";
-  } catch (const std::runtime_error& e) {
+  } catch (const io::FolderNotEmptyError& e) {  // its own type, so tools can add how to overwrite
     EXPECT_NE(std::string(e.what()).find("not empty"), std::string::npos) << e.what();
+    EXPECT_EQ(e.folder(), target);
   }
   EXPECT_EQ(readFile(target / "old.txt"), "old");
   EXPECT_EQ(entries(scratch), std::vector<std::string>{"out"});

@@ -226,10 +226,8 @@ void requireOutputFolderOf(const std::string& path, const std::string& option) {
 void rethrowWithOverwriteHint(bool overwrite) {
   try {
     throw;
-  } catch (const std::runtime_error& e) {
-    const std::string what = e.what();
-    if (!overwrite && what.find("not empty") != std::string::npos)
-      throw std::runtime_error(what + " (--overwrite replaces it)");
+  } catch (const io::FolderNotEmptyError& e) {
+    if (!overwrite) throw std::runtime_error(std::string(e.what()) + " (--overwrite replaces it)");
     throw;
   }
 }

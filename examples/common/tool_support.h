@@ -198,7 +198,7 @@ class JsonObject {
 void writeTextFile(const std::string& path, const std::string& content);
 
 /// @brief Inside a catch block: rethrows the exception being handled, adding "(--overwrite replaces it)" to an
-/// io::AtomicFolder's refusal of a non-empty folder when --overwrite was not given.
+/// io::FolderNotEmptyError (io::AtomicFolder's refusal of a non-empty folder) when --overwrite was not given.
 /// @param overwrite the --overwrite switch
 [[noreturn]] void rethrowWithOverwriteHint(bool overwrite);
 

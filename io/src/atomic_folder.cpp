@@ -27,8 +27,7 @@ fs::path checkedTarget(const std::string& dir, bool overwrite) {
   std::error_code error;
   if (fs::exists(target, error)) {
     if (!fs::is_directory(target)) throw std::runtime_error(target.string() + " exists and is not a folder");
-    if (!fs::is_empty(target) && !overwrite)
-      throw std::runtime_error(target.string() + " exists and is not empty; not overwriting it");
+    if (!fs::is_empty(target) && !overwrite) throw FolderNotEmptyError(target);
   }
   const fs::path parent = target.has_parent_path() ? target.parent_path() : fs::path(".");
   fs::create_directories(parent, error);

@@ -5,11 +5,26 @@
 // for single files.
 
 #include <filesystem>
+#include <stdexcept>
 #include <string>
 
 #include "weighted_icp/io/atomic_file.h"
 
 namespace weighted_icp::io {
+
+/// @brief The refusal of an existing, non-empty target when overwriting was not asked for: its own type, so that a
+/// tool can add how to overwrite without reading the message.
+class FolderNotEmptyError : public std::runtime_error {
+ public:
+  /// @param folder the target refused
+  explicit FolderNotEmptyError(const std::filesystem::path& folder)
+      : std::runtime_error(folder.string() + " exists and is not empty; not overwriting it"), folder_(folder) {}
+  /// @brief The target refused.
+  const std::filesystem::path& folder() const { return folder_; }
+
+ private:
+  std::filesystem::path folder_;
+};
 
 /// @brief A folder under construction: files go into path(); publish() renames
 /// it to the target, and a folder never published is deleted with this object
@@ -19,7 +34,7 @@ class AtomicFolder {
   /// @brief Checks the target and creates the temporary folder beside it.
   /// @param target the folder to publish ("out/" names "out"); its parent is created
   /// @param overwrite replace an existing non-empty target; without it such a
-  ///        target is refused (std::runtime_error) before anything is written
+  ///        target is refused (FolderNotEmptyError) before anything is written
   AtomicFolder(const std::string& target, bool overwrite);
   /// @brief Deletes the temporary folder unless it was published.
   ~AtomicFolder();
