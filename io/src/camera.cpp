@@ -106,20 +106,6 @@ std::vector<KeyProblem> invalidKeys(const PinholeCamera& camera) {
   return problems;
 }
 
-/// The line each "key:" of a plain YAML camera file is on (its first), so that a value out of range is reported
-/// with its line; keys of an XML or JSON file are not found (no line given).
-std::map<std::string, std::size_t> keyLines(const std::string& path) {
-  std::map<std::string, std::size_t> lines;
-  std::ifstream in(path, std::ios::binary);
-  std::string line;
-  for (std::size_t number = 1; std::getline(in, line); ++number) {
-    const std::size_t colon = line.find(':');
-    if (colon == std::string::npos || colon == 0 || line[0] == ' ' || line[0] == '#' || line[0] == '%') continue;
-    lines.emplace(line.substr(0, colon), number);
-  }
-  return lines;
-}
-
 /// "line N: key what; ..." (the line where the file has the key; none for a missing key).
 std::string describe(const std::vector<KeyProblem>& problems, const std::map<std::string, std::size_t>& lines = {}) {
   std::string text;
@@ -138,7 +124,10 @@ std::string describe(const std::vector<KeyProblem>& problems, const std::map<std
 /// (found by fuzz/fuzz_camera: "%YAML:1.0\n---<:p\na: -\n", and an indented line right after the directive), so
 /// it is given only text of this layout. XML and JSON files (first character '<' or '{') are left to FileStorage.
 /// @param path the camera file
-void requirePlainYamlLayout(const std::string& path) {
+/// @return the line each key is on (its first), so that a value out of range can be reported with its line; empty
+///         for an XML or JSON file
+std::map<std::string, std::size_t> requirePlainYamlLayout(const std::string& path) {
+  std::map<std::string, std::size_t> key_lines;
   std::ifstream in(path, std::ios::binary);
   std::string line;
   std::size_t number = 0;
@@ -153,7 +142,7 @@ void requirePlainYamlLayout(const std::string& path) {
     if (first) {
       const std::size_t start = line.find_first_not_of(" \t");
       if (start == std::string::npos) continue;
-      if (line[start] == '<' || line[start] == '{') return;
+      if (line[start] == '<' || line[start] == '{') return key_lines;
       first = false;
     }
     if (line.empty() || line[0] == '#') continue;
@@ -175,8 +164,10 @@ void requirePlainYamlLayout(const std::string& path) {
     if (!named || (colon + 1 < line.size() && line[colon + 1] != ' ' && line[colon + 1] != '\t'))
       throw std::runtime_error(path + ":" + std::to_string(number) +
                                ": not a camera file: expected \"key: value\", found " + detail::quoteToken(line));
+    key_lines.emplace(line.substr(0, colon), number);
     below_key = true;
   }
+  return key_lines;
 }
 
 /// The optional unregistered depth camera: none of its keys, or all of them (the missing ones reported).
@@ -196,7 +187,7 @@ PinholeCamera readCameraFile(const std::string& path) {
   if (!std::filesystem::is_regular_file(path))
     throw std::runtime_error(path + ": no such file (and not a camera preset fr1, fr2 or fr3)");
   if (std::filesystem::is_empty(path)) throw std::runtime_error(path + ": empty camera file");
-  requirePlainYamlLayout(path);
+  const std::map<std::string, std::size_t> key_lines = requirePlainYamlLayout(path);
   cv::FileStorage storage;
   try {
     storage.open(path, cv::FileStorage::READ);
@@ -242,7 +233,7 @@ PinholeCamera readCameraFile(const std::string& path) {
     for (std::size_t i = 0; i < unread; ++i) reported |= problems[i].key == problem.key;
     if (!reported) problems.push_back(std::move(problem));
   }
-  if (!problems.empty()) throw std::runtime_error(path + ": invalid camera: " + describe(problems, keyLines(path)));
+  if (!problems.empty()) throw std::runtime_error(path + ": invalid camera: " + describe(problems, key_lines));
   return camera;
 }
 
