@@ -52,12 +52,22 @@ int main(int argc, char** argv) {
         ("burst-length", tools::rangedValue(&options.burst_length, std::size_t{1})->default_value(options.burst_length), "burst: frames per burst")
         ("burst-blur", tools::rangedValue(&options.burst_blur_length_px, 1.0, 200.0)->default_value(options.burst_blur_length_px), "burst: blur length in px")
         ("burst-noise", tools::rangedValue(&options.burst_noise_sigma, 0.0, 100.0)->default_value(options.burst_noise_sigma), "burst: noise sigma, grey levels")
-        ("seed", tools::rangedValue(&options.seed, std::uint64_t{0})->default_value(options.seed), "blur directions and noise")
-        ("synthetic-frames", tools::rangedValue(&synthetic.frames, std::size_t{1}, std::size_t{100000})->default_value(synthetic.frames), "synthetic: frames")
-        ("synthetic-seed", tools::rangedValue(&synthetic.seed, std::uint64_t{0})->default_value(synthetic.seed), "synthetic: seed");
+        ("seed", tools::rangedValue(&options.seed, std::uint64_t{0})->default_value(options.seed), "blur directions and noise");
     // clang-format on
+    // Their own group, so that --dataset refuses each of them.
+    po::options_description synthetic_options("The synthetic sequence (without --dataset)");
+    // clang-format off
+    synthetic_options.add_options()
+        ("synthetic-frames", tools::rangedValue(&synthetic.frames, std::size_t{1}, std::size_t{100000})->default_value(synthetic.frames), "frames (1-100000)")
+        ("synthetic-seed", tools::rangedValue(&synthetic.seed, std::uint64_t{0})->default_value(synthetic.seed), "seed");
+    // clang-format on
+    description.add(synthetic_options);
     po::variables_map vm;
     if (!tools::parseCommandLine(argc, argv, description, vm)) return 0;
+    if (!dataset.empty())
+      tools::refuseOptionsGiven(vm, synthetic_options, "applies to the synthetic sequence, not to --dataset");
+    else if (vm.count("camera"))
+      throw po::error("--camera applies to --dataset only: the synthetic sequence has its own camera");
     options.describe_depth_camera = vm.count("no-depth-calibration") == 0;
     try {
       options.kinds = simulation::parseVariantKinds(kinds);

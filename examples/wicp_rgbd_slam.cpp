@@ -440,23 +440,6 @@ mapping::BowLoopDetector::Ptr makeDetector(const std::string& vocabulary_option,
   return std::make_shared<mapping::BowLoopDetector>(std::move(vocabulary), camera, std::move(options));
 }
 
-/// @brief Refuses an option the chosen source would ignore (a bad command line): the synthetic sequence's options
-/// with --dataset, --camera without it (the synthetic sequence has its own camera; --focal-error and the others
-/// miscalibrate what the tracker is given).
-void requireOptionsOfTheSource(const po::variables_map& vm, bool dataset) {
-  static const char* const kSyntheticOnly[] = {
-      "synthetic-frames", "seed",        "moving-object",    "dim",
-      "frames-per-loop",  "depth-noise", "depth-distortion", "repeated-texture",
-      "room-scale",       "focal-error", "cx-error",         "cy-error"};
-  if (dataset) {
-    for (const char* name : kSyntheticOnly)
-      if (vm.count(name) && !vm[name].defaulted())
-        throw po::error(std::string("--") + name + " applies to the synthetic sequence, not to --dataset");
-  } else if (vm.count("camera")) {
-    throw po::error("--camera applies to --dataset only: the synthetic sequence has its own camera");
-  }
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -521,23 +504,30 @@ int main(int argc, char** argv) {
         ("global-ba", tools::rangedValue(&closing_options.global_bundle_adjustment_iterations, 0, 1000)
                           ->default_value(closing_options.global_bundle_adjustment_iterations),
          "after the last frame and loop correction, a global bundle adjustment of every keyframe of the last segment "
-         "with this many iterations (0: none; docs/mapping.md)")
+         "with this many iterations (0: none; docs/mapping.md)");
+    // clang-format on
+    // The synthetic sequence's options, in their own group so that --dataset refuses each of them (not a list of
+    // names to keep in step).
+    po::options_description synthetic_options("The synthetic sequence (without --dataset)");
+    // clang-format off
+    synthetic_options.add_options()
         ("synthetic-frames", tools::rangedValue(&synthetic.frames, std::size_t{1}, std::size_t{100000})
                                  ->default_value(synthetic.frames),
-         "synthetic: frames (1-100000)")
-        ("seed", tools::rangedValue(&synthetic.seed, std::uint64_t{0})->default_value(synthetic.seed), "synthetic: seed")
+         "frames (1-100000)")
+        ("seed", tools::rangedValue(&synthetic.seed, std::uint64_t{0})->default_value(synthetic.seed), "seed")
         ("depth-noise", tools::rangedValue(&synthetic.depth_noise_coefficient, 0.0, 1.0)
                             ->default_value(synthetic.depth_noise_coefficient),
-         "synthetic: depth noise sigma_z = COEFF * z^2 (0-1)")
+         "depth noise sigma_z = COEFF * z^2 (0-1)")
         ("focal-error", tools::rangedValue(&synthetic.focal_length_error, -0.2, 0.2)->default_value(0.0),
-         "synthetic: the tracker is given fx, fy off by this fraction (an uncalibrated camera; the images are "
+         "the tracker is given fx, fy off by this fraction (an uncalibrated camera; the images are "
          "rendered with the true ones) (-0.2-0.2)")
         ("cx-error", tools::rangedValue(&synthetic.principal_point_error_x_px, -100.0, 100.0)->default_value(0.0),
-         "synthetic: the tracker is given cx off by this many pixels (-100-100)")
+         "the tracker is given cx off by this many pixels (-100-100)")
         ("cy-error", tools::rangedValue(&synthetic.principal_point_error_y_px, -80.0, 80.0)->default_value(0.0),
-         "synthetic: the tracker is given cy off by this many pixels (-80-80)");
+         "the tracker is given cy off by this many pixels (-80-80)");
     // clang-format on
-    tools::addSyntheticSceneOptions(description, synthetic, "synthetic: ");
+    tools::addSyntheticSceneOptions(synthetic_options, synthetic);
+    description.add(synthetic_options);
     // The papers' techniques, each an option off by default (issue #11; docs/frontend_ablation.md). Each name is
     // read by the library's parser, so the names and the error listing them exist once.
     const auto name = [](auto value) { return frontend::toString(value); };
@@ -586,7 +576,10 @@ int main(int argc, char** argv) {
     closing_options.loop_closure = !vm.count("no-loop-closure");
     if (!closing_options.loop_closure && !vocabulary_path.empty())
       throw po::error("--vocabulary has no use with --no-loop-closure");
-    requireOptionsOfTheSource(vm, !dataset.empty());
+    if (!dataset.empty())
+      tools::refuseOptionsGiven(vm, synthetic_options, "applies to the synthetic sequence, not to --dataset");
+    else if (vm.count("camera"))
+      throw po::error("--camera applies to --dataset only: the synthetic sequence has its own camera");
 
     std::unique_ptr<FrameSource> source;
     if (dataset.empty()) {

@@ -37,11 +37,10 @@ TEST(MakeVariant, NamesABadCameraFileAndWritesNothing) {
   const fs::path scratch = scratchDir("variant");
   const fs::path camera = scratch / "camera.yaml";
   std::ofstream(camera) << "%YAML:1.0\n---\nfx: 517.3\nfy: -1\n";
-  const auto run =
-      runBuiltTool("wicp_make_variant",
-                   "--synthetic-frames 2 --dataset " + (dataDir() / "tum_fr1_xyz_head").string() + " --camera " +
-                       camera.string() + " --variant jpeg --out " + (scratch / "v").string(),
-                   scratch);
+  const auto run = runBuiltTool("wicp_make_variant",
+                                "--dataset " + (dataDir() / "tum_fr1_xyz_head").string() + " --camera " +
+                                    camera.string() + " --variant jpeg --out " + (scratch / "v").string(),
+                                scratch);
   EXPECT_EQ(run.status, 1);
   EXPECT_NE(run.err.find(camera.string()), std::string::npos) << run.err;
   EXPECT_FALSE(fs::exists(scratch / "v"));

@@ -223,6 +223,14 @@ void requireOutputFolderOf(const std::string& path, const std::string& option) {
     throw boost::program_options::error(option + " " + path + ": no folder " + folder.string() + " to write it in");
 }
 
+void refuseOptionsGiven(const boost::program_options::variables_map& vm,
+                        const boost::program_options::options_description& group, const std::string& why) {
+  for (const auto& option : group.options()) {
+    const std::string& name = option->long_name();
+    if (vm.count(name) && !vm[name].defaulted()) throw boost::program_options::error("--" + name + " " + why);
+  }
+}
+
 void rethrowWithOverwriteHint(bool overwrite) {
   try {
     throw;

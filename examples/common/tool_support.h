@@ -197,6 +197,14 @@ class JsonObject {
 /// Writes a text file atomically (temporary file, then rename).
 void writeTextFile(const std::string& path, const std::string& content);
 
+/// @brief Refuses, as a bad command line (boost::program_options::error), any option of `group` given on the
+/// command line (defaults do not count): for options that the run's other choices would silently ignore.
+/// @param vm the parsed command line
+/// @param group the options that do not apply
+/// @param why the end of the error, after "--NAME " (e.g. "applies to the synthetic sequence, not to --dataset")
+void refuseOptionsGiven(const boost::program_options::variables_map& vm,
+                        const boost::program_options::options_description& group, const std::string& why);
+
 /// @brief Inside a catch block: rethrows the exception being handled, adding "(--overwrite replaces it)" to an
 /// io::FolderNotEmptyError (io::AtomicFolder's refusal of a non-empty folder) when --overwrite was not given.
 /// @param overwrite the --overwrite switch
