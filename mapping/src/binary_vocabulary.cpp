@@ -22,27 +22,11 @@ namespace weighted_icp::mapping {
 
 namespace {
 
-constexpr int kDescriptorBytes = 32;
+constexpr int kDescriptorBytes = static_cast<int>(sizeof(BinaryDescriptor));
 constexpr const char* kMagic = "wicp_vocabulary";
 constexpr int kFormatVersion = 1;
 
 }  // namespace
-
-int hammingDistance(const BinaryDescriptor& a, const BinaryDescriptor& b) {
-  return __builtin_popcountll(a[0] ^ b[0]) + __builtin_popcountll(a[1] ^ b[1]) + __builtin_popcountll(a[2] ^ b[2]) +
-         __builtin_popcountll(a[3] ^ b[3]);
-}
-
-std::vector<BinaryDescriptor> toBinaryDescriptors(const cv::Mat& descriptors) {
-  if (descriptors.empty()) return {};
-  if (descriptors.type() != CV_8UC1 || descriptors.cols != kDescriptorBytes)
-    throw std::invalid_argument("binary descriptors must be CV_8U with 32 columns (ORB), got type " +
-                                std::to_string(descriptors.type()) + " with " + std::to_string(descriptors.cols) +
-                                " columns");
-  std::vector<BinaryDescriptor> result(static_cast<std::size_t>(descriptors.rows));
-  for (int r = 0; r < descriptors.rows; ++r) std::memcpy(result[r].data(), descriptors.ptr(r), kDescriptorBytes);
-  return result;
-}
 
 // --- Training: one node at a time, depth first, so node indices are parents first.
 

@@ -59,16 +59,7 @@ Matches matchToLandmarks(const frontend::Keyframe& query, const KeyframeSnapshot
   const std::size_t usable = std::min(features.size(), query.pixels.size());
   for (std::size_t f = 0; f < usable; ++f) {
     if (!query.pixels[f].allFinite()) continue;
-    int best = std::numeric_limits<int>::max(), second = best;
-    std::size_t best_index = 0;
-    for (std::size_t l = 0; l < landmark_descriptors.size(); ++l) {
-      const int d = hammingDistance(features[f], landmark_descriptors[l]);
-      if (d < best) {
-        second = best, best = d, best_index = l;
-      } else if (d < second) {
-        second = d;
-      }
-    }
+    const auto [best, second, best_index] = nearestTwo(features[f], landmark_descriptors);
     if (best > options.max_hamming_distance) continue;
     if (second != std::numeric_limits<int>::max() && best >= options.ratio * second) continue;
     matches.points.push_back(landmark_positions[best_index]);

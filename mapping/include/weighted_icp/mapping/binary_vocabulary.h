@@ -14,20 +14,9 @@
 
 #include <opencv2/core.hpp>
 
+#include "weighted_icp/mapping/binary_descriptor.h"
+
 namespace weighted_icp::mapping {
-
-/// @brief One 256-bit binary descriptor (an ORB row of 32 bytes) as four words, so that Hamming
-/// distances are four popcounts.
-using BinaryDescriptor = std::array<std::uint64_t, 4>;
-
-/// @brief Hamming distance between two descriptors (0..256).
-/// @param a first descriptor
-/// @param b second descriptor
-int hammingDistance(const BinaryDescriptor& a, const BinaryDescriptor& b);
-
-/// @brief The rows of an ORB descriptor matrix as BinaryDescriptors.
-/// @param descriptors CV_8U with 32 columns (or empty); anything else throws std::invalid_argument
-std::vector<BinaryDescriptor> toBinaryDescriptors(const cv::Mat& descriptors);
 
 /// @brief A word id: the index of a leaf of the tree (0 .. wordCount() - 1).
 using WordId = std::uint32_t;

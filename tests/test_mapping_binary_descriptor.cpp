@@ -1,0 +1,82 @@
+// Hamming distances between binary descriptors: against a bit-by-bit count, on whichever path the CPU takes
+// (popcount instruction or the portable count), and the nearest-two search against a search pair by pair.
+
+#include <bitset>
+#include <cstdint>
+#include <random>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "weighted_icp/mapping/binary_descriptor.h"
+
+namespace weighted_icp::mapping {
+namespace {
+
+int bitByBit(const BinaryDescriptor& a, const BinaryDescriptor& b) {
+  int bits = 0;
+  for (int w = 0; w < 4; ++w) bits += static_cast<int>(std::bitset<64>(a[w] ^ b[w]).count());
+  return bits;
+}
+
+std::vector<BinaryDescriptor> randomDescriptors(std::size_t count, std::mt19937_64& random) {
+  std::vector<BinaryDescriptor> result(count);
+  for (auto& d : result)
+    for (auto& word : d) word = random();
+  return result;
+}
+
+TEST(BinaryDescriptor, HammingDistanceCountsTheDifferingBits) {
+  std::mt19937_64 random(3);
+  const BinaryDescriptor zero{}, ones{~0ULL, ~0ULL, ~0ULL, ~0ULL};
+  EXPECT_EQ(hammingDistance(zero, zero), 0);
+  EXPECT_EQ(hammingDistance(zero, ones), 256);
+  EXPECT_EQ(hammingDistance(zero, BinaryDescriptor{1ULL << 63, 0, 0, 1}), 2);
+  const auto a = randomDescriptors(500, random), b = randomDescriptors(500, random);
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    ASSERT_EQ(hammingDistance(a[i], b[i]), bitByBit(a[i], b[i])) << i;
+    ASSERT_EQ(detail::portableHammingDistance(a[i], b[i]), bitByBit(a[i], b[i])) << i;
+  }
+}
+
+TEST(BinaryDescriptor, NearestTwoIsThePairByPairSearch) {
+  std::mt19937_64 random(5);
+  auto candidates = randomDescriptors(300, random);
+  // Equal distances: a duplicate of one candidate makes best and second equal, the first one kept.
+  candidates.push_back(candidates[17]);
+  for (const BinaryDescriptor& query : randomDescriptors(50, random)) {
+    int best = 1000, second = 1000;
+    std::size_t index = 0;
+    for (std::size_t i = 0; i < candidates.size(); ++i) {
+      const int d = bitByBit(query, candidates[i]);
+      if (d < best) {
+        second = best, best = d, index = i;
+      } else if (d < second) {
+        second = d;
+      }
+    }
+    for (const NearestTwo& nearest : {nearestTwo(query, candidates), detail::portableNearestTwo(query, candidates)}) {
+      EXPECT_EQ(nearest.best, best);
+      EXPECT_EQ(nearest.second, second);
+      EXPECT_EQ(nearest.index, index);
+    }
+  }
+  const NearestTwo to_itself = nearestTwo(candidates[17], candidates);
+  EXPECT_EQ(to_itself.best, 0);
+  EXPECT_EQ(to_itself.second, 0);
+  EXPECT_EQ(to_itself.index, 17u);
+}
+
+TEST(BinaryDescriptor, NearestTwoOfTooFewCandidatesSaysSo) {
+  const BinaryDescriptor query{1, 2, 3, 4};
+  const NearestTwo none = nearestTwo(query, {});
+  EXPECT_EQ(none.best, std::numeric_limits<int>::max());
+  EXPECT_EQ(none.second, std::numeric_limits<int>::max());
+  const NearestTwo one = nearestTwo(query, {BinaryDescriptor{1, 2, 3, 5}});
+  EXPECT_EQ(one.best, 1);  // 4 ^ 5 = 1
+  EXPECT_EQ(one.second, std::numeric_limits<int>::max());
+  EXPECT_EQ(one.index, 0u);
+}
+
+}  // namespace
+}  // namespace weighted_icp::mapping
