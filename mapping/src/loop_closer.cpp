@@ -4,6 +4,7 @@
 #include <stdexcept>
 #include <utility>
 
+#include "weighted_icp/core/thread_name.h"
 #include "weighted_icp/mapping/keyframe_snapshot.h"
 
 namespace weighted_icp::mapping {
@@ -101,6 +102,7 @@ std::vector<LoopConstraint> LoopCloser::acceptedLoops() const {
 }
 
 void LoopCloser::run() {
+  nameThisThread("wicp-loops");
   std::unique_lock<std::mutex> lock(mutex_);
   while (true) {
     wake_.wait(lock, [this] { return !queue_.empty() || stopping_; });

@@ -5,6 +5,8 @@
 #include <string>
 #include <unordered_map>
 
+#include "weighted_icp/core/thread_name.h"
+
 namespace weighted_icp::frontend {
 
 namespace {
@@ -85,6 +87,7 @@ std::size_t Backend::optimizationsRun() const {
 }
 
 void Backend::run() {
+  nameThisThread("wicp-ba");
   std::unique_lock<std::mutex> lock(mutex_);
   while (true) {
     wake_.wait(lock, [this] { return pending_ || stopping_; });
