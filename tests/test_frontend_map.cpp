@@ -5,7 +5,9 @@
 #include <algorithm>
 #include <atomic>
 #include <set>
+#include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -228,6 +230,70 @@ TEST(Map, ConcurrentWritersAndReadersSeeWholeUpdates) {
   EXPECT_EQ(inconsistent.load(), 0);
   EXPECT_EQ(map.keyframeCount(), static_cast<std::size_t>(kKeyframes));
   EXPECT_EQ(map.mapPointCount(), static_cast<std::size_t>(kKeyframes * kPointsPerKeyframe));
+}
+
+TEST(Map, CopyInBlocksHoldsWhatOneCopyUnderTheLockHolds) {
+  Map map;
+  for (int k = 0; k < 30; ++k) {
+    const KeyframeId keyframe = map.addKeyframe(keyframeAt(k));
+    for (int i = 0; i < 7; ++i) map.addMapPoint(pointSeenBy({static_cast<double>(i), 0, 1}, {keyframe}));
+  }
+  const std::vector<Keyframe> keyframes = map.keyframes();
+  const std::vector<MapPoint> points = map.mapPoints();
+  // Blocks of one, of a few (not dividing the counts) and of more than the map holds.
+  for (const auto& [keyframe_block, point_block] :
+       std::vector<std::pair<std::size_t, std::size_t>>{{1, 1}, {4, 16}, {1000, 100000}, {0, 0}}) {
+    SCOPED_TRACE(std::to_string(keyframe_block) + " " + std::to_string(point_block));
+    const MapCopy copy = map.copyInBlocks(keyframe_block, point_block);
+    ASSERT_EQ(copy.keyframes.size(), keyframes.size());
+    ASSERT_EQ(copy.points.size(), points.size());
+    for (std::size_t i = 0; i < keyframes.size(); ++i) {
+      EXPECT_EQ(copy.keyframes[i].id, keyframes[i].id);
+      EXPECT_TRUE(copy.keyframes[i].pose_wc.isApprox(keyframes[i].pose_wc));
+    }
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      EXPECT_EQ(copy.points[i].id, points[i].id);
+      EXPECT_EQ(copy.points[i].position, points[i].position);
+    }
+  }
+  EXPECT_TRUE(Map().copyInBlocks(1, 1).points.empty());
+}
+
+// The loop closer copies the map in blocks while tracking applies pose-graph corrections: a copy must never hold
+// some points moved by a correction and others not (each correction here moves everything by 1 m along x).
+TEST(Map, CopyInBlocksNeverMixesCorrectedAndUncorrectedPoses) {
+  Map map;
+  constexpr int kKeyframes = 40, kPointsPerKeyframe = 25;
+  for (int k = 0; k < kKeyframes; ++k) {
+    const KeyframeId keyframe = map.addKeyframe(keyframeAt(0.0));
+    for (int i = 0; i < kPointsPerKeyframe; ++i) map.addMapPoint(pointSeenBy({0.0, 0, 1}, {keyframe}));
+  }
+  std::atomic<bool> done{false};
+  std::atomic<int> mixed{0}, copies{0};
+  std::thread reader([&] {
+    while (!done) {
+      const MapCopy copy = map.copyInBlocks(1, 1);  // as many lock releases as possible
+      ++copies;
+      if (copy.keyframes.empty()) continue;
+      const double x = copy.keyframes.front().pose_wc.translation().x();
+      for (const Keyframe& keyframe : copy.keyframes) mixed += keyframe.pose_wc.translation().x() != x;
+      for (const MapPoint& point : copy.points) mixed += point.position.x() != x;
+    }
+  });
+  Eigen::Isometry3d shift = Eigen::Isometry3d::Identity();
+  shift.translation().x() = 1.0;
+  for (int c = 0; c < 300; ++c) {
+    PoseGraphCorrection correction;
+    correction.base_corrections = map.corrections();
+    for (KeyframeId k = 0; k < static_cast<KeyframeId>(kKeyframes); ++k) correction.delta_wc[k] = shift;
+    ASSERT_TRUE(map.postCorrection(correction));
+    ASSERT_TRUE(map.applyPendingCorrection(0));
+  }
+  done = true;
+  reader.join();
+  EXPECT_EQ(mixed.load(), 0);
+  EXPECT_GT(copies.load(), 0);
+  EXPECT_EQ(map.keyframePose(0)->translation().x(), 300.0);
 }
 
 }  // namespace

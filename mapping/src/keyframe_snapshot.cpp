@@ -11,9 +11,15 @@
 namespace weighted_icp::mapping {
 
 KeyframeSnapshot KeyframeSnapshot::of(const frontend::Map& map) {
+  // In blocks: the loop closer takes a snapshot at every keyframe, and a whole copy under one lock made tracking
+  // wait up to 32 ms for it (Map::copyInBlocks).
+  frontend::MapCopy copy = map.copyInBlocks();
   KeyframeSnapshot snapshot;
-  for (frontend::Keyframe& keyframe : map.keyframes()) snapshot.keyframes.emplace(keyframe.id, std::move(keyframe));
-  for (frontend::MapPoint& point : map.mapPoints()) snapshot.points.emplace(point.id, std::move(point));
+  // Sorted by id: each goes at the end.
+  for (frontend::Keyframe& keyframe : copy.keyframes)
+    snapshot.keyframes.emplace_hint(snapshot.keyframes.end(), keyframe.id, std::move(keyframe));
+  for (frontend::MapPoint& point : copy.points)
+    snapshot.points.emplace_hint(snapshot.points.end(), point.id, std::move(point));
   return snapshot;
 }
 

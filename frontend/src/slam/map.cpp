@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <iterator>
+#include <optional>
 #include <set>
 #include <stdexcept>
 #include <string>
@@ -218,6 +219,39 @@ std::vector<MapPoint> Map::mapPoints() const {
   out.reserve(points_.size());
   for (const auto& [id, point] : points_) out.push_back(point);
   return out;
+}
+
+template <typename Id, typename Value>
+bool Map::copyBlocks(const std::map<Id, Value>& source, std::size_t per_block, std::uint64_t corrections,
+                     std::vector<Value>& out) const {
+  // Resumed from the last id copied, not from an iterator: the map may change between blocks.
+  std::optional<Id> last;
+  while (true) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (corrections_ != corrections) return false;
+    auto it = last ? source.upper_bound(*last) : source.begin();
+    for (std::size_t n = 0; n < per_block && it != source.end(); ++n, ++it) out.push_back(it->second);
+    if (it == source.end()) return true;
+    last = std::prev(it)->first;
+  }
+}
+
+MapCopy Map::copyInBlocks(std::size_t keyframes_per_block, std::size_t points_per_block) const {
+  keyframes_per_block = std::max<std::size_t>(keyframes_per_block, 1);
+  points_per_block = std::max<std::size_t>(points_per_block, 1);
+  while (true) {
+    MapCopy copy;
+    std::uint64_t corrections = 0;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      corrections = corrections_;
+      copy.keyframes.reserve(keyframes_.size());
+      copy.points.reserve(points_.size());
+    }
+    if (copyBlocks(keyframes_, keyframes_per_block, corrections, copy.keyframes) &&
+        copyBlocks(points_, points_per_block, corrections, copy.points))
+      return copy;
+  }
 }
 
 std::size_t Map::keyframeCount() const {

@@ -1,7 +1,8 @@
 #pragma once
-// A copy of a front-end map's keyframes and landmarks, taken once under the
-// map's lock, that place recognition and loop verification read without
-// locking: which keyframes share landmarks, and the landmarks around a keyframe.
+// A copy of a front-end map's keyframes and landmarks, taken in blocks that
+// never hold tracking up for long (frontend::Map::copyInBlocks) and never mix
+// corrected with uncorrected poses, that place recognition and loop
+// verification read without locking: which keyframes share landmarks, and the landmarks around a keyframe.
 
 #include <cstddef>
 #include <map>
@@ -22,7 +23,8 @@ struct KeyframeSnapshot {
   /// @brief Map points by id (world positions, covariances, descriptors, observations).
   std::map<frontend::MapPointId, frontend::MapPoint> points;
 
-  /// @brief Copies a front-end map (keyframes first, then points, as frontend::toLandmarkMap does).
+  /// @brief Copies a front-end map (keyframes first, then points, as frontend::toLandmarkMap does), in blocks
+  /// (frontend::Map::copyInBlocks).
   /// @param map the map; not modified
   static KeyframeSnapshot of(const frontend::Map& map);
 

@@ -61,6 +61,12 @@ struct PoseGraphCorrection {
   std::map<KeyframeId, Eigen::Isometry3d> delta_wc;
 };
 
+/// @brief A copy of a map's keyframes and points (Map::copyInBlocks), each sorted by id.
+struct MapCopy {
+  std::vector<Keyframe> keyframes;
+  std::vector<MapPoint> points;
+};
+
 class Map {
  public:
   /// Assigns and returns the keyframe id (0, 1, 2, ...).
@@ -110,11 +116,25 @@ class Map {
 
   std::vector<Keyframe> keyframes() const;
   std::vector<MapPoint> mapPoints() const;
+  /// @brief Every keyframe and map point, copied a few at a time for a background reader (loop closing): the lock
+  /// is released between blocks, so that tracking waits at most one block's copy. A whole copy holds it for long:
+  /// 14 ms in the median, 32 ms at worst, for the 60,000 points of a 1000-frame run, at every keyframe. A pose-graph
+  /// correction applied while copying restarts the copy, so the result never mixes corrected and uncorrected poses;
+  /// a keyframe or point added, optimised or removed meanwhile may be seen in its old or its new state (as between
+  /// two calls of keyframes() and mapPoints()).
+  /// @param keyframes_per_block keyframes copied under one lock (at least 1)
+  /// @param points_per_block map points copied under one lock (at least 1)
+  MapCopy copyInBlocks(std::size_t keyframes_per_block = 8, std::size_t points_per_block = 1024) const;
   std::size_t keyframeCount() const;
   std::size_t mapPointCount() const;
 
  private:
   std::vector<MapPointId> currentSegmentPoints(std::size_t keyframes) const;  // lock held
+  /// Appends `source`'s values to `out`, `per_block` under each lock; false when a correction other than the
+  /// `corrections`-th was applied meanwhile.
+  template <typename Id, typename Value>
+  bool copyBlocks(const std::map<Id, Value>& source, std::size_t per_block, std::uint64_t corrections,
+                  std::vector<Value>& out) const;
   /// The correction of a keyframe: its own, else that of the nearest listed keyframe before it.
   static Eigen::Isometry3d deltaOf(const PoseGraphCorrection& correction, KeyframeId id);
 
