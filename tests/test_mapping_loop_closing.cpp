@@ -1,8 +1,17 @@
 // Loop closing: map corrections move keyframes and landmarks together, the loop closer corrects a drifted map,
 // the background thread agrees with the inline mode, and errors are carried out.
 #include <atomic>
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <optional>
 #include <random>
+#include <sstream>
 #include <stdexcept>
+#include <string>
+#include <thread>
+
+#include <sys/resource.h>
 
 #include <gtest/gtest.h>
 
@@ -306,6 +315,48 @@ TEST(LoopCloser, ADetectorErrorIsCarriedOutAndTheThreadStopsCleanly) {
 TEST(LoopCloser, RequiresADetector) {
   Map map;
   EXPECT_THROW(mapping::LoopCloser(map, mapping::LoopDetector{}), std::invalid_argument);
+}
+
+/// The nice value of this process's thread named `name` (Linux /proc), or nothing when there is none.
+std::optional<int> niceOfThread(const std::string& name) {
+  for (const auto& task : std::filesystem::directory_iterator("/proc/self/task")) {
+    std::string comm;
+    std::getline(std::ifstream(task.path() / "comm"), comm);
+    if (comm != name) continue;
+    std::string stat;
+    std::getline(std::ifstream(task.path() / "stat"), stat);
+    // Fields after the parenthesised name: state is field 3, nice field 19.
+    std::istringstream fields(stat.substr(stat.rfind(')') + 2));
+    std::string field;
+    for (int i = 3; i <= 19 && fields >> field; ++i) {
+    }
+    return std::stoi(field);
+  }
+  return std::nullopt;
+}
+
+TEST(LoopCloser, TheBackgroundThreadYieldsToTracking) {
+  Map map;
+  const auto never = [](const Map&, KeyframeId) { return std::optional<mapping::LoopConstraint>{}; };
+  mapping::LoopClosingOptions options;
+  options.background_niceness = 19;
+  ASSERT_FALSE(niceOfThread("wicp-loops")) << "a loop closer thread from elsewhere is running";
+  const int own_nice = ::getpriority(PRIO_PROCESS, 0);  // this thread's (Linux)
+  {
+    mapping::LoopCloser closer(map, never, options);
+    std::optional<int> nice;
+    for (int wait = 0; wait < 200 && !(nice && *nice == 19); ++wait) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+      nice = niceOfThread("wicp-loops");
+    }
+    ASSERT_TRUE(nice) << "no thread named wicp-loops";
+    EXPECT_EQ(*nice, 19);
+    EXPECT_EQ(::getpriority(PRIO_PROCESS, 0), own_nice) << "only the loop closer's thread is lowered";
+  }
+  for (const int bad : {-1, 20}) {
+    options.background_niceness = bad;
+    EXPECT_THROW(mapping::LoopCloser(map, never, options), std::invalid_argument) << bad;
+  }
 }
 
 }  // namespace

@@ -2,9 +2,10 @@
 #include "weighted_icp/mapping/loop_closer.h"
 
 #include <stdexcept>
+#include <string>
 #include <utility>
 
-#include "weighted_icp/core/thread_name.h"
+#include "weighted_icp/core/background_thread.h"
 #include "weighted_icp/mapping/keyframe_snapshot.h"
 
 namespace weighted_icp::mapping {
@@ -46,6 +47,9 @@ PoseGraph odometryGraph(const frontend::KeyframePoses& keyframes, const LoopClos
 LoopCloser::LoopCloser(frontend::Map& map, LoopDetector detector, LoopClosingOptions options)
     : map_(map), detector_(std::move(detector)), options_(std::move(options)) {
   if (!detector_) throw std::invalid_argument("LoopCloser: no loop detector given");
+  if (options_.background_niceness < 0 || options_.background_niceness > 19)
+    throw std::invalid_argument("LoopCloser: background_niceness must be between 0 and 19, got " +
+                                std::to_string(options_.background_niceness));
   if (options_.background_thread) thread_ = std::thread([this] { run(); });
 }
 
@@ -103,6 +107,8 @@ std::vector<LoopConstraint> LoopCloser::acceptedLoops() const {
 
 void LoopCloser::run() {
   nameThisThread("wicp-loops");
+  // Refused only by a system that forbids it: loop closing then competes with tracking, as it did before.
+  (void)lowerThisThreadPriority(options_.background_niceness);
   std::unique_lock<std::mutex> lock(mutex_);
   while (true) {
     wake_.wait(lock, [this] { return !queue_.empty() || stopping_; });

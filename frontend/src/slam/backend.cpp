@@ -5,7 +5,7 @@
 #include <string>
 #include <unordered_map>
 
-#include "weighted_icp/core/thread_name.h"
+#include "weighted_icp/core/background_thread.h"
 
 namespace weighted_icp::frontend {
 

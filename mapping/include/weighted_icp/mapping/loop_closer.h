@@ -32,6 +32,10 @@ using LoopDetector = std::function<std::optional<LoopConstraint>(const frontend:
 struct LoopClosingOptions {
   /// @brief false: detection and optimisation run inside keyframeInserted(), so runs are reproducible.
   bool background_thread = true;
+  /// @brief Added to the background thread's nice value (0-19; Linux): with the cores busy, tracking runs first and
+  /// loop closing takes the time left (a loop is closed later, never lost; at a camera's frame rate tracking leaves
+  /// time). 0: the same priority as tracking.
+  int background_niceness = 19;
   /// @brief Information of the odometry edges (consecutive keyframes, poses as tracking and bundle adjustment left
   /// them).
   OdometryNoiseModel odometry;
