@@ -493,6 +493,10 @@ int main(int argc, char** argv) {
          "(BRISQUE on every frame, above 47)")
         ("deterministic", "run bundle adjustment and loop closing inline instead of in their threads (reproducible)")
         ("no-loop-closure", "track and map only: no place recognition, no pose graph")
+        ("loop-closing-niceness", tools::rangedValue(&closing_options.loop_closing.background_niceness, 0, 19)
+                                      ->default_value(closing_options.loop_closing.background_niceness),
+         "the loop-closing thread's nice value above tracking's (0-19): with the cores busy, tracking runs first "
+         "and loops are closed a little later (0: the same priority)")
         ("vocabulary", po::value(&vocabulary_path), "place-recognition vocabulary (wicp_vocabulary train); "
                                                     "default: the one built with the tools")
         ("loop-edge", tools::namedValue(&loop_edge, mapping::parseLoopEdgeSource,

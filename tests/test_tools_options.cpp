@@ -67,6 +67,7 @@ TEST(ToolOptions, OutOfRangeNumbersAreCommandLineErrorsNamingTheOption) {
       {"wicp_rgbd_slam", "--out x --seed -1", "--seed must be at least 0 (got -1)"},
       {"wicp_rgbd_slam", "--out x --synthetic-frames -1", "--synthetic-frames must be between 1 and 100000 (got -1)"},
       {"wicp_rgbd_slam", "--out x --global-ba -1", "--global-ba must be between 0 and 1000 (got -1)"},
+      {"wicp_rgbd_slam", "--out x --loop-closing-niceness 20", "--loop-closing-niceness must be between 0 and 19"},
       // An option the chosen source would ignore is refused, not ignored.
       {"wicp_rgbd_slam", "--out x --camera fr3", "--camera applies to --dataset only"},
       {"wicp_rgbd_slam", "--out x --dataset d --room-scale 2", "--room-scale applies to the synthetic sequence"},
