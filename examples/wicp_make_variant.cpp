@@ -64,10 +64,7 @@ int main(int argc, char** argv) {
     description.add(synthetic_options);
     po::variables_map vm;
     if (!tools::parseCommandLine(argc, argv, description, vm)) return 0;
-    if (!dataset.empty())
-      tools::refuseOptionsGiven(vm, synthetic_options, "applies to the synthetic sequence, not to --dataset");
-    else if (vm.count("camera"))
-      throw po::error("--camera applies to --dataset only: the synthetic sequence has its own camera");
+    tools::requireOptionsOfTheSource(vm, !dataset.empty(), synthetic_options);
     options.describe_depth_camera = vm.count("no-depth-calibration") == 0;
     try {
       options.kinds = simulation::parseVariantKinds(kinds);

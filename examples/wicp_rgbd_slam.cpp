@@ -580,10 +580,7 @@ int main(int argc, char** argv) {
     closing_options.loop_closure = !vm.count("no-loop-closure");
     if (!closing_options.loop_closure && !vocabulary_path.empty())
       throw po::error("--vocabulary has no use with --no-loop-closure");
-    if (!dataset.empty())
-      tools::refuseOptionsGiven(vm, synthetic_options, "applies to the synthetic sequence, not to --dataset");
-    else if (vm.count("camera"))
-      throw po::error("--camera applies to --dataset only: the synthetic sequence has its own camera");
+    tools::requireOptionsOfTheSource(vm, !dataset.empty(), synthetic_options);
 
     std::unique_ptr<FrameSource> source;
     if (dataset.empty()) {

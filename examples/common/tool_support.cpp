@@ -231,6 +231,15 @@ void refuseOptionsGiven(const boost::program_options::variables_map& vm,
   }
 }
 
+void requireOptionsOfTheSource(const boost::program_options::variables_map& vm, bool dataset,
+                               const boost::program_options::options_description& synthetic_options) {
+  if (dataset)
+    refuseOptionsGiven(vm, synthetic_options, "applies to the synthetic sequence, not to --dataset");
+  else if (vm.count("camera"))
+    throw boost::program_options::error(
+        "--camera applies to --dataset only: the synthetic sequence has its own camera");
+}
+
 void rethrowWithOverwriteHint(bool overwrite) {
   try {
     throw;

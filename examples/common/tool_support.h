@@ -205,6 +205,14 @@ void writeTextFile(const std::string& path, const std::string& content);
 void refuseOptionsGiven(const boost::program_options::variables_map& vm,
                         const boost::program_options::options_description& group, const std::string& why);
 
+/// @brief Refuses the options the chosen frame source would ignore (a bad command line): with --dataset, any of
+/// the synthetic sequence's options; without it, --camera (the synthetic sequence has its own camera).
+/// @param vm the parsed command line
+/// @param dataset whether --dataset was given
+/// @param synthetic_options the group holding the synthetic sequence's options
+void requireOptionsOfTheSource(const boost::program_options::variables_map& vm, bool dataset,
+                               const boost::program_options::options_description& synthetic_options);
+
 /// @brief Inside a catch block: rethrows the exception being handled, adding "(--overwrite replaces it)" to an
 /// io::FolderNotEmptyError (io::AtomicFolder's refusal of a non-empty folder) when --overwrite was not given.
 /// @param overwrite the --overwrite switch
