@@ -48,7 +48,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
                     reread.depth() == vocabulary->depth(),
                 "a vocabulary reads back with another shape");
   const cv::Mat probes = probeDescriptors();
-  for (const auto& descriptor : mapping::toBinaryDescriptors(probes))
+  for (const auto& descriptor : toBinaryDescriptors(probes))
     fuzz::require(vocabulary->wordOf(descriptor) < vocabulary->wordCount(), "a descriptor's word is out of range");
   const mapping::BowVector bow = vocabulary->transform(probes);
   double sum = 0.0;

@@ -234,6 +234,34 @@ TEST(DescriptorMatcher, KeepsOnlyTheBestQueryPerReferenceRow) {
   }
 }
 
+// 256-bit rows are searched by popcount (core/binary_descriptor.h), other row
+// lengths by OpenCV's BFMatcher: both must give OpenCV's exact answer.
+TEST(DescriptorMatcher, BruteForceOfAnyRowLengthIsOpenCvsExactSearch) {
+  for (const int bytes : {32, 16, 64}) {
+    cv::Mat reference(300, bytes, CV_8U), query(120, bytes, CV_8U);
+    cv::RNG rng(static_cast<std::uint64_t>(bytes));
+    rng.fill(reference, cv::RNG::UNIFORM, 0, 256);
+    for (int r = 0; r < query.rows; ++r) {  // each query a few bits from a reference row
+      reference.row((r * 7) % reference.rows).copyTo(query.row(r));
+      for (int flip = 0; flip < 1 + r % 24; ++flip)
+        query.at<std::uint8_t>(r, rng.uniform(0, bytes)) ^= 1 << rng.uniform(0, 8);
+    }
+    DescriptorMatcherOptions options = withKind(MatcherKind::BruteForce);
+    options.cross_check_unique = false;
+    options.max_hamming_distance = 8 * bytes;
+    std::vector<std::vector<cv::DMatch>> nearest;
+    cv::BFMatcher(cv::NORM_HAMMING).knnMatch(query, reference, nearest, 2);
+    std::vector<cv::DMatch> expected;
+    for (const std::vector<cv::DMatch>& two : nearest)
+      if (two.size() == 2 && two[0].distance < options.ratio * two[1].distance) expected.push_back(two[0]);
+    ASSERT_GT(expected.size(), 60u) << bytes << " bytes";
+    DescriptorMatcher matcher(options);
+    matcher.setReference(reference);
+    const std::vector<cv::DMatch> matches = matcher.match(query);
+    EXPECT_TRUE(sameMatches(matches, expected)) << bytes << " bytes: " << matches.size() << " vs " << expected.size();
+  }
+}
+
 TEST(DescriptorMatcher, ReturnsNoMatchesForEmptyInput) {
   const cv::Mat some = clusteredDescriptors(20, 2);
   for (const MatcherKind kind : {MatcherKind::BruteForce, MatcherKind::FlannLsh}) {

@@ -59,11 +59,11 @@ Matches matchToLandmarks(const frontend::Keyframe& query, const KeyframeSnapshot
   const std::size_t usable = std::min(features.size(), query.pixels.size());
   for (std::size_t f = 0; f < usable; ++f) {
     if (!query.pixels[f].allFinite()) continue;
-    const auto [best, second, best_index] = nearestTwo(features[f], landmark_descriptors);
-    if (best > options.max_hamming_distance) continue;
-    if (second != std::numeric_limits<int>::max() && best >= options.ratio * second) continue;
-    matches.points.push_back(landmark_positions[best_index]);
-    matches.covariances.push_back(landmark_covariances[best_index]);
+    const NearestTwo nearest = nearestTwo(features[f], landmark_descriptors);
+    if (nearest.best > options.max_hamming_distance) continue;
+    if (nearest.second != std::numeric_limits<int>::max() && nearest.best >= options.ratio * nearest.second) continue;
+    matches.points.push_back(landmark_positions[nearest.index]);
+    matches.covariances.push_back(landmark_covariances[nearest.index]);
     matches.pixels.push_back(query.pixels[f]);
   }
   return matches;

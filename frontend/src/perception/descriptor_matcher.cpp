@@ -5,6 +5,7 @@
 
 #include <opencv2/flann.hpp>
 
+#include "weighted_icp/core/binary_descriptor.h"
 #include "weighted_icp/core/named_values.h"
 #include "weighted_icp/core/parallel_for.h"
 
@@ -51,6 +52,10 @@ cv::Ptr<cv::DescriptorMatcher> buildMatcher(const DescriptorMatcherOptions& o, c
 // 1 ms with LSH on a 2000-row local map) well above the pool's overhead.
 constexpr int kQueryRowsPerJob = 128;
 
+// Rows of this length (ORB's and the modified BRIEF's 256 bits) are searched as
+// BinaryDescriptors by the brute-force matcher; other lengths by OpenCV's.
+constexpr int kWordRowBytes = static_cast<int>(sizeof(BinaryDescriptor));
+
 }  // namespace
 
 DescriptorMatcher::DescriptorMatcher(DescriptorMatcherOptions options) : options_(options) {
@@ -67,10 +72,13 @@ void DescriptorMatcher::setReference(const cv::Mat& descriptors) {
   requireBinary(descriptors, "reference");
   matcher_.release();
   kd_tree_.reset();
+  reference_words_.clear();
   reference_rows_ = descriptors.empty() ? 0 : descriptors.rows;
   reference_cols_ = descriptors.empty() ? 0 : descriptors.cols;
   if (reference_rows_ == 0) return;
-  if (options_.kind == MatcherKind::KdTree) {
+  if (options_.kind == MatcherKind::BruteForce && reference_cols_ == kWordRowBytes) {
+    reference_words_ = toBinaryDescriptors(descriptors);
+  } else if (options_.kind == MatcherKind::KdTree) {
     kd_tree_ = std::make_shared<BinaryKdTree>(options_.kd_tree);
     kd_tree_->build(descriptors);
   } else {
@@ -80,7 +88,7 @@ void DescriptorMatcher::setReference(const cv::Mat& descriptors) {
 
 std::vector<cv::DMatch> DescriptorMatcher::match(const cv::Mat& query) const {
   requireBinary(query, "query");
-  if (query.empty() || (!matcher_ && !kd_tree_)) return {};
+  if (query.empty() || reference_rows_ == 0) return {};
   if (query.cols != reference_cols_)
     throw std::invalid_argument("DescriptorMatcher: query rows have " + std::to_string(query.cols) +
                                 " bytes, reference rows " + std::to_string(reference_cols_));
@@ -101,6 +109,7 @@ std::vector<cv::DMatch> DescriptorMatcher::match(const cv::Mat& query) const {
 }
 
 std::vector<std::vector<cv::DMatch>> DescriptorMatcher::nearestTwo(const cv::Mat& query) const {
+  if (!reference_words_.empty()) return exhaustiveNearestTwo(query);
   std::vector<std::vector<cv::DMatch>> nearest(static_cast<std::size_t>(query.rows));
   const int jobs = (query.rows + kQueryRowsPerJob - 1) / kQueryRowsPerJob;
   // The searches only read the index (FLANN's LSH k-NN search and the KD-tree
@@ -124,6 +133,25 @@ std::vector<std::vector<cv::DMatch>> DescriptorMatcher::nearestTwo(const cv::Mat
       for (std::size_t r = 0; r < rows.size(); ++r) {
         for (cv::DMatch& m : rows[r]) m.queryIdx += first;  // chunk row -> query row
         nearest[static_cast<std::size_t>(first) + r] = std::move(rows[r]);
+      }
+    }
+  });
+  return nearest;
+}
+
+std::vector<std::vector<cv::DMatch>> DescriptorMatcher::exhaustiveNearestTwo(const cv::Mat& query) const {
+  const std::vector<BinaryDescriptor> words = toBinaryDescriptors(query);
+  std::vector<std::vector<cv::DMatch>> nearest(words.size());
+  const int jobs = (query.rows + kQueryRowsPerJob - 1) / kQueryRowsPerJob;
+  // Each row's search reads only the reference: any split of the rows gives the same result.
+  parallelFor(cv::Range(0, jobs), [&](const cv::Range& range) {
+    for (int job = range.start; job < range.end; ++job) {
+      const int last = std::min(query.rows, (job + 1) * kQueryRowsPerJob);
+      for (int q = job * kQueryRowsPerJob; q < last; ++q) {
+        const NearestTwo two = weighted_icp::nearestTwo(words[static_cast<std::size_t>(q)], reference_words_);
+        nearest[static_cast<std::size_t>(q)] = {
+            cv::DMatch(q, static_cast<int>(two.index), static_cast<float>(two.best)),
+            cv::DMatch(q, static_cast<int>(two.second_index), static_cast<float>(two.second))};
       }
     }
   });

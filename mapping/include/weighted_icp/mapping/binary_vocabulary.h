@@ -14,7 +14,7 @@
 
 #include <opencv2/core.hpp>
 
-#include "weighted_icp/mapping/binary_descriptor.h"
+#include "weighted_icp/core/binary_descriptor.h"
 
 namespace weighted_icp::mapping {
 

@@ -1,8 +1,9 @@
 #pragma once
-// Binary descriptor matching: FLANN's locality-sensitive hashing index (fast,
-// approximate) or brute-force Hamming search (exact), each followed by Lowe's
-// ratio test, a distance cap and, optionally, one match per reference row.
-// Issue #11: or the KD-tree paper's KD-tree with bounded backtracking.
+// Binary descriptor matching: FLANN's locality-sensitive hashing index
+// (approximate) or brute-force Hamming search (exact; 256-bit rows by the
+// popcount of core/binary_descriptor.h, others by OpenCV's BFMatcher), each
+// followed by Lowe's ratio test, a distance cap and, optionally, one match per
+// reference row. Issue #11: or the KD-tree paper's KD-tree with bounded backtracking.
 
 #include <cstdint>
 #include <string>
@@ -11,6 +12,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/features2d.hpp>
 
+#include "weighted_icp/core/binary_descriptor.h"
 #include "weighted_icp/frontend/perception/binary_kd_tree.h"
 
 namespace weighted_icp::frontend {
@@ -63,10 +65,13 @@ class DescriptorMatcher {
   /// Each query row's two nearest reference rows (fewer where the index has
   /// none), searched in parallel jobs of query rows; the same for any number of threads.
   std::vector<std::vector<cv::DMatch>> nearestTwo(const cv::Mat& query) const;
+  /// nearestTwo of the brute-force matcher for 32-byte rows: every reference row, by popcount.
+  std::vector<std::vector<cv::DMatch>> exhaustiveNearestTwo(const cv::Mat& query) const;
 
   DescriptorMatcherOptions options_;
-  cv::Ptr<cv::DescriptorMatcher> matcher_;  // null until a non-empty reference is set
-  BinaryKdTree::Ptr kd_tree_;               // instead of matcher_ for MatcherKind::KdTree
+  cv::Ptr<cv::DescriptorMatcher> matcher_;         // null until a non-empty reference is set
+  BinaryKdTree::Ptr kd_tree_;                      // instead of matcher_ for MatcherKind::KdTree
+  std::vector<BinaryDescriptor> reference_words_;  // instead of matcher_ for BruteForce with 32-byte rows
   int reference_rows_ = 0;
   int reference_cols_ = 0;
 };

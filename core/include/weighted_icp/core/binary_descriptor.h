@@ -1,7 +1,8 @@
 #pragma once
 // A 256-bit binary (ORB) descriptor as four 64-bit words, and Hamming distances between them: one pair, or the
-// nearest two of many (the brute-force search of loop verification). The popcount instruction is used where the
-// CPU has it (checked once at run time; the binaries are built for the x86-64 baseline, which lacks it).
+// nearest two of many (the exhaustive searches of the front end's descriptor matcher and of loop verification).
+// The popcount instruction is used where the CPU has it (checked once at run time; the binaries are built for the
+// x86-64 baseline, which lacks it). In core because the front end and the mapping layer both match descriptors.
 
 #include <array>
 #include <cstddef>
@@ -11,7 +12,7 @@
 
 #include <opencv2/core.hpp>
 
-namespace weighted_icp::mapping {
+namespace weighted_icp {
 
 /// @brief One 256-bit binary descriptor (an ORB row of 32 bytes) as four words, so that Hamming
 /// distances are four popcounts.
@@ -30,6 +31,8 @@ struct NearestTwo {
   int second = std::numeric_limits<int>::max();
   /// Where best is (the first of equals); 0 when the set is empty.
   std::size_t index = 0;
+  /// Where second is (the first of equals after index); 0 with fewer than two descriptors.
+  std::size_t second_index = 0;
 };
 
 /// @brief The nearest and second-nearest of `candidates` to `query` by Hamming distance, by exhaustive search
@@ -49,4 +52,4 @@ NearestTwo portableNearestTwo(const BinaryDescriptor& query, const std::vector<B
 /// @param descriptors CV_8U with 32 columns (or empty); anything else throws std::invalid_argument
 std::vector<BinaryDescriptor> toBinaryDescriptors(const cv::Mat& descriptors);
 
-}  // namespace weighted_icp::mapping
+}  // namespace weighted_icp

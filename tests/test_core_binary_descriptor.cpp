@@ -8,9 +8,9 @@
 
 #include <gtest/gtest.h>
 
-#include "weighted_icp/mapping/binary_descriptor.h"
+#include "weighted_icp/core/binary_descriptor.h"
 
-namespace weighted_icp::mapping {
+namespace weighted_icp {
 namespace {
 
 int bitByBit(const BinaryDescriptor& a, const BinaryDescriptor& b) {
@@ -46,25 +46,27 @@ TEST(BinaryDescriptor, NearestTwoIsThePairByPairSearch) {
   candidates.push_back(candidates[17]);
   for (const BinaryDescriptor& query : randomDescriptors(50, random)) {
     int best = 1000, second = 1000;
-    std::size_t index = 0;
+    std::size_t index = 0, second_index = 0;
     for (std::size_t i = 0; i < candidates.size(); ++i) {
       const int d = bitByBit(query, candidates[i]);
       if (d < best) {
-        second = best, best = d, index = i;
+        second = best, second_index = index, best = d, index = i;
       } else if (d < second) {
-        second = d;
+        second = d, second_index = i;
       }
     }
     for (const NearestTwo& nearest : {nearestTwo(query, candidates), detail::portableNearestTwo(query, candidates)}) {
       EXPECT_EQ(nearest.best, best);
       EXPECT_EQ(nearest.second, second);
       EXPECT_EQ(nearest.index, index);
+      EXPECT_EQ(nearest.second_index, second_index);
     }
   }
   const NearestTwo to_itself = nearestTwo(candidates[17], candidates);
   EXPECT_EQ(to_itself.best, 0);
   EXPECT_EQ(to_itself.second, 0);
   EXPECT_EQ(to_itself.index, 17u);
+  EXPECT_EQ(to_itself.second_index, candidates.size() - 1);  // the duplicate, after the original
 }
 
 TEST(BinaryDescriptor, NearestTwoOfTooFewCandidatesSaysSo) {
@@ -79,4 +81,4 @@ TEST(BinaryDescriptor, NearestTwoOfTooFewCandidatesSaysSo) {
 }
 
 }  // namespace
-}  // namespace weighted_icp::mapping
+}  // namespace weighted_icp
