@@ -440,6 +440,16 @@ mapping::BowLoopDetector::Ptr makeDetector(const std::string& vocabulary_option,
   return std::make_shared<mapping::BowLoopDetector>(std::move(vocabulary), camera, std::move(options));
 }
 
+/// Refuses a matcher's own option given with another matcher, which would ignore it.
+void requireOptionsOfTheMatcher(const po::variables_map& vm, frontend::MatcherKind kind) {
+  const std::pair<const char*, frontend::MatcherKind> owned[] = {{"kd-backtracks", frontend::MatcherKind::KdTree},
+                                                                 {"lsh-seed", frontend::MatcherKind::FlannLsh}};
+  for (const auto& [option, owner] : owned)
+    if (!vm[option].defaulted() && kind != owner)
+      throw po::error("--" + std::string(option) + " applies to --matcher " + frontend::matcherKindName(owner) +
+                      ", not to --matcher " + frontend::matcherKindName(kind));
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -544,6 +554,10 @@ int main(int argc, char** argv) {
         ("kd-backtracks", tools::rangedValue(&options.frontend.matcher.kd_tree.max_backtracks, 0, 100000)
                               ->default_value(options.frontend.matcher.kd_tree.max_backtracks),
          "--matcher kd-tree: leaves visited after the first (0-100000)")
+        ("lsh-seed", tools::rangedValue(&options.frontend.matcher.lsh_seed, std::uint64_t{0})
+                         ->default_value(options.frontend.matcher.lsh_seed),
+         "--matcher flann: seed of the LSH index's random key bits (another seed, other approximate matches: how "
+         "much a result depends on them)")
         ("match-region", tools::namedValue(&options.frontend.match_region, frontend::parseMatchRegion,
                                            frontend::matchRegionName),
          "everywhere, projection (regions of interest around projected points) or homography (KD-tree paper, Eq. 8)")
@@ -581,6 +595,7 @@ int main(int argc, char** argv) {
     if (!closing_options.loop_closure && !vocabulary_path.empty())
       throw po::error("--vocabulary has no use with --no-loop-closure");
     tools::requireOptionsOfTheSource(vm, !dataset.empty(), synthetic_options);
+    requireOptionsOfTheMatcher(vm, options.frontend.matcher.kind);
 
     std::unique_ptr<FrameSource> source;
     if (dataset.empty()) {
