@@ -39,6 +39,25 @@ TEST(BinaryDescriptor, HammingDistanceCountsTheDifferingBits) {
   }
 }
 
+// Rows of any length (not only 32 bytes, not aligned): the same count as bit by bit, on both paths.
+TEST(BinaryDescriptor, ByteRowDistanceCountsTheDifferingBitsOfAnyLength) {
+  std::mt19937_64 random(11);
+  std::vector<std::uint8_t> a(80), b(80);
+  for (int trial = 0; trial < 200; ++trial) {
+    for (std::size_t i = 0; i < a.size(); ++i) a[i] = static_cast<std::uint8_t>(random()), b[i] = a[i];
+    for (int flip = 0; flip < trial % 70; ++flip)
+      b[random() % b.size()] ^= static_cast<std::uint8_t>(1u << (random() % 8));
+    const int offset = trial % 3;  // unaligned starts
+    for (const int bytes : {0, 1, 7, 8, 13, 16, 32, 61, 64, 77}) {
+      int expected = 0;
+      for (int i = 0; i < bytes; ++i)
+        expected += static_cast<int>(std::bitset<8>(a[offset + i] ^ b[offset + i]).count());
+      EXPECT_EQ(hammingDistance(a.data() + offset, b.data() + offset, bytes), expected) << bytes << " bytes";
+      EXPECT_EQ(detail::portableHammingDistance(a.data() + offset, b.data() + offset, bytes), expected) << bytes;
+    }
+  }
+}
+
 TEST(BinaryDescriptor, NearestTwoIsThePairByPairSearch) {
   std::mt19937_64 random(5);
   auto candidates = randomDescriptors(300, random);

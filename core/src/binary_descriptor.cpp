@@ -5,6 +5,7 @@
 
 #include "weighted_icp/core/binary_descriptor.h"
 
+#include <algorithm>
 #include <cstring>
 #include <stdexcept>
 #include <string>
@@ -25,6 +26,14 @@ inline int bitCount(std::uint64_t v) {
 
 inline int bitCountDistance(const BinaryDescriptor& a, const BinaryDescriptor& b) {
   return bitCount(a[0] ^ b[0]) + bitCount(a[1] ^ b[1]) + bitCount(a[2] ^ b[2]) + bitCount(a[3] ^ b[3]);
+}
+
+/// Reads the 64-bit word of a descriptor row at byte `offset`, zero-filled past `bytes` (memcpy: rows need not be
+/// aligned).
+inline std::uint64_t rowWord(const std::uint8_t* row, int offset, int bytes) {
+  std::uint64_t word = 0;
+  std::memcpy(&word, row + offset, static_cast<std::size_t>(std::min(8, bytes - offset)));
+  return word;
 }
 
 /// One step of the nearest-two search.
@@ -58,6 +67,13 @@ __attribute__((target("popcnt"))) NearestTwo popcntNearestTwo(const BinaryDescri
   return nearest;
 }
 
+__attribute__((target("popcnt"))) int popcntByteRowDistance(const std::uint8_t* a, const std::uint8_t* b, int bytes) {
+  int bits = 0;
+  for (int offset = 0; offset < bytes; offset += 8)
+    bits += __builtin_popcountll(rowWord(a, offset, bytes) ^ rowWord(b, offset, bytes));
+  return bits;
+}
+
 bool cpuHasPopcnt() {
   static const bool has = __builtin_cpu_supports("popcnt");
   return has;
@@ -69,6 +85,13 @@ bool cpuHasPopcnt() {
 namespace detail {
 
 int portableHammingDistance(const BinaryDescriptor& a, const BinaryDescriptor& b) { return bitCountDistance(a, b); }
+
+int portableHammingDistance(const std::uint8_t* a, const std::uint8_t* b, int bytes) {
+  int bits = 0;
+  for (int offset = 0; offset < bytes; offset += 8)
+    bits += bitCount(rowWord(a, offset, bytes) ^ rowWord(b, offset, bytes));
+  return bits;
+}
 
 NearestTwo portableNearestTwo(const BinaryDescriptor& query, const std::vector<BinaryDescriptor>& candidates) {
   NearestTwo nearest;
@@ -84,6 +107,13 @@ int hammingDistance(const BinaryDescriptor& a, const BinaryDescriptor& b) {
   if (cpuHasPopcnt()) return popcntDistance(a, b);
 #endif
   return bitCountDistance(a, b);
+}
+
+int hammingDistance(const std::uint8_t* a, const std::uint8_t* b, int bytes) {
+#ifdef WEIGHTED_ICP_POPCNT_PATH
+  if (cpuHasPopcnt()) return popcntByteRowDistance(a, b, bytes);
+#endif
+  return detail::portableHammingDistance(a, b, bytes);
 }
 
 NearestTwo nearestTwo(const BinaryDescriptor& query, const std::vector<BinaryDescriptor>& candidates) {

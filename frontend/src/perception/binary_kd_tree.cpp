@@ -8,7 +8,7 @@
 #include <string>
 #include <tuple>
 
-#include <opencv2/core/hal/hal.hpp>
+#include "weighted_icp/core/binary_descriptor.h"
 
 namespace weighted_icp::frontend {
 namespace {
@@ -98,7 +98,7 @@ TwoNearest BinaryKdTree::nearestTwo(const std::uint8_t* query) const {
     const Node& leaf = nodes_[static_cast<std::size_t>(node)];
     for (int i = leaf.begin; i < leaf.end; ++i) {
       const int row = order_[static_cast<std::size_t>(i)];
-      const int d = cv::hal::normHamming(query, descriptors_.ptr<std::uint8_t>(row), descriptors_.cols);
+      const int d = hammingDistance(query, descriptors_.ptr<std::uint8_t>(row), descriptors_.cols);
       // Ties go to the smaller row index, so the result does not depend on the visiting order.
       if (d < result.best_distance || (d == result.best_distance && row < result.best)) {
         result.second = result.best;

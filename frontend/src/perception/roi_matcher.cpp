@@ -6,8 +6,7 @@
 #include <stdexcept>
 #include <string>
 
-#include <opencv2/core/hal/hal.hpp>
-
+#include "weighted_icp/core/binary_descriptor.h"
 #include "weighted_icp/core/named_values.h"
 #include "weighted_icp/frontend/perception/descriptor_matcher.h"
 
@@ -100,7 +99,7 @@ std::vector<cv::DMatch> matchInRegionsOfInterest(const cv::Mat& query, const std
       for (int x = std::max(0, cx - 1); x <= std::min(grid.cols - 1, cx + 1); ++x)
         for (const int r : grid.buckets[grid.index(x, y)]) {
           if ((predicted[static_cast<std::size_t>(r)] - pixel).squaredNorm() > radius_sq) continue;
-          const int d = cv::hal::normHamming(query.ptr<std::uint8_t>(q), reference.ptr<std::uint8_t>(r), query.cols);
+          const int d = hammingDistance(query.ptr<std::uint8_t>(q), reference.ptr<std::uint8_t>(r), query.cols);
           // Rows are visited in bucket order; ties go to the smaller row index.
           if (d < best_d || (d == best_d && r < best)) {
             second_d = best_d;

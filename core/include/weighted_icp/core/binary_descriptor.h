@@ -23,6 +23,13 @@ using BinaryDescriptor = std::array<std::uint64_t, 4>;
 /// @param b second descriptor
 int hammingDistance(const BinaryDescriptor& a, const BinaryDescriptor& b);
 
+/// @brief Hamming distance between two binary descriptors of any length, given as bytes (an OpenCV descriptor
+/// row): what cv::hal::normHamming computes, by the popcount instruction where the CPU has it.
+/// @param a first descriptor's bytes
+/// @param b second descriptor's bytes
+/// @param bytes length of each (>= 0)
+int hammingDistance(const std::uint8_t* a, const std::uint8_t* b, int bytes);
+
 /// @brief The two smallest Hamming distances from a query to a set of descriptors.
 struct NearestTwo {
   /// The smallest distance; max() when the set is empty.
@@ -44,6 +51,8 @@ NearestTwo nearestTwo(const BinaryDescriptor& query, const std::vector<BinaryDes
 namespace detail {
 /// @brief hammingDistance without the popcount instruction (what a CPU without it runs; for tests).
 int portableHammingDistance(const BinaryDescriptor& a, const BinaryDescriptor& b);
+/// @brief hammingDistance of byte rows without the popcount instruction (for tests).
+int portableHammingDistance(const std::uint8_t* a, const std::uint8_t* b, int bytes);
 /// @brief nearestTwo without the popcount instruction (what a CPU without it runs; for tests).
 NearestTwo portableNearestTwo(const BinaryDescriptor& query, const std::vector<BinaryDescriptor>& candidates);
 }  // namespace detail
