@@ -154,7 +154,7 @@ TEST(DescriptorMatcher, LshMatchesDoNotDependOnOpenCvsRandomStateOrThread) {
   EXPECT_TRUE(sameMatches(first, other_thread));
 
   // Building the index leaves the caller's random state as it was.
-  DescriptorMatcher matcher;
+  DescriptorMatcher matcher(withKind(MatcherKind::FlannLsh));
   const uint64 state = cv::theRNG().state;
   matcher.setReference(features(p.freiburg, p.reference).descriptors);
   EXPECT_EQ(cv::theRNG().state, state);

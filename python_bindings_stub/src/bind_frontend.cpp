@@ -253,6 +253,9 @@ void bindTrackResult(py::module_& m) {
       });
 }
 
+/// The library's default matcher, by the name wicp_rgbd_slam's --matcher reads (one default, in the library).
+std::string defaultMatcherName() { return frontend::matcherKindName(frontend::DescriptorMatcherOptions{}.kind); }
+
 }  // namespace
 
 void bindFrontend(py::module_& m) {
@@ -263,7 +266,7 @@ void bindFrontend(py::module_& m) {
                          "with run(); read the trajectory, keyframes and landmarks.")
       .def(
           py::init(&makeSlam), py::arg("camera") = "fr1", py::arg("minimap_keyframes") = 10,
-          py::arg("matcher") = "flann", py::arg("quality_gate") = true, py::arg("deterministic") = false,
+          py::arg("matcher") = defaultMatcherName(), py::arg("quality_gate") = true, py::arg("deterministic") = false,
           py::arg("options") = std::map<std::string, std::string>{},
           "camera: a Camera, 'fr1'|'fr2'|'fr3' or a YAML path. deterministic runs bundle adjustment inline "
           "(reproducible) instead of in its own thread. options: the papers' techniques by wicp_rgbd_slam's "
@@ -351,7 +354,7 @@ void bindFrontend(py::module_& m) {
         } catch (const std::runtime_error& e) {
           throw py::value_error(e.what());
         }
-        auto slam = makeSlam(py::cast(cam), minimap_keyframes, "flann", true, deterministic, options);
+        auto slam = makeSlam(py::cast(cam), minimap_keyframes, defaultMatcherName(), true, deterministic, options);
         slam->run(folder, max_frames, progress);
         return slam;
       },
