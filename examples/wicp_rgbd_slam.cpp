@@ -442,12 +442,14 @@ mapping::BowLoopDetector::Ptr makeDetector(const std::string& vocabulary_option,
 
 /// Refuses a matcher's own option given with another matcher, which would ignore it.
 void requireOptionsOfTheMatcher(const po::variables_map& vm, frontend::MatcherKind kind) {
-  const std::pair<const char*, frontend::MatcherKind> owned[] = {{"kd-backtracks", frontend::MatcherKind::KdTree},
-                                                                 {"lsh-seed", frontend::MatcherKind::FlannLsh}};
-  for (const auto& [option, owner] : owned)
-    if (!vm[option].defaulted() && kind != owner)
-      throw po::error("--" + std::string(option) + " applies to --matcher " + frontend::matcherKindName(owner) +
-                      ", not to --matcher " + frontend::matcherKindName(kind));
+  using frontend::MatcherKind;
+  const bool lsh = kind == MatcherKind::Lsh || kind == MatcherKind::FlannLsh;
+  if (!vm["kd-backtracks"].defaulted() && kind != MatcherKind::KdTree)
+    throw po::error("--kd-backtracks applies to --matcher kd-tree, not to --matcher " +
+                    frontend::matcherKindName(kind));
+  if (!vm["lsh-seed"].defaulted() && !lsh)
+    throw po::error("--lsh-seed applies to --matcher lsh or flann, not to --matcher " +
+                    frontend::matcherKindName(kind));
 }
 
 }  // namespace
@@ -495,7 +497,8 @@ int main(int argc, char** argv) {
         ("out", po::value(&out_dir)->required(), "output folder (created; published complete or not at all)")
         ("overwrite", "replace --out if it exists and is not empty")
         ("matcher", tools::namedValue(&options.frontend.matcher.kind, frontend::parseMatcherKind, frontend::matcherKindName),
-         "flann (LSH), brute-force or kd-tree (our binary KD-tree, the KD-tree paper)")
+         "flann (FLANN's LSH), lsh (our LSH: the same scheme, flat buckets, popcount), brute-force (exact, popcount) or "
+         "kd-tree (our binary KD-tree, the KD-tree paper)")
         ("no-quality-gate", "do not judge frame quality (no frame is refused as a keyframe)")
         ("quality-gate", tools::namedValue(&options.frontend.quality.mode, frontend::parseQualityGateMode,
                                            [](frontend::QualityGateMode m) { return frontend::toString(m); }),
@@ -556,7 +559,7 @@ int main(int argc, char** argv) {
          "--matcher kd-tree: leaves visited after the first (0-100000)")
         ("lsh-seed", tools::rangedValue(&options.frontend.matcher.lsh_seed, std::uint64_t{0})
                          ->default_value(options.frontend.matcher.lsh_seed),
-         "--matcher flann: seed of the LSH index's random key bits (another seed, other approximate matches: how "
+         "--matcher lsh or flann: seed of the LSH index's random key bits (another seed, other approximate matches: how "
          "much a result depends on them)")
         ("match-region", tools::namedValue(&options.frontend.match_region, frontend::parseMatchRegion,
                                            frontend::matchRegionName),

@@ -92,7 +92,7 @@ TEST_P(RealFramePair, LshFindsMostBruteForceMatches) {
 TEST_P(RealFramePair, KeepsTheRatioTestTheCapAndOneMatchPerReference) {
   const cv::Mat& reference = features(GetParam().freiburg, GetParam().reference).descriptors;
   const cv::Mat& query = features(GetParam().freiburg, GetParam().query).descriptors;
-  for (const MatcherKind kind : {MatcherKind::BruteForce, MatcherKind::FlannLsh}) {
+  for (const MatcherKind kind : {MatcherKind::BruteForce, MatcherKind::FlannLsh, MatcherKind::Lsh}) {
     DescriptorMatcherOptions options = withKind(kind);
     options.max_hamming_distance = 40;
     const std::vector<cv::DMatch> matches = matchPair(GetParam(), options);
@@ -122,7 +122,7 @@ TEST_P(RealFramePair, KeepsTheRatioTestTheCapAndOneMatchPerReference) {
 
 TEST_P(RealFramePair, MatchesAgreeWithTheGroundTruthMotion) {
   const FramePair p = GetParam();
-  for (const MatcherKind kind : {MatcherKind::BruteForce, MatcherKind::FlannLsh}) {
+  for (const MatcherKind kind : {MatcherKind::BruteForce, MatcherKind::FlannLsh, MatcherKind::Lsh}) {
     const std::vector<cv::DMatch> matches = matchPair(p, withKind(kind));
     const auto check = weighted_icp::testing::checkAgainstGroundTruth(
         sequence(p.freiburg), p.reference, p.query, features(p.freiburg, p.reference).keypoints,
@@ -185,7 +185,8 @@ TEST(DescriptorMatcher, SearchesInParallelJobsWithTheMatchesOfOneSearch) {
   EXPECT_GT(all.back().queryIdx, 384) << "matches from the last jobs keep their query rows";
 
   const int threads = cv::getNumThreads();
-  for (const MatcherKind kind : {MatcherKind::FlannLsh, MatcherKind::BruteForce, MatcherKind::KdTree}) {
+  for (const MatcherKind kind :
+       {MatcherKind::FlannLsh, MatcherKind::BruteForce, MatcherKind::KdTree, MatcherKind::Lsh}) {
     const std::vector<cv::DMatch> pooled = matchPair(p, withKind(kind));
     cv::setNumThreads(1);
     const std::vector<cv::DMatch> serial = matchPair(p, withKind(kind));
@@ -214,7 +215,7 @@ TEST(DescriptorMatcher, KeepsOnlyTheBestQueryPerReferenceRow) {
   reference.row(7).copyTo(query.row(1));
   query.at<std::uint8_t>(1, 0) ^= 0x01;  // one bit from reference row 7
   reference.row(9).copyTo(query.row(2));
-  for (const MatcherKind kind : {MatcherKind::BruteForce, MatcherKind::FlannLsh}) {
+  for (const MatcherKind kind : {MatcherKind::BruteForce, MatcherKind::FlannLsh, MatcherKind::Lsh}) {
     DescriptorMatcherOptions options = withKind(kind);
     options.cross_check_unique = false;
     DescriptorMatcher all(options);
@@ -264,7 +265,7 @@ TEST(DescriptorMatcher, BruteForceOfAnyRowLengthIsOpenCvsExactSearch) {
 
 TEST(DescriptorMatcher, ReturnsNoMatchesForEmptyInput) {
   const cv::Mat some = clusteredDescriptors(20, 2);
-  for (const MatcherKind kind : {MatcherKind::BruteForce, MatcherKind::FlannLsh}) {
+  for (const MatcherKind kind : {MatcherKind::BruteForce, MatcherKind::FlannLsh, MatcherKind::Lsh}) {
     DescriptorMatcher matcher(withKind(kind));
     EXPECT_TRUE(matcher.match(some).empty()) << "no reference set";
     matcher.setReference(cv::Mat());

@@ -26,7 +26,7 @@ TEST(MatchingOptionsTool, BadValuesAreRefusedWithExitTwo) {
       {"--lsh-seed -1", "--lsh-seed"},
       // a matcher's own option with another matcher
       {"--kd-backtracks 4", "--matcher kd-tree"},
-      {"--matcher brute-force --lsh-seed 3", "--matcher flann"}};
+      {"--matcher brute-force --lsh-seed 3", "--matcher lsh or flann"}};
   for (const auto& [arguments, named] : bad) {
     const auto run = weighted_icp::testing::runBuiltTool(
         "wicp_rgbd_slam", arguments + " --synthetic-frames 2 --out " + out.string(), scratch);

@@ -64,6 +64,9 @@ DescriptorMatcher::DescriptorMatcher(DescriptorMatcherOptions options) : options
   requireOption(options_.lsh_tables >= 1, "lsh_tables must be >= 1");
   requireOption(options_.lsh_key_bits >= 1 && options_.lsh_key_bits <= 32, "lsh_key_bits must be in [1, 32]");
   requireOption(options_.lsh_multi_probe_level >= 0, "lsh_multi_probe_level must be >= 0");
+  if (options_.kind == MatcherKind::Lsh)  // our index's own limits (key bits up to 24, probes up to 2 bits away)
+    BinaryLshIndex(BinaryLshOptions{options_.lsh_tables, options_.lsh_key_bits, options_.lsh_multi_probe_level,
+                                    options_.lsh_seed});
   requireOption(options_.kd_tree.leaf_size >= 1, "kd_tree.leaf_size must be >= 1");
   requireOption(options_.kd_tree.max_backtracks >= 0, "kd_tree.max_backtracks must be >= 0");
 }
@@ -72,12 +75,17 @@ void DescriptorMatcher::setReference(const cv::Mat& descriptors) {
   requireBinary(descriptors, "reference");
   matcher_.release();
   kd_tree_.reset();
+  lsh_.reset();
   reference_words_.clear();
   reference_rows_ = descriptors.empty() ? 0 : descriptors.rows;
   reference_cols_ = descriptors.empty() ? 0 : descriptors.cols;
   if (reference_rows_ == 0) return;
   if (options_.kind == MatcherKind::BruteForce && reference_cols_ == kWordRowBytes) {
     reference_words_ = toBinaryDescriptors(descriptors);
+  } else if (options_.kind == MatcherKind::Lsh) {
+    lsh_ = std::make_shared<BinaryLshIndex>(BinaryLshOptions{options_.lsh_tables, options_.lsh_key_bits,
+                                                             options_.lsh_multi_probe_level, options_.lsh_seed});
+    lsh_->build(descriptors);
   } else if (options_.kind == MatcherKind::KdTree) {
     kd_tree_ = std::make_shared<BinaryKdTree>(options_.kd_tree);
     kd_tree_->build(descriptors);
@@ -119,6 +127,16 @@ std::vector<std::vector<cv::DMatch>> DescriptorMatcher::nearestTwo(const cv::Mat
     for (int job = range.start; job < range.end; ++job) {
       const int first = job * kQueryRowsPerJob;
       const int last = std::min(query.rows, first + kQueryRowsPerJob);
+      if (lsh_) {
+        BinaryLshIndex::Scratch scratch;  // one per job: jobs run concurrently
+        for (int q = first; q < last; ++q) {
+          const TwoNearest two = lsh_->nearestTwo(query.ptr<std::uint8_t>(q), scratch);
+          if (two.second < 0) continue;
+          nearest[static_cast<std::size_t>(q)] = {cv::DMatch(q, two.best, static_cast<float>(two.best_distance)),
+                                                  cv::DMatch(q, two.second, static_cast<float>(two.second_distance))};
+        }
+        continue;
+      }
       if (kd_tree_) {
         for (int q = first; q < last; ++q) {
           const TwoNearest two = kd_tree_->nearestTwo(query.ptr<std::uint8_t>(q));
@@ -171,8 +189,8 @@ std::vector<cv::DMatch> keepBestMatchPerReference(const std::vector<cv::DMatch>&
 }
 
 MatcherKind parseMatcherKind(const std::string& name) {
-  return parseNamedValue(name, {MatcherKind::FlannLsh, MatcherKind::BruteForce, MatcherKind::KdTree}, matcherKindName,
-                         "matcher");
+  return parseNamedValue(name, {MatcherKind::FlannLsh, MatcherKind::BruteForce, MatcherKind::KdTree, MatcherKind::Lsh},
+                         matcherKindName, "matcher");
 }
 
 std::string matcherKindName(MatcherKind kind) {
@@ -180,6 +198,7 @@ std::string matcherKindName(MatcherKind kind) {
     case MatcherKind::FlannLsh: return "flann";
     case MatcherKind::BruteForce: return "brute-force";
     case MatcherKind::KdTree: return "kd-tree";
+    case MatcherKind::Lsh: return "lsh";
   }
   return "unknown";
 }

@@ -14,18 +14,20 @@
 
 #include "weighted_icp/core/binary_descriptor.h"
 #include "weighted_icp/frontend/perception/binary_kd_tree.h"
+#include "weighted_icp/frontend/perception/binary_lsh_index.h"
 
 namespace weighted_icp::frontend {
 
-/// KdTree: BinaryKdTree (issue #11, the KD-tree paper), exact Hamming metric, bounded backtracking.
-enum class MatcherKind { FlannLsh, BruteForce, KdTree };
+/// FlannLsh: FLANN's LSH index. BruteForce: every row (exact). KdTree: BinaryKdTree (issue #11, the KD-tree paper),
+/// exact Hamming metric, bounded backtracking. Lsh: BinaryLshIndex, FLANN's scheme and parameters in flat arrays.
+enum class MatcherKind { FlannLsh, BruteForce, KdTree, Lsh };
 
 struct DescriptorMatcherOptions {
   MatcherKind kind = MatcherKind::FlannLsh;
   float ratio = 0.8f;              // best distance < ratio * second best
   int max_hamming_distance = 64;   // bits, of 256 for ORB
   bool cross_check_unique = true;  // keep at most one query per reference: the best
-  // FLANN LSH index: hash tables, bits per hash key, neighbouring buckets
+  // LSH index (FLANN's and ours): hash tables, bits per hash key, neighbouring buckets
   // probed. Tuned on TUM fr1/fr3 pairs (reference 1200-1650 rows, query
   // 1000): 8/14/1 finds 97 % of the brute-force matches at under half its
   // time; 12/20/2 finds 98-99.6 % but is slower than brute force, 12/20/1 is
@@ -72,6 +74,7 @@ class DescriptorMatcher {
   cv::Ptr<cv::DescriptorMatcher> matcher_;         // null until a non-empty reference is set
   BinaryKdTree::Ptr kd_tree_;                      // instead of matcher_ for MatcherKind::KdTree
   std::vector<BinaryDescriptor> reference_words_;  // instead of matcher_ for BruteForce with 32-byte rows
+  BinaryLshIndex::Ptr lsh_;                        // instead of matcher_ for MatcherKind::Lsh
   int reference_rows_ = 0;
   int reference_cols_ = 0;
 };
@@ -82,7 +85,8 @@ class DescriptorMatcher {
 /// @param reference_rows rows of the reference descriptors (every trainIdx is below it)
 std::vector<cv::DMatch> keepBestMatchPerReference(const std::vector<cv::DMatch>& matches, int reference_rows);
 
-/// "flann" -> FlannLsh, "brute-force" -> BruteForce, "kd-tree" -> KdTree; throws std::invalid_argument otherwise.
+/// "flann" -> FlannLsh, "brute-force" -> BruteForce, "kd-tree" -> KdTree, "lsh" -> Lsh; throws
+/// std::invalid_argument otherwise.
 MatcherKind parseMatcherKind(const std::string& name);
 /// The name parseMatcherKind reads.
 std::string matcherKindName(MatcherKind kind);
