@@ -3,6 +3,7 @@
 #include "weighted_icp/frontend/perception/binary_lsh_index.h"
 
 #include <algorithm>
+#include <cstring>
 #include <numeric>
 #include <random>
 #include <stdexcept>
@@ -65,8 +66,9 @@ void BinaryLshIndex::build(const cv::Mat& descriptors) {
     throw std::invalid_argument("BinaryLshIndex: rows of " + std::to_string(descriptors.cols * 8) +
                                 " bits are shorter than a key of " + std::to_string(options_.key_bits));
   descriptors_ = descriptors.empty() ? cv::Mat() : descriptors.clone();
-  key_bit_positions_.clear(), offsets_.clear(), rows_.clear();
+  key_bit_positions_.clear(), offsets_.clear(), rows_.clear(), words_.clear();
   if (descriptors_.empty()) return;
+  if (descriptors_.cols == static_cast<int>(sizeof(BinaryDescriptor))) words_ = toBinaryDescriptors(descriptors_);
 
   // Each table samples key_bits distinct bits of the row; the draws depend on the seed only.
   std::mt19937_64 random(options_.seed);
@@ -98,6 +100,8 @@ TwoNearest BinaryLshIndex::nearestTwo(const std::uint8_t* query, Scratch& scratc
   if (scratch.seen.size() != rows || scratch.stamp == UINT32_MAX) scratch.seen.assign(rows, 0), scratch.stamp = 0;
   const std::uint32_t stamp = ++scratch.stamp;
   const int bytes = descriptors_.cols;
+  BinaryDescriptor query_words{};  // 256-bit rows: four popcounts per distance, no per-word copies
+  if (!words_.empty()) std::memcpy(query_words.data(), query, sizeof(BinaryDescriptor));
   for (int t = 0; t < options_.tables; ++t) {
     const std::uint32_t key = keyOf(query, t);
     const std::vector<std::uint32_t>& offsets = offsets_[static_cast<std::size_t>(t)];
@@ -108,8 +112,9 @@ TwoNearest BinaryLshIndex::nearestTwo(const std::uint8_t* query, Scratch& scratc
         const std::uint32_t row = table_rows[i];
         if (scratch.seen[row] == stamp) continue;  // a candidate of an earlier table or probe
         scratch.seen[row] = stamp;
-        keepNearestTwo(static_cast<int>(row), hammingDistance(query, descriptors_.ptr(static_cast<int>(row)), bytes),
-                       result);
+        const int d = words_.empty() ? hammingDistance(query, descriptors_.ptr(static_cast<int>(row)), bytes)
+                                     : hammingDistance(query_words, words_[row]);
+        keepNearestTwo(static_cast<int>(row), d, result);
       }
     }
   }

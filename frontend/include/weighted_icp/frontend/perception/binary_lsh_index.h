@@ -8,6 +8,7 @@
 
 #include <opencv2/core.hpp>
 
+#include "weighted_icp/core/binary_descriptor.h"
 #include "weighted_icp/frontend/perception/binary_kd_tree.h"
 
 namespace weighted_icp::frontend {
@@ -71,6 +72,7 @@ class BinaryLshIndex {
 
   BinaryLshOptions options_;
   cv::Mat descriptors_;
+  std::vector<BinaryDescriptor> words_;              // the rows again when they are 256-bit (ORB's): the fast distance
   std::vector<std::vector<int>> key_bit_positions_;  // per table, key_bits bit indices into a row
   std::vector<std::uint32_t> probe_masks_;           // XORed onto a key: 0 first, then by flipped bits
   std::vector<std::vector<std::uint32_t>> offsets_;  // per table, 2^key_bits + 1 bucket starts into rows_
