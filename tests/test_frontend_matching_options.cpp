@@ -59,6 +59,9 @@ INSTANTIATE_TEST_SUITE_P(
     Issue11, MatchingOption,
     ::testing::Values(
         Option{"KdTree", [](frontend::RgbdSlamOptions& o) { o.frontend.matcher.kind = frontend::MatcherKind::KdTree; }},
+        Option{"OurLsh", [](frontend::RgbdSlamOptions& o) { o.frontend.matcher.kind = frontend::MatcherKind::Lsh; }},
+        Option{"BruteForce",
+               [](frontend::RgbdSlamOptions& o) { o.frontend.matcher.kind = frontend::MatcherKind::BruteForce; }},
         Option{"RoiProjection",
                [](frontend::RgbdSlamOptions& o) { o.frontend.match_region = frontend::MatchRegion::Projection; }},
         Option{"RoiHomography",
