@@ -56,6 +56,13 @@ constexpr int kQueryRowsPerJob = 128;
 // BinaryDescriptors by the brute-force matcher; other lengths by OpenCV's.
 constexpr int kWordRowBytes = static_cast<int>(sizeof(BinaryDescriptor));
 
+/// One search's two nearest as knnMatch's pair for query row q; empty without a second (no ratio test possible).
+std::vector<cv::DMatch> asNearestPair(int q, const TwoNearest& two) {
+  if (two.second < 0) return {};
+  return {cv::DMatch(q, two.best, static_cast<float>(two.best_distance)),
+          cv::DMatch(q, two.second, static_cast<float>(two.second_distance))};
+}
+
 }  // namespace
 
 DescriptorMatcher::DescriptorMatcher(DescriptorMatcherOptions options) : options_(options) {
@@ -129,21 +136,14 @@ std::vector<std::vector<cv::DMatch>> DescriptorMatcher::nearestTwo(const cv::Mat
       const int last = std::min(query.rows, first + kQueryRowsPerJob);
       if (lsh_) {
         BinaryLshIndex::Scratch scratch;  // one per job: jobs run concurrently
-        for (int q = first; q < last; ++q) {
-          const TwoNearest two = lsh_->nearestTwo(query.ptr<std::uint8_t>(q), scratch);
-          if (two.second < 0) continue;
-          nearest[static_cast<std::size_t>(q)] = {cv::DMatch(q, two.best, static_cast<float>(two.best_distance)),
-                                                  cv::DMatch(q, two.second, static_cast<float>(two.second_distance))};
-        }
+        for (int q = first; q < last; ++q)
+          nearest[static_cast<std::size_t>(q)] =
+              asNearestPair(q, lsh_->nearestTwo(query.ptr<std::uint8_t>(q), scratch));
         continue;
       }
       if (kd_tree_) {
-        for (int q = first; q < last; ++q) {
-          const TwoNearest two = kd_tree_->nearestTwo(query.ptr<std::uint8_t>(q));
-          if (two.second < 0) continue;
-          nearest[static_cast<std::size_t>(q)] = {cv::DMatch(q, two.best, static_cast<float>(two.best_distance)),
-                                                  cv::DMatch(q, two.second, static_cast<float>(two.second_distance))};
-        }
+        for (int q = first; q < last; ++q)
+          nearest[static_cast<std::size_t>(q)] = asNearestPair(q, kd_tree_->nearestTwo(query.ptr<std::uint8_t>(q)));
         continue;
       }
       std::vector<std::vector<cv::DMatch>> rows;
