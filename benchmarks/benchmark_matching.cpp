@@ -139,7 +139,8 @@ void registerBenchmarks() {
   for (const Pair& p : pairs) {
     const std::string pair_name = std::string(p.sequence->name) + "/" + std::to_string(p.reference_frame) + "_to_" +
                                   std::to_string(p.query_frame);
-    for (const MatcherKind kind : {MatcherKind::FlannLsh, MatcherKind::Lsh, MatcherKind::BruteForce, MatcherKind::KdTree}) {
+    for (const MatcherKind kind :
+         {MatcherKind::FlannLsh, MatcherKind::Lsh, MatcherKind::BruteForce, MatcherKind::KdTree}) {
       DescriptorMatcherOptions options;
       options.kind = kind;
       const std::string kind_name = frontend::matcherKindName(kind);
