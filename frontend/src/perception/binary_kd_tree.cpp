@@ -99,16 +99,7 @@ TwoNearest BinaryKdTree::nearestTwo(const std::uint8_t* query) const {
     for (int i = leaf.begin; i < leaf.end; ++i) {
       const int row = order_[static_cast<std::size_t>(i)];
       const int d = hammingDistance(query, descriptors_.ptr<std::uint8_t>(row), descriptors_.cols);
-      // Ties go to the smaller row index, so the result does not depend on the visiting order.
-      if (d < result.best_distance || (d == result.best_distance && row < result.best)) {
-        result.second = result.best;
-        result.second_distance = result.best_distance;
-        result.best = row;
-        result.best_distance = d;
-      } else if (d < result.second_distance || (d == result.second_distance && row < result.second)) {
-        result.second = row;
-        result.second_distance = d;
-      }
+      result.offer(row, d);
     }
   }
   if (result.best < 0) result.best_distance = 0;

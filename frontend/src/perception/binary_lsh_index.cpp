@@ -30,16 +30,6 @@ std::vector<std::uint32_t> probeMasks(int key_bits, int level) {
   return masks;
 }
 
-/// Keeps the two nearest, ties to the smaller row (the result does not depend on the visiting order).
-inline void keepNearestTwo(int row, int d, TwoNearest& result) {
-  if (result.best < 0 || d < result.best_distance || (d == result.best_distance && row < result.best)) {
-    result.second = result.best, result.second_distance = result.best_distance;
-    result.best = row, result.best_distance = d;
-  } else if (result.second < 0 || d < result.second_distance || (d == result.second_distance && row < result.second)) {
-    result.second = row, result.second_distance = d;
-  }
-}
-
 }  // namespace
 
 BinaryLshIndex::BinaryLshIndex(BinaryLshOptions options) : options_(options) {
@@ -114,7 +104,7 @@ TwoNearest BinaryLshIndex::nearestTwo(const std::uint8_t* query, Scratch& scratc
         scratch.seen[row] = stamp;
         const int d = words_.empty() ? hammingDistance(query, descriptors_.ptr(static_cast<int>(row)), bytes)
                                      : hammingDistance(query_words, words_[row]);
-        keepNearestTwo(static_cast<int>(row), d, result);
+        result.offer(static_cast<int>(row), d);
       }
     }
   }

@@ -27,6 +27,19 @@ struct TwoNearest {
   int best_distance = 0;
   int second = -1;
   int second_distance = 0;
+
+  /// @brief Keeps `row` if it is among the two nearest so far; ties go to the smaller row, so the result does not
+  /// depend on the order rows are offered in.
+  /// @param row a row index (>= 0)
+  /// @param distance its Hamming distance to the query
+  void offer(int row, int distance) {
+    if (best < 0 || distance < best_distance || (distance == best_distance && row < best)) {
+      second = best, second_distance = best_distance;
+      best = row, best_distance = distance;
+    } else if (second < 0 || distance < second_distance || (distance == second_distance && row < second)) {
+      second = row, second_distance = distance;
+    }
+  }
 };
 
 /// @brief KD-tree over the bits of binary descriptors.
