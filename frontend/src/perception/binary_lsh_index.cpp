@@ -32,11 +32,15 @@ std::vector<std::uint32_t> probeMasks(int key_bits, int level) {
 
 }  // namespace
 
-BinaryLshIndex::BinaryLshIndex(BinaryLshOptions options) : options_(options) {
-  requireOption(options_.tables >= 1, "tables must be >= 1");
-  requireOption(options_.key_bits >= 1 && options_.key_bits <= 24, "key_bits must be in [1, 24]");
-  requireOption(options_.multi_probe_level >= 0 && options_.multi_probe_level <= 2,
+void BinaryLshIndex::validate(const BinaryLshOptions& options) {
+  requireOption(options.tables >= 1, "tables must be >= 1");
+  requireOption(options.key_bits >= 1 && options.key_bits <= 24, "key_bits must be in [1, 24]");
+  requireOption(options.multi_probe_level >= 0 && options.multi_probe_level <= 2,
                 "multi_probe_level must be 0, 1 or 2");
+}
+
+BinaryLshIndex::BinaryLshIndex(BinaryLshOptions options) : options_(options) {
+  validate(options_);
   probe_masks_ = probeMasks(options_.key_bits, options_.multi_probe_level);
 }
 

@@ -56,6 +56,22 @@ constexpr int kQueryRowsPerJob = 128;
 // BinaryDescriptors by the brute-force matcher; other lengths by OpenCV's.
 constexpr int kWordRowBytes = static_cast<int>(sizeof(BinaryDescriptor));
 
+/// Runs step(first, last) over query rows [0, rows) in jobs of kQueryRowsPerJob on the thread pool. Each row's
+/// search only reads the index and writes its own row of the result, so any split gives the same result.
+template <typename Step>
+void forEachQueryJob(int rows, const Step& step) {
+  const int jobs = (rows + kQueryRowsPerJob - 1) / kQueryRowsPerJob;
+  parallelFor(cv::Range(0, jobs), [&](const cv::Range& range) {
+    for (int job = range.start; job < range.end; ++job)
+      step(job * kQueryRowsPerJob, std::min(rows, (job + 1) * kQueryRowsPerJob));
+  });
+}
+
+/// The matcher's LSH parameters as our index takes them.
+BinaryLshOptions lshOptions(const DescriptorMatcherOptions& o) {
+  return {o.lsh_tables, o.lsh_key_bits, o.lsh_multi_probe_level, o.lsh_seed};
+}
+
 /// One search's two nearest as knnMatch's pair for query row q; empty without a second (no ratio test possible).
 std::vector<cv::DMatch> asNearestPair(int q, const TwoNearest& two) {
   if (two.second < 0) return {};
@@ -72,8 +88,7 @@ DescriptorMatcher::DescriptorMatcher(DescriptorMatcherOptions options) : options
   requireOption(options_.lsh_key_bits >= 1 && options_.lsh_key_bits <= 32, "lsh_key_bits must be in [1, 32]");
   requireOption(options_.lsh_multi_probe_level >= 0, "lsh_multi_probe_level must be >= 0");
   if (options_.kind == MatcherKind::Lsh)  // our index's own limits (key bits up to 24, probes up to 2 bits away)
-    BinaryLshIndex(BinaryLshOptions{options_.lsh_tables, options_.lsh_key_bits, options_.lsh_multi_probe_level,
-                                    options_.lsh_seed});
+    BinaryLshIndex::validate(lshOptions(options_));
   requireOption(options_.kd_tree.leaf_size >= 1, "kd_tree.leaf_size must be >= 1");
   requireOption(options_.kd_tree.max_backtracks >= 0, "kd_tree.max_backtracks must be >= 0");
 }
@@ -90,8 +105,7 @@ void DescriptorMatcher::setReference(const cv::Mat& descriptors) {
   if (options_.kind == MatcherKind::BruteForce && reference_cols_ == kWordRowBytes) {
     reference_words_ = toBinaryDescriptors(descriptors);
   } else if (options_.kind == MatcherKind::Lsh) {
-    lsh_ = std::make_shared<BinaryLshIndex>(BinaryLshOptions{options_.lsh_tables, options_.lsh_key_bits,
-                                                             options_.lsh_multi_probe_level, options_.lsh_seed});
+    lsh_ = std::make_shared<BinaryLshIndex>(lshOptions(options_));
     lsh_->build(descriptors);
   } else if (options_.kind == MatcherKind::KdTree) {
     kd_tree_ = std::make_shared<BinaryKdTree>(options_.kd_tree);
@@ -126,26 +140,17 @@ std::vector<cv::DMatch> DescriptorMatcher::match(const cv::Mat& query) const {
 std::vector<std::vector<cv::DMatch>> DescriptorMatcher::nearestTwo(const cv::Mat& query) const {
   if (!reference_words_.empty()) return exhaustiveNearestTwo(query);
   std::vector<std::vector<cv::DMatch>> nearest(static_cast<std::size_t>(query.rows));
-  const int jobs = (query.rows + kQueryRowsPerJob - 1) / kQueryRowsPerJob;
-  // The searches only read the index (FLANN's LSH k-NN search and the KD-tree
-  // keep no state between queries; the OpenCV matcher's train() is a no-op
-  // once trained), so jobs share it and write disjoint rows of the result.
-  parallelFor(cv::Range(0, jobs), [&](const cv::Range& range) {
-    for (int job = range.start; job < range.end; ++job) {
-      const int first = job * kQueryRowsPerJob;
-      const int last = std::min(query.rows, first + kQueryRowsPerJob);
-      if (lsh_) {
-        BinaryLshIndex::Scratch scratch;  // one per job: jobs run concurrently
-        for (int q = first; q < last; ++q)
-          nearest[static_cast<std::size_t>(q)] =
-              asNearestPair(q, lsh_->nearestTwo(query.ptr<std::uint8_t>(q), scratch));
-        continue;
-      }
-      if (kd_tree_) {
-        for (int q = first; q < last; ++q)
-          nearest[static_cast<std::size_t>(q)] = asNearestPair(q, kd_tree_->nearestTwo(query.ptr<std::uint8_t>(q)));
-        continue;
-      }
+  // The searches only read the index (our LSH and KD-tree and FLANN's LSH k-NN search keep no state between
+  // queries; the OpenCV matcher's train() is a no-op once trained), so jobs share it.
+  forEachQueryJob(query.rows, [&](int first, int last) {
+    if (lsh_) {
+      BinaryLshIndex::Scratch scratch;  // one per job: jobs run concurrently
+      for (int q = first; q < last; ++q)
+        nearest[static_cast<std::size_t>(q)] = asNearestPair(q, lsh_->nearestTwo(query.ptr<std::uint8_t>(q), scratch));
+    } else if (kd_tree_) {
+      for (int q = first; q < last; ++q)
+        nearest[static_cast<std::size_t>(q)] = asNearestPair(q, kd_tree_->nearestTwo(query.ptr<std::uint8_t>(q)));
+    } else {
       std::vector<std::vector<cv::DMatch>> rows;
       matcher_->knnMatch(query.rowRange(first, last), rows, 2);
       for (std::size_t r = 0; r < rows.size(); ++r) {
@@ -160,17 +165,12 @@ std::vector<std::vector<cv::DMatch>> DescriptorMatcher::nearestTwo(const cv::Mat
 std::vector<std::vector<cv::DMatch>> DescriptorMatcher::exhaustiveNearestTwo(const cv::Mat& query) const {
   const std::vector<BinaryDescriptor> words = toBinaryDescriptors(query);
   std::vector<std::vector<cv::DMatch>> nearest(words.size());
-  const int jobs = (query.rows + kQueryRowsPerJob - 1) / kQueryRowsPerJob;
-  // Each row's search reads only the reference: any split of the rows gives the same result.
-  parallelFor(cv::Range(0, jobs), [&](const cv::Range& range) {
-    for (int job = range.start; job < range.end; ++job) {
-      const int last = std::min(query.rows, (job + 1) * kQueryRowsPerJob);
-      for (int q = job * kQueryRowsPerJob; q < last; ++q) {
-        const NearestTwo two = weighted_icp::nearestTwo(words[static_cast<std::size_t>(q)], reference_words_);
-        nearest[static_cast<std::size_t>(q)] = {
-            cv::DMatch(q, static_cast<int>(two.index), static_cast<float>(two.best)),
-            cv::DMatch(q, static_cast<int>(two.second_index), static_cast<float>(two.second))};
-      }
+  forEachQueryJob(query.rows, [&](int first, int last) {
+    for (int q = first; q < last; ++q) {
+      const NearestTwo two = weighted_icp::nearestTwo(words[static_cast<std::size_t>(q)], reference_words_);
+      nearest[static_cast<std::size_t>(q)] = {
+          cv::DMatch(q, static_cast<int>(two.index), static_cast<float>(two.best)),
+          cv::DMatch(q, static_cast<int>(two.second_index), static_cast<float>(two.second))};
     }
   });
   return nearest;

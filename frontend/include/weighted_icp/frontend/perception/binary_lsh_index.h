@@ -46,8 +46,11 @@ class BinaryLshIndex {
     std::uint32_t stamp = 0;
   };
 
-  /// @brief Checks the options. Throws std::invalid_argument for tables < 1, key_bits outside 1-24 or
-  /// multi_probe_level outside 0-2.
+  /// @brief Throws std::invalid_argument for tables < 1, key_bits outside 1-24 or multi_probe_level outside 0-2.
+  /// @param options the parameters an index would be built with
+  static void validate(const BinaryLshOptions& options);
+
+  /// @brief Checks the options (validate).
   /// @param options the index's parameters
   explicit BinaryLshIndex(BinaryLshOptions options = {});
 
