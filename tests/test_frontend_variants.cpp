@@ -82,7 +82,8 @@ bool haveData(const char* sequence) { return fs::exists(weighted_icp::testing::d
 TEST(FrontendVariants, JpegColourAndMillimetreDepthTrackBelowOneAndAHalfCentimetres) {
   if (!haveData("tum_fr1_xyz_head")) GTEST_SKIP() << "no " << weighted_icp::testing::dataDir() / "tum_fr1_xyz_head";
   // The held-out Kinect's format: JPEG colour, depth in mm, focal 585 px. The
-  // original tracks to 0.54 cm; 1.5 cm leaves room for the compression, not for a failure.
+  // original tracks to 0.54-0.58 cm over draws of the matcher's key bits, the variant to 0.53-0.57 cm; 1.5 cm leaves
+  // room for the compression, not for a failure.
   const VariantRun run = trackVariant("tum_fr1_xyz_head", 1, "jpeg,mm-depth,focal");
   EXPECT_EQ(run.without_pose, 0u);
   EXPECT_LT(run.ate_m, 0.015);
@@ -91,7 +92,8 @@ TEST(FrontendVariants, JpegColourAndMillimetreDepthTrackBelowOneAndAHalfCentimet
 TEST(FrontendVariants, UnregisteredDepthIsRegisteredWithItsCalibration) {
   if (!haveData("tum_fr3_teddy_head")) GTEST_SKIP() << "no " << weighted_icp::testing::dataDir() / "tum_fr3_teddy_head";
   // The variant's camera.yaml names its depth camera: the front end registers every depth image. First 100 frames:
-  // the original tracks to 0.30 cm, the variant with its calibration to 0.44 cm, without it to 1.14 cm.
+  // the original tracks to 0.30 cm, the variant with its calibration to 0.37-0.48 cm, without it to 1.07-1.87 cm
+  // (eight draws of the matcher's key bits).
   const auto relative = frontend::QualityGateMode::Relative;
   const VariantRun registered = trackVariant("tum_fr3_teddy_head", 3, "unregistered", relative, 100);
   const VariantRun unregistered = trackVariant("tum_fr3_teddy_head", 3, "unregistered", relative, 100, false);
@@ -116,7 +118,8 @@ TEST(FrontendVariants, WhenTheMotionChangesSuddenlyTheLocalMapIsMatchedAgainWith
   // fr3 as a dim Kinect would record it (JPEG, mm depth, focal 585, low light), first 150 frames. Around frame 137
   // the camera turns faster than the constant-velocity prediction: within the 40 px gate 3D-2D found 0-8 matches for
   // ten frames, 2D-2D carried the pose and tracking was lost (6.4 cm). Matched again within the 120 px gate
-  // of a frame without motion, every frame tracks (1.6 cm).
+  // of a frame without motion, every frame tracks (1.0 cm). Fragile: over eight draws of the matcher's key bits
+  // (FLANN's LSH and ours) 1.0-4.7 cm, and two of the eight still lose a frame (docs/frontend_speed.md).
   const VariantRun run =
       trackVariant("tum_fr3_teddy_head", 3, "jpeg,mm-depth,focal,low-light", frontend::QualityGateMode::Relative, 150);
   EXPECT_EQ(run.without_pose, 0u);
@@ -127,13 +130,15 @@ TEST(FrontendVariants, WhenTheMotionChangesSuddenlyTheLocalMapIsMatchedAgainWith
 TEST(FrontendVariants, ADegradedFrameThatCannotBeTrackedKeepsThePredictionNotA2d2dPose) {
   if (!haveData("tum_fr3_teddy_head")) GTEST_SKIP() << "no " << weighted_icp::testing::dataDir() / "tum_fr3_teddy_head";
   // fr3 with bursts of blurred, noisy frames, first 100: 3D-2D fails on some burst frames. The 2D-2D fallback, meant
-  // for good images without depth, posed two of them 4 and 8 cm off (ATE 1.06 cm); the gate now refuses them first
-  // and they keep the motion model's prediction (0.60 cm; the clean original: 0.30 cm).
+  // for good images without depth, posed two of them 4 and 8 cm off; the gate now refuses them first and they keep
+  // the motion model's prediction (burst_fallback == 0 is the check of that). The ATE bound is set on the spread over
+  // the descriptor index's random key bits, not on one draw: 0.48-0.99 cm over eight (FLANN's LSH and ours, four
+  // seeds each; the clean original: 0.30 cm).
   const VariantRun run = trackVariant("tum_fr3_teddy_head", 3, "burst", frontend::QualityGateMode::Relative, 100);
   EXPECT_EQ(run.without_pose, 0u);
   EXPECT_EQ(run.burst_fallback, 0u);
   EXPECT_GT(run.burst_refused, 0u);
-  EXPECT_LT(run.ate_m, 0.008);
+  EXPECT_LT(run.ate_m, 0.012);
 }
 
 }  // namespace

@@ -242,7 +242,7 @@ class RgbdSlam:
         self,
         camera: Union[Camera, str] = "fr1",
         minimap_keyframes: int = 10,
-        matcher: str = "flann",
+        matcher: str = "lsh",
         quality_gate: bool = True,
         deterministic: bool = False,
         options: Dict[str, str] = ...,
