@@ -126,6 +126,30 @@ TEST(RoiMatcher, MatchesOnlyWithinTheRadiusOfThePrediction) {
   EXPECT_EQ(matchInRegionsOfInterest(query, query_pixels, reference, predicted, options).size(), 2u);
 }
 
+TEST(RoiMatcher, APredictionFarOutsideTheImageIsIgnoredNotAnError) {
+  // A map point almost in the camera's plane projects millions of pixels away. It cannot be within the radius of any
+  // feature: it used to make the grid over the predictions too large and the run stop with an error.
+  const cv::Mat reference = randomDescriptors(4, 7);
+  cv::Mat query;
+  query.push_back(reference.row(0));
+  query.push_back(reference.row(1));
+  const std::vector<Eigen::Vector2d> query_pixels{{100, 100}, {600, 400}};
+  std::vector<Eigen::Vector2d> predicted{{102, 101}, {598, 403}, {320, 240}, {320, 240}};
+  RoiMatchOptions options;
+  const auto near_only = matchInRegionsOfInterest(query, query_pixels, reference, predicted, options);
+  for (const Eigen::Vector2d far : {Eigen::Vector2d(3e9, -2e9), Eigen::Vector2d(-1e12, 5e11)}) {
+    predicted[3] = far;
+    std::vector<cv::DMatch> matches;
+    ASSERT_NO_THROW(matches = matchInRegionsOfInterest(query, query_pixels, reference, predicted, options));
+    ASSERT_EQ(matches.size(), near_only.size());
+    for (std::size_t i = 0; i < matches.size(); ++i) {
+      EXPECT_EQ(matches[i].queryIdx, near_only[i].queryIdx);
+      EXPECT_EQ(matches[i].trainIdx, near_only[i].trainIdx);
+    }
+  }
+  EXPECT_EQ(near_only.size(), 2u);
+}
+
 TEST(RoiMatcher, RefusesMismatchedInputsAndBadOptions) {
   const cv::Mat reference = randomDescriptors(2, 6);
   const std::vector<Eigen::Vector2d> two{{1, 1}, {2, 2}}, one{{1, 1}};

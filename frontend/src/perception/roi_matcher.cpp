@@ -6,6 +6,8 @@
 #include <stdexcept>
 #include <string>
 
+#include <Eigen/Geometry>
+
 #include "weighted_icp/core/binary_descriptor.h"
 #include "weighted_icp/core/named_values.h"
 #include "weighted_icp/frontend/perception/descriptor_matcher.h"
@@ -29,34 +31,31 @@ void check(const cv::Mat& query, const std::vector<Eigen::Vector2d>& query_pixel
     fail("query rows have " + std::to_string(query.cols) + " bytes, reference rows " + std::to_string(reference.cols));
 }
 
-/// Reference rows bucketed by predicted pixel in square cells of the radius.
+/// Reference rows bucketed by predicted pixel in square cells of the radius, over the features' extent widened by the
+/// radius: a prediction outside it is farther than the radius from every feature and cannot match (a map point
+/// almost in the camera's plane projects millions of pixels away; bucketing it would size the grid by it).
 struct PredictionGrid {
   double cell;
-  int x0, y0, cols = 0, rows = 0;
+  int x0 = 0, y0 = 0, cols = 0, rows = 0;
   std::vector<std::vector<int>> buckets;
 
-  PredictionGrid(const std::vector<Eigen::Vector2d>& predicted, double radius) : cell(radius) {
-    double min_x = 0, min_y = 0, max_x = 0, max_y = 0;
-    bool any = false;
-    for (const auto& p : predicted) {
-      if (!p.allFinite()) continue;
-      min_x = any ? std::min(min_x, p.x()) : p.x();
-      min_y = any ? std::min(min_y, p.y()) : p.y();
-      max_x = any ? std::max(max_x, p.x()) : p.x();
-      max_y = any ? std::max(max_y, p.y()) : p.y();
-      any = true;
-    }
-    if (!any) return;
-    // Predictions far outside any image are bounded by the grid's extent, not the memory.
-    x0 = static_cast<int>(std::floor(min_x / cell));
-    y0 = static_cast<int>(std::floor(min_y / cell));
-    cols = static_cast<int>(std::floor(max_x / cell)) - x0 + 1;
-    rows = static_cast<int>(std::floor(max_y / cell)) - y0 + 1;
+  PredictionGrid(const std::vector<Eigen::Vector2d>& predicted, const std::vector<Eigen::Vector2d>& query_pixels,
+                 double radius)
+      : cell(radius) {
+    Eigen::AlignedBox2d features;
+    for (const Eigen::Vector2d& p : query_pixels)
+      if (p.allFinite()) features.extend(p);
+    if (features.isEmpty()) return;
+    const Eigen::AlignedBox2d reach(features.min().array() - radius, features.max().array() + radius);
+    x0 = static_cast<int>(std::floor(reach.min().x() / cell));
+    y0 = static_cast<int>(std::floor(reach.min().y() / cell));
+    cols = static_cast<int>(std::floor(reach.max().x() / cell)) - x0 + 1;
+    rows = static_cast<int>(std::floor(reach.max().y() / cell)) - y0 + 1;
     if (static_cast<double>(cols) * rows > 4e6)
-      throw std::invalid_argument("matchInRegionsOfInterest: radius too small for the spread of the predictions");
+      throw std::invalid_argument("matchInRegionsOfInterest: radius too small for the spread of the query pixels");
     buckets.resize(static_cast<std::size_t>(cols) * rows);
     for (std::size_t i = 0; i < predicted.size(); ++i)
-      if (predicted[i].allFinite())
+      if (predicted[i].allFinite() && reach.contains(predicted[i]))
         buckets[index(cellX(predicted[i].x()), cellY(predicted[i].y()))].push_back(static_cast<int>(i));
   }
   int cellX(double x) const { return static_cast<int>(std::floor(x / cell)) - x0; }
@@ -86,7 +85,7 @@ std::vector<cv::DMatch> matchInRegionsOfInterest(const cv::Mat& query, const std
                                                  const RoiMatchOptions& options) {
   check(query, query_pixels, reference, predicted, options);
   if (query.empty() || reference.empty()) return {};
-  const PredictionGrid grid(predicted, options.radius_px);
+  const PredictionGrid grid(predicted, query_pixels, options.radius_px);
   if (grid.cols == 0) return {};
   const double radius_sq = options.radius_px * options.radius_px;
   std::vector<cv::DMatch> matches;
