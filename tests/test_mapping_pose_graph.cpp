@@ -1,4 +1,8 @@
 // Pose-graph optimisation: a drifted loop is pulled back to truth, a wrong loop edge is refused, bad edges throw.
+#include <tuple>
+#include <utility>
+#include <vector>
+
 #include <gtest/gtest.h>
 
 #include "pose_graph_fixtures.h"
@@ -53,6 +57,54 @@ TEST(PoseGraph, OneWrongLoopAmongGoodOnesIsRefusedAndTheResultStaysNearTruth) {
   const double reference_error = rmsPositionError(loop, posesOf(without_wrong));
   EXPECT_NEAR(rmsPositionError(loop, posesOf(graph)), reference_error, 1e-6);
   EXPECT_LT(reference_error, rmsPositionError(loop, loop.drifted) / 3);
+}
+
+TEST(PoseGraph, LoopsAdmittedBeforeAreTestedTogetherInOneSolve) {
+  // A loop closer's graph at its fifth closure: four loops accepted earlier, one new. Re-testing each earlier loop
+  // alone was one solve per loop at every closure (quadratic over a run); together they take one.
+  const DriftedLoop loop = makeDriftedLoop(60, 3.0, 0.1, 0.005);
+  const std::vector<std::pair<std::size_t, std::size_t>> ends = {{0, 59}, {2, 57}, {5, 55}, {1, 50}, {3, 58}};
+  PoseGraph together = makeOdometryGraph(loop), alone = makeOdometryGraph(loop);
+  for (std::size_t i = 0; i < ends.size(); ++i) {
+    mapping::PoseGraphEdge edge = trueLoopEdge(loop, ends[i].first, ends[i].second);
+    alone.addEdge(edge);
+    edge.admitted_before = i + 1 < ends.size();
+    together.addEdge(edge);
+  }
+  const auto summary = together.optimize();
+  const auto reference = alone.optimize();
+  ASSERT_TRUE(summary.ok && reference.ok);
+  EXPECT_EQ(summary.solves, 3u);  // odometry, the four earlier loops, the new one
+  EXPECT_EQ(reference.solves, 6u);
+  EXPECT_EQ(summary.loops_used, 5u);
+  EXPECT_EQ(summary.loops_rejected, 0u);
+  // The same optimum, reached in fewer steps.
+  const auto a = posesOf(together), b = posesOf(alone);
+  for (std::size_t i = 0; i < a.size(); ++i)
+    EXPECT_LT((a[i].translation() - b[i].translation()).norm(), 1e-4) << "keyframe " << i;
+  EXPECT_LT(rmsPositionError(loop, a), rmsPositionError(loop, loop.drifted) / 3);
+}
+
+TEST(PoseGraph, AWrongLoopAmongThoseAdmittedBeforeIsStillRefused) {
+  // If the earlier loops fail together, each is tested alone again, as a new loop is.
+  const DriftedLoop loop = makeDriftedLoop(60, 3.0, 0.1, 0.005);
+  PoseGraph graph = makeOdometryGraph(loop);
+  Eigen::Isometry3d wrong = Eigen::Isometry3d::Identity();
+  wrong.translation() = Eigen::Vector3d(0.8, 0.0, 0.3);
+  for (const auto& [match, query, error] :
+       {std::tuple<std::size_t, std::size_t, Eigen::Isometry3d>{0, 59, Eigen::Isometry3d::Identity()},
+        {10, 40, wrong},
+        {2, 57, Eigen::Isometry3d::Identity()}}) {
+    mapping::PoseGraphEdge edge = trueLoopEdge(loop, match, query, error);
+    edge.admitted_before = true;
+    graph.addEdge(edge);
+  }
+  const auto summary = graph.optimize();
+  ASSERT_TRUE(summary.ok) << summary.message;
+  EXPECT_EQ(summary.solves, 5u);  // odometry, the three together (refused), each alone
+  EXPECT_EQ(summary.loops_used, 2u);
+  EXPECT_EQ(summary.loops_rejected, 1u);
+  EXPECT_FALSE(summary.edge_used[graph.edges().size() - 2]) << "the wrong edge must be the one refused";
 }
 
 TEST(PoseGraph, AWrongLoopAloneIsRefusedAndTheOdometryKept) {

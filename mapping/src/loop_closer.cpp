@@ -161,7 +161,11 @@ bool LoopCloser::closeLoop(const LoopConstraint& candidate) {
     };
     // loops_ changes only in this thread: reading it here needs no lock.
     for (const LoopConstraint& loop : loops_)
-      if (known(loop)) graph.addEdge(loopEdge(loop));
+      if (known(loop)) {
+        PoseGraphEdge edge = loopEdge(loop);
+        edge.admitted_before = true;  // accepted at an earlier closure: re-tested together, not one by one
+        graph.addEdge(edge);
+      }
     if (!known(candidate)) return false;  // names a keyframe the map does not have
     graph.addEdge(loopEdge(candidate));
 

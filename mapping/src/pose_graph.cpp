@@ -9,6 +9,7 @@
 
 #include <ceres/ceres.h>
 #include <ceres/manifold.h>
+#include <boost/math/distributions/chi_squared.hpp>
 
 namespace weighted_icp::mapping {
 
@@ -157,6 +158,38 @@ PoseGraph::Solve PoseGraph::solve(const std::vector<bool>& use,
   return {true, "", summary.final_cost};
 }
 
+namespace {
+
+/// The chi-square gate of `dof` degrees of freedom at the probability loop_chi2_gate has for one loop's six.
+double jointLoopGate(double six_dof_gate, std::size_t dof) {
+  const double probability = boost::math::cdf(boost::math::chi_squared_distribution<double>(6.0), six_dof_gate);
+  return boost::math::quantile(boost::math::chi_squared_distribution<double>(static_cast<double>(dof)), probability);
+}
+
+}  // namespace
+
+void PoseGraph::admitEarlierLoopsTogether(const PoseGraphOptions& options, PoseGraphSummary& summary,
+                                          std::map<frontend::KeyframeId, Eigen::Isometry3d>& poses, Solve& current,
+                                          std::vector<bool>& decided) const {
+  std::vector<bool> trial = summary.edge_used;
+  std::size_t earlier = 0;
+  for (std::size_t e = 0; e < edges_.size(); ++e)
+    if (edges_[e].kind == PoseGraphEdgeKind::Loop && edges_[e].admitted_before) {
+      trial[e] = true;
+      ++earlier;
+    }
+  if (earlier < 2) return;  // one alone is tested as any loop is
+  std::map<frontend::KeyframeId, Eigen::Isometry3d> trial_poses = poses;
+  const Solve attempt = solve(trial, trial_poses, options);
+  ++summary.solves;
+  if (!attempt.ok || 2.0 * (attempt.cost - current.cost) > jointLoopGate(options.loop_chi2_gate, 6 * earlier)) return;
+  for (std::size_t e = 0; e < edges_.size(); ++e) decided[e] = decided[e] || (trial[e] && !summary.edge_used[e]);
+  summary.edge_used = std::move(trial);
+  summary.loops_used += earlier;
+  poses = std::move(trial_poses);
+  current = attempt;
+}
+
 PoseGraphSummary PoseGraph::optimize(const PoseGraphOptions& options) {
   PoseGraphSummary summary;
   summary.edge_used.assign(edges_.size(), false);
@@ -169,10 +202,12 @@ PoseGraphSummary PoseGraph::optimize(const PoseGraphOptions& options) {
     summary.message = "odometry solve failed: " + current.message;
     return summary;
   }
+  std::vector<bool> decided(edges_.size(), false);
+  admitEarlierLoopsTogether(options, summary, poses, current, decided);
   // Each loop is tried on top of the graph so far: a consistent loop raises the optimum's cost by about its
   // degrees of freedom, a wrong one by far more, whatever the drift it corrects.
   for (std::size_t e = 0; e < edges_.size(); ++e) {
-    if (edges_[e].kind != PoseGraphEdgeKind::Loop) continue;
+    if (edges_[e].kind != PoseGraphEdgeKind::Loop || decided[e]) continue;
     std::vector<bool> trial = summary.edge_used;
     trial[e] = true;
     std::map<frontend::KeyframeId, Eigen::Isometry3d> trial_poses = poses;

@@ -41,6 +41,9 @@ struct PoseGraphEdge {
   Information6d information = Information6d::Identity();
   /// @brief Odometry edges are always kept; loop edges go through the consistency test and a Huber loss.
   PoseGraphEdgeKind kind = PoseGraphEdgeKind::Odometry;
+  /// @brief A loop edge an earlier optimisation admitted (a loop closer's accepted loops): such loops are tested
+  /// together first, in one solve, and one by one only if together they fail (PoseGraph::optimize).
+  bool admitted_before = false;
 };
 
 /// @brief The loop edge LoopConstraint describes (from = match, to = query).
@@ -103,7 +106,8 @@ struct PoseGraphSummary {
   std::size_t loops_rejected = 0;
   /// @brief Final cost: half the sum of squared (robustified) whitened residuals of the used edges.
   double final_cost = 0.0;
-  /// @brief Ceres solves run (one for the odometry, one per loop edge tested).
+  /// @brief Ceres solves run (one for the odometry, one for the loops admitted before if any, one per loop edge
+  /// tested alone).
   std::size_t solves = 0;
 };
 
@@ -125,6 +129,9 @@ class PoseGraph {
 
   /// @brief Optimises: odometry first, then the loop edges in addEdge order, each admitted only if it passes the
   /// chi-square gate against the graph so far; the poses end at the optimum with the admitted loops.
+  /// Loop edges marked admitted_before (two or more) are first tested together, against the chi-square gate of their
+  /// joint degrees of freedom at the same probability as loop_chi2_gate's: one solve where a loop closer that
+  /// re-tested every earlier loop at each closure ran one per loop. If together they fail, each is tested alone.
   /// @param options Solver and gate settings.
   PoseGraphSummary optimize(const PoseGraphOptions& options = {});
 
@@ -144,6 +151,11 @@ class PoseGraph {
   /// One Levenberg-Marquardt solve over the given edges, starting from and writing into `poses`.
   Solve solve(const std::vector<bool>& use, std::map<frontend::KeyframeId, Eigen::Isometry3d>& poses,
               const PoseGraphOptions& options) const;
+  /// optimize's first step after the odometry: the loops admitted before, two or more, tested together; if they pass,
+  /// they are used and marked decided, and `poses` and `current` become that solve's.
+  void admitEarlierLoopsTogether(const PoseGraphOptions& options, PoseGraphSummary& summary,
+                                 std::map<frontend::KeyframeId, Eigen::Isometry3d>& poses, Solve& current,
+                                 std::vector<bool>& decided) const;
 
   std::map<frontend::KeyframeId, Eigen::Isometry3d> poses_;
   std::map<frontend::KeyframeId, bool> fixed_;
