@@ -1,4 +1,5 @@
 // Pose-graph optimisation: a drifted loop is pulled back to truth, a wrong loop edge is refused, bad edges throw.
+#include <limits>
 #include <tuple>
 #include <utility>
 #include <vector>
@@ -105,6 +106,26 @@ TEST(PoseGraph, AWrongLoopAmongThoseAdmittedBeforeIsStillRefused) {
   EXPECT_EQ(summary.loops_used, 2u);
   EXPECT_EQ(summary.loops_rejected, 1u);
   EXPECT_FALSE(summary.edge_used[graph.edges().size() - 2]) << "the wrong edge must be the one refused";
+}
+
+TEST(PoseGraph, ExtremeGatesTestLoopsAdmittedBeforeAsTheyTestOne) {
+  // An infinite gate (or one so wide that its probability rounds to 1) admits every loop, a gate of 0 none; the
+  // joint gate of the earlier loops follows, instead of failing to find a chi-square quantile.
+  const DriftedLoop loop = makeDriftedLoop(40, 2.0, 0.05, 0.003);
+  for (const double gate : {std::numeric_limits<double>::infinity(), 1e6, 0.0}) {
+    PoseGraph graph = makeOdometryGraph(loop);
+    for (const auto& [match, query] : {std::pair<std::size_t, std::size_t>{0, 39}, {1, 38}, {2, 37}}) {
+      mapping::PoseGraphEdge edge = trueLoopEdge(loop, match, query);
+      edge.admitted_before = true;
+      graph.addEdge(edge);
+    }
+    mapping::PoseGraphOptions options;
+    options.loop_chi2_gate = gate;
+    mapping::PoseGraphSummary summary;
+    ASSERT_NO_THROW(summary = graph.optimize(options)) << "gate " << gate;
+    ASSERT_TRUE(summary.ok) << summary.message;
+    EXPECT_EQ(summary.loops_used, gate > 0.0 ? 3u : 0u) << "gate " << gate;
+  }
 }
 
 TEST(PoseGraph, AWrongLoopAloneIsRefusedAndTheOdometryKept) {
