@@ -162,7 +162,8 @@ PoseGraph::Solve PoseGraph::solve(const std::vector<bool>& use,
 namespace {
 
 /// The chi-square gate of `dof` degrees of freedom at the probability loop_chi2_gate has for one loop's six.
-/// A gate of 0 or less admits nothing, an infinite one (or one whose probability rounds to 1) everything, as for one loop.
+/// A gate of 0 or less admits nothing, an infinite one (or one whose probability rounds to 1) everything, as for one
+/// loop.
 double jointLoopGate(double six_dof_gate, std::size_t dof) {
   if (!(six_dof_gate > 0.0)) return 0.0;
   if (!std::isfinite(six_dof_gate)) return six_dof_gate;
