@@ -112,9 +112,7 @@ TEST(RoiMatcher, MatchesOnlyWithinTheRadiusOfThePrediction) {
   const cv::Mat reference = randomDescriptors(3, 5);
   // Query 0 is reference 0's descriptor at its predicted pixel; query 1 is
   // reference 1's descriptor 60 px from its prediction: outside a 40 px region.
-  cv::Mat query;
-  query.push_back(reference.row(0));
-  query.push_back(reference.row(1));
+  const cv::Mat query = reference.rowRange(0, 2).clone();
   const std::vector<Eigen::Vector2d> query_pixels{{100, 100}, {300, 100}};
   const std::vector<Eigen::Vector2d> predicted{{102, 101}, {240, 100}, {500, 400}};
   RoiMatchOptions options;
@@ -130,9 +128,7 @@ TEST(RoiMatcher, APredictionFarOutsideTheImageIsIgnoredNotAnError) {
   // A map point almost in the camera's plane projects millions of pixels away. It cannot be within the radius of any
   // feature: it used to make the grid over the predictions too large and the run stop with an error.
   const cv::Mat reference = randomDescriptors(4, 7);
-  cv::Mat query;
-  query.push_back(reference.row(0));
-  query.push_back(reference.row(1));
+  const cv::Mat query = reference.rowRange(0, 2).clone();  // rows 0 and 1, seen near their predictions
   const std::vector<Eigen::Vector2d> query_pixels{{100, 100}, {600, 400}};
   std::vector<Eigen::Vector2d> predicted{{102, 101}, {598, 403}, {320, 240}, {320, 240}};
   RoiMatchOptions options;
