@@ -175,8 +175,8 @@ double jointLoopGate(double six_dof_gate, std::size_t dof) {
 }  // namespace
 
 void PoseGraph::admitEarlierLoopsTogether(const PoseGraphOptions& options, PoseGraphSummary& summary,
-                                          std::map<frontend::KeyframeId, Eigen::Isometry3d>& poses, Solve& current,
-                                          std::vector<bool>& decided) const {
+                                          std::map<frontend::KeyframeId, Eigen::Isometry3d>& poses,
+                                          Solve& current) const {
   std::vector<bool> trial = summary.edge_used;
   std::size_t earlier = 0;
   for (std::size_t e = 0; e < edges_.size(); ++e)
@@ -189,7 +189,6 @@ void PoseGraph::admitEarlierLoopsTogether(const PoseGraphOptions& options, PoseG
   const Solve attempt = solve(trial, trial_poses, options);
   ++summary.solves;
   if (!attempt.ok || 2.0 * (attempt.cost - current.cost) > jointLoopGate(options.loop_chi2_gate, 6 * earlier)) return;
-  for (std::size_t e = 0; e < edges_.size(); ++e) decided[e] = decided[e] || (trial[e] && !summary.edge_used[e]);
   summary.edge_used = std::move(trial);
   summary.loops_used += earlier;
   poses = std::move(trial_poses);
@@ -208,12 +207,12 @@ PoseGraphSummary PoseGraph::optimize(const PoseGraphOptions& options) {
     summary.message = "odometry solve failed: " + current.message;
     return summary;
   }
-  std::vector<bool> decided(edges_.size(), false);
-  admitEarlierLoopsTogether(options, summary, poses, current, decided);
+  admitEarlierLoopsTogether(options, summary, poses, current);
   // Each loop is tried on top of the graph so far: a consistent loop raises the optimum's cost by about its
-  // degrees of freedom, a wrong one by far more, whatever the drift it corrects.
+  // degrees of freedom, a wrong one by far more, whatever the drift it corrects. Loops already used were admitted
+  // together just above.
   for (std::size_t e = 0; e < edges_.size(); ++e) {
-    if (edges_[e].kind != PoseGraphEdgeKind::Loop || decided[e]) continue;
+    if (edges_[e].kind != PoseGraphEdgeKind::Loop || summary.edge_used[e]) continue;
     std::vector<bool> trial = summary.edge_used;
     trial[e] = true;
     std::map<frontend::KeyframeId, Eigen::Isometry3d> trial_poses = poses;

@@ -152,10 +152,9 @@ class PoseGraph {
   Solve solve(const std::vector<bool>& use, std::map<frontend::KeyframeId, Eigen::Isometry3d>& poses,
               const PoseGraphOptions& options) const;
   /// optimize's first step after the odometry: the loops admitted before, two or more, tested together; if they pass,
-  /// they are used and marked decided, and `poses` and `current` become that solve's.
+  /// they are marked used in `summary`, and `poses` and `current` become that solve's.
   void admitEarlierLoopsTogether(const PoseGraphOptions& options, PoseGraphSummary& summary,
-                                 std::map<frontend::KeyframeId, Eigen::Isometry3d>& poses, Solve& current,
-                                 std::vector<bool>& decided) const;
+                                 std::map<frontend::KeyframeId, Eigen::Isometry3d>& poses, Solve& current) const;
 
   std::map<frontend::KeyframeId, Eigen::Isometry3d> poses_;
   std::map<frontend::KeyframeId, bool> fixed_;
