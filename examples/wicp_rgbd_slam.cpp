@@ -581,7 +581,10 @@ int main(int argc, char** argv) {
          "an equalised frame's corners described in the frame as it is (original) or in the equalised image "
          "(equalized, before 2026-11-26)")
         ("pnp", tools::namedValue(&options.frontend.pnp.method, frontend::parsePnpMethod, name),
-         "RANSAC PnP solver: ap3p (AP3P sets, EPnP) or iterative (the paper's iterative 5-point solution)");
+         "RANSAC PnP solver: ap3p (AP3P sets, EPnP) or iterative (the paper's iterative 5-point solution)")
+        ("pnp-ransac-iterations", tools::rangedValue(&options.frontend.pnp.ransac_iterations, 1, 100000)
+                                      ->default_value(options.frontend.pnp.ransac_iterations),
+         "most RANSAC draws a frame's PnP makes; fewer when the inliers found already give 99 % confidence (1-100000)");
     // clang-format on
     description.add(ablation);
     po::variables_map vm;

@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <random>
+#include <set>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -61,6 +62,29 @@ inline Eigen::Vector2d gaussianPixel(double sigma, std::mt19937& rng) {
   std::normal_distribution<double> gauss(0.0, sigma);
   const double du = gauss(rng);
   return {du, gauss(rng)};
+}
+
+/// Matches of a camera at `truth_wc`: noisy pixels, and a fraction replaced by random pixels.
+struct PnpScene {
+  std::vector<Eigen::Vector3d> points;
+  std::vector<Eigen::Vector2d> pixels;
+  std::set<int> outliers;
+};
+
+inline PnpScene makePnpScene(const PinholeCamera& camera, const Eigen::Isometry3d& truth_wc, int n, double pixel_sigma,
+                      double outlier_fraction, unsigned seed) {
+  std::mt19937 rng(seed);
+  PnpScene scene;
+  scene.points = pointsInView(camera, truth_wc, n, 1.0, 5.0, rng);
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  for (int i = 0; i < n; ++i) {
+    scene.pixels.push_back(projectWorld(camera, truth_wc, scene.points[i]) + gaussianPixel(pixel_sigma, rng));
+    if (i < static_cast<int>(outlier_fraction * n)) {
+      scene.pixels.back() = {uniform(rng) * camera.width, uniform(rng) * camera.height};
+      scene.outliers.insert(i);
+    }
+  }
+  return scene;
 }
 
 /// Angle between two directions, in degrees.
