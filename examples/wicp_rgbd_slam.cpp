@@ -134,7 +134,8 @@ double percentile(const std::vector<double>& values, double q) { return values.e
 /// Counts over the processed frames, for the checks, the report and the summary line.
 struct RunCounts {
   std::size_t processed = 0, unreadable = 0, tracked = 0, skipped = 0, lost = 0, clahe = 0, dynamic = 0;
-  std::size_t predicted = 0;  // skipped or lost, posed by the motion model's prediction
+  std::size_t predicted = 0;  // skipped, coasted or lost, posed by the motion model's prediction
+  std::size_t coasted = 0;    // 3D-2D failed on a frame with depth: the prediction kept, tracking went on
   std::vector<double> tracking_ms;
   std::vector<double> tracking_cpu_ms;  // issue #11: the tracking thread's CPU time
   std::size_t dense = 0;                // Issue #11: frames posed by the dense odometry fallback
@@ -172,6 +173,7 @@ void countResults(const frontend::RgbdSlam& slam, RunCounts& counts) {
     counts.predicted += record.result.pose_predicted;
     counts.skipped += record.result.refused_by_quality_gate;
     counts.lost += record.result.status == frontend::TrackingStatus::Lost;
+    counts.coasted += record.result.status == frontend::TrackingStatus::Coasted;
     counts.clahe += record.result.used_clahe;
     counts.dynamic += record.result.dynamic;
     counts.dense += record.result.status == frontend::TrackingStatus::TrackedDense;
@@ -350,6 +352,7 @@ tools::JsonObject makeReport(const FrameSource& source, std::size_t frames, cons
       .add("p90_cpu_ms_per_frame", percentile(counts.tracking_cpu_ms, 0.9))
       .add("skipped_frames", counts.skipped)
       .add("predicted_frames", counts.predicted)
+      .add("coasted_frames", counts.coasted)
       .add("unreadable_frames", counts.unreadable)
       .add("lost_frames", counts.lost)
       .add("clahe_frames", counts.clahe)
@@ -410,9 +413,9 @@ int writeAndPublish(io::AtomicFolder& folder, const FrameSource& source, std::si
             << slam.map().keyframeCount() << " keyframes, " << slam.map().mapPointCount() << " landmarks, "
             << minimaps.size() << " mini-maps, " << closing.loopStats().loops_accepted << " loop(s) closed"
             << refusedSummary(refusals) << "; median " << percentile(counts.tracking_ms, 0.5) << " ms/frame (p90 "
-            << percentile(counts.tracking_ms, 0.9) << "); skipped " << counts.skipped << ", lost " << counts.lost
-            << " (" << counts.predicted << " of those posed by prediction"
-            << (counts.skipped + counts.lost > 0 ? "; why: frames.txt" : "") << ")\n";
+            << percentile(counts.tracking_ms, 0.9) << "); skipped " << counts.skipped << ", coasted " << counts.coasted
+            << ", lost " << counts.lost << " (" << counts.predicted << " of those posed by prediction"
+            << (counts.skipped + counts.coasted + counts.lost > 0 ? "; why: frames.txt" : "") << ")\n";
   if (ate)
     std::cout << std::setprecision(2) << "ATE RMSE " << ate->translation.rmse * 100 << " cm over " << ate->pairs
               << " poses\n";

@@ -6,6 +6,8 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "weighted_icp/frontend/slam/backend.h"
 #include "weighted_icp/frontend/slam/frontend.h"
@@ -67,6 +69,15 @@ class FrontendTracking : public ::testing::Test {
     blank.color.setTo(cv::Scalar::all(0));  // no features at all
     blank.depth.setTo(0.0f);
     return blank;
+  }
+  /// Frame i with its depth but a colour image of noise: corners, none of which matches the map.
+  static RgbdFrame scrambled(std::size_t i) {
+    RgbdFrame frame = image(i);
+    cv::RNG rng(i);
+    cv::Mat noise(frame.color.rows / 8, frame.color.cols / 8, frame.color.type());
+    rng.fill(noise, cv::RNG::UNIFORM, cv::Scalar::all(0), cv::Scalar::all(255));
+    cv::resize(noise, frame.color, frame.color.size(), 0, 0, cv::INTER_NEAREST);
+    return frame;
   }
   /// The true pose of frame i relative to frame 0, where the front end starts its map.
   static Eigen::Isometry3d truthFromFirst(std::size_t i) {
@@ -160,6 +171,38 @@ TEST_F(FrontendTracking, ALossEndsTheSegmentAndTheNextGoodFrameStartsANewOne) {
   // The local map is now the new segment's only: tracking goes on from it.
   EXPECT_EQ(tracker.frontend.track(image(8)).status, TrackingStatus::Tracked);
   EXPECT_EQ(tracker.frontend.segment(), 1u);
+}
+
+TEST_F(FrontendTracking, AFrameWithDepthThatCannotBeTrackedKeepsThePredictionOnceAndTrackingGoesOn) {
+  Tracker tracker(camera());
+  for (std::size_t i = 0; i < 5; ++i) ASSERT_TRUE(tracker.frontend.track(image(i)).measuredPose());
+  // Its matches failed, not its depth: the prediction (here within millimetres of the truth) instead of a 2D-2D
+  // pose, which on real frames was further off (docs/frontend_generalisation.md), and the segment goes on.
+  const frontend::TrackingResult coasted = tracker.frontend.track(scrambled(5));
+  EXPECT_EQ(coasted.status, TrackingStatus::Coasted) << coasted.reason;
+  EXPECT_TRUE(coasted.pose_predicted);
+  EXPECT_FALSE(coasted.keyframe);
+  EXPECT_LT((coasted.pose_wc.translation() - truthFromFirst(5).translation()).norm(), 0.01);
+  EXPECT_EQ(tracker.frontend.state(), FrontendState::Tracking);
+  const frontend::TrackingResult next = tracker.frontend.track(image(6));
+  EXPECT_EQ(next.status, TrackingStatus::Tracked) << next.reason;
+  EXPECT_EQ(tracker.frontend.segment(), 0u);
+
+  // Once in a row: a second such frame takes the fallbacks, and here tracking is lost.
+  ASSERT_EQ(tracker.frontend.track(scrambled(7)).status, TrackingStatus::Coasted);
+  const frontend::TrackingResult second = tracker.frontend.track(scrambled(8));
+  EXPECT_EQ(second.status, TrackingStatus::Lost) << second.reason;
+  EXPECT_EQ(tracker.frontend.segment(), 1u);
+}
+
+TEST_F(FrontendTracking, AFrameWithoutDepthThatCannotBeTrackedDoesNotKeepThePrediction) {
+  Tracker tracker(camera());
+  for (std::size_t i = 0; i < 5; ++i) ASSERT_TRUE(tracker.frontend.track(image(i)).measuredPose());
+  RgbdFrame no_depth = scrambled(5);
+  no_depth.depth.setTo(0.0f);
+  const frontend::TrackingResult result = tracker.frontend.track(no_depth);
+  EXPECT_NE(result.status, TrackingStatus::Coasted) << result.reason;
+  EXPECT_EQ(result.status, TrackingStatus::Lost) << result.reason;
 }
 
 TEST_F(FrontendTracking, BadImagesThrowAndChangeNothing) {

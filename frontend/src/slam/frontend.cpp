@@ -19,6 +19,7 @@ std::string toString(TrackingStatus status) {
     case TrackingStatus::SkippedLowQuality: return "skipped-low-quality";
     case TrackingStatus::Lost: return "lost";
     case TrackingStatus::TrackedDense: return "tracked-dense";
+    case TrackingStatus::Coasted: return "coasted";
   }
   return "unknown";
 }
@@ -333,6 +334,7 @@ void Frontend::acceptPose(Frame& frame, TrackingResult& result, TrackingStatus s
   setPose(result, frame.pose_wc);
   motion_.update(frame.pose_wc);
   last_pose_wc_ = frame.pose_wc;
+  last_measured_frame_id_ = frame.id;
   if (dense_) dense_->acceptCurrent();
 }
 
@@ -363,6 +365,7 @@ TrackingResult Frontend::initialize(Frame& frame, TrackingResult result) {
   transitionTo(FrontendState::Tracking);
   motion_.update(frame.pose_wc);
   last_pose_wc_ = frame.pose_wc;
+  last_measured_frame_id_ = frame.id;
   if (dense_) dense_->acceptCurrent();
   insertKeyframe(frame, {}, {});
   result.status = TrackingStatus::Initialized;
@@ -384,17 +387,37 @@ TrackingResult Frontend::trackWithoutFeatures(Frame& frame, TrackingResult resul
   // from it is worse (fr3 with bursts of blurred, noisy frames: a 2D-2D pose 4 cm off, then one 8 cm off). The
   // fallbacks are for good images without depth.
   if (refusedByQualityGate(result)) return skipLowQuality(result, why_not_3d);
+  std::string why = why_not_3d;
   const DenseOdometryUse use = options_.dense_odometry.use;
-  if (!dense_ || !(use == DenseOdometryUse::Fallback || use == DenseOdometryUse::PriorAndFallback))
-    return trackRelative(frame, result, why_not_3d);
-  const auto motion = dense_->motionFromReference();
-  if (!motion) return trackRelative(frame, result, why_not_3d + "; dense odometry failed");
-  // Measured with depth, so it may scale a later 2D-2D estimate. No keyframe: its points would
-  // rest on a pose no map point confirms; the map grows again once 3D-2D tracking is back.
-  metric_velocity_ = *motion;
-  acceptPose(frame, result, TrackingStatus::TrackedDense, *last_pose_wc_ * *motion);
-  result.reason = why_not_3d;
-  return result;
+  if (dense_ && (use == DenseOdometryUse::Fallback || use == DenseOdometryUse::PriorAndFallback)) {
+    if (const auto motion = dense_->motionFromReference()) {
+      // Measured with depth, so it may scale a later 2D-2D estimate. No keyframe: its points would
+      // rest on a pose no map point confirms; the map grows again once 3D-2D tracking is back.
+      metric_velocity_ = *motion;
+      acceptPose(frame, result, TrackingStatus::TrackedDense, *last_pose_wc_ * *motion);
+      result.reason = why_not_3d;
+      return result;
+    }
+    why += "; dense odometry failed";
+  }
+  // A frame with depth lost its matches, not its depth: on real frames (fr3 Kinect-like, dim or blurred) a 2D-2D
+  // pose there was a median 5 cm off where the prediction was 2 cm (docs/frontend_generalisation.md).
+  if (canCoast(frame)) {
+    predictPoseOf(result);
+    if (result.pose_predicted) {
+      result.status = TrackingStatus::Coasted;
+      result.reason = why + "; kept the prediction";
+      return result;
+    }
+  }
+  return trackRelative(frame, result, why);
+}
+
+bool Frontend::canCoast(const Frame& frame) const {
+  if (state_ != FrontendState::Tracking || !last_pose_wc_ || last_measured_frame_id_ + 1 != frame.id) return false;
+  std::size_t with_depth = 0;
+  for (std::size_t i = 0; i < frame.size(); ++i) with_depth += frame.hasDepth(i);
+  return with_depth >= options_.min_initial_points;
 }
 
 TrackingResult Frontend::trackRelative(Frame& frame, TrackingResult result, const std::string& why_not_3d) {

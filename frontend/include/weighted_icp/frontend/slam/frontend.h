@@ -95,7 +95,10 @@ enum class TrackingStatus {
   SkippedLowQuality,  // failed to track and refused by the image quality gate
   Lost,               // no pose; the next frame starts a new segment
   // Issue #11: dense odometry.
-  TrackedDense  // 3D-2D failed; pose from OpenCV's dense odometry against the last posed frame
+  TrackedDense,  // 3D-2D failed; pose from OpenCV's dense odometry against the last posed frame
+  /// 3D-2D failed on a frame with depth right after a measured one: posed by the motion model's prediction
+  /// (pose_predicted), the segment goes on; a 2D-2D pose there was further off than the prediction.
+  Coasted
 };
 std::string toString(TrackingStatus status);
 
@@ -117,7 +120,7 @@ struct TrackingResult {
   bool used_clahe = false;
   double quality_score = std::numeric_limits<double>::quiet_NaN();
 
-  /// @brief A frame that could not be tracked (SkippedLowQuality or Lost) while a motion was known still has a pose:
+  /// @brief A frame that could not be tracked (SkippedLowQuality, Coasted or Lost) while a motion was known has a pose:
   /// the constant-velocity model's prediction, so that the trajectory has every frame. Nothing of it is mapped.
   bool pose_predicted = false;
 
@@ -214,7 +217,7 @@ class Frontend {
                                       const Eigen::Isometry3d& guess_wc, double gate_px, LocalMatches& matched,
                                       PoseEstimate& estimate) const;
   /// 3D-2D failed: skipped on the prediction if the quality gate refuses the image; else the dense odometry's pose
-  /// when it is the fallback and registers the frame, else 2D-2D.
+  /// when it is the fallback and registers the frame; else coasted on the prediction when canCoast; else 2D-2D.
   TrackingResult trackWithoutFeatures(Frame& frame, TrackingResult result, const std::string& why_not_3d);
   /// Pixel pairs (last keyframe, frame) of the descriptor matches between the two.
   void matchLastKeyframe(const Frame& frame, std::vector<Eigen::Vector2d>& keyframe_pixels,
@@ -231,6 +234,9 @@ class Frontend {
   bool refusedByQualityGate(TrackingResult& result, bool must_keep = false);
   /// A frame the gate refused: SkippedLowQuality, posed by the motion model's prediction.
   TrackingResult skipLowQuality(TrackingResult result, const std::string& reason);
+  /// True when a frame 3D-2D could not pose may keep the prediction instead of a 2D-2D pose: it has the depth
+  /// to start a map (its matches failed, not its sensor) and the frame before it was measured (once in a row).
+  bool canCoast(const Frame& frame) const;
   /// True when the camera moved or turned enough since the last keyframe, or too few of its points are tracked.
   bool needsKeyframe(const Eigen::Isometry3d& pose_wc, std::size_t tracked) const;
   // Issue #11: ROI matching and the keyframe homography (frontend_roi_matching.cpp).
@@ -278,6 +284,8 @@ class Frontend {
   FrontendState state_ = FrontendState::Initializing;
   std::size_t segment_ = 0;
   std::optional<Eigen::Isometry3d> last_pose_wc_;
+  /// The id of the frame last_pose_wc_ was measured on.
+  std::size_t last_measured_frame_id_ = 0;
   /// Motion between the last two frames tracked with 3D points: what scales 2D-2D.
   std::optional<Eigen::Isometry3d> metric_velocity_;
   Frame last_keyframe_;
