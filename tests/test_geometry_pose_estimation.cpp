@@ -104,7 +104,7 @@ TEST(PosePnp, AGoodGuessSurvivesARansacFailure) {
 TEST(PosePnp, FindsThePoseWhenOnlyAQuarterOfTheMatchesAreRight) {
   // A dim frame in a fast turn (fr3 Kinect-like + low light): 60-120 matches, a quarter or fewer right. An
   // all-inlier 4-point set then comes with p = 0.25^4 = 0.4 % a draw: 100 draws (OpenCV's default, ours until
-  // 2026-11-27) find one in 8 of 30 such scenes, 1000 in 30 of 30.
+  // 2026-11-26) find one in 8 of 30 such scenes, 1000 in 30 of 30.
   const auto camera = syntheticCamera();
   for (unsigned seed = 10; seed < 20; ++seed) {
     const PnpScene scene = makePnpScene(camera, kPnpTruthWc, 80, 1.0, 0.75, seed);
