@@ -72,7 +72,7 @@ struct PnpScene {
 };
 
 inline PnpScene makePnpScene(const PinholeCamera& camera, const Eigen::Isometry3d& truth_wc, int n, double pixel_sigma,
-                      double outlier_fraction, unsigned seed) {
+                             double outlier_fraction, unsigned seed) {
   std::mt19937 rng(seed);
   PnpScene scene;
   scene.points = pointsInView(camera, truth_wc, n, 1.0, 5.0, rng);

@@ -353,8 +353,7 @@ void Frontend::insertKeyframeIfNeeded(const Frame& frame, TrackingResult& result
 }
 
 TrackingResult Frontend::initialize(Frame& frame, TrackingResult result) {
-  std::size_t with_depth = 0;
-  for (std::size_t i = 0; i < frame.size(); ++i) with_depth += frame.hasDepth(i);
+  const std::size_t with_depth = frame.withDepth();
   if (with_depth < options_.min_initial_points) {
     result.status = TrackingStatus::Lost;
     result.reason = "only " + std::to_string(with_depth) + " features with depth to start a map";
@@ -415,9 +414,7 @@ TrackingResult Frontend::trackWithoutFeatures(Frame& frame, TrackingResult resul
 
 bool Frontend::canCoast(const Frame& frame) const {
   if (state_ != FrontendState::Tracking || !last_pose_wc_ || last_measured_frame_id_ + 1 != frame.id) return false;
-  std::size_t with_depth = 0;
-  for (std::size_t i = 0; i < frame.size(); ++i) with_depth += frame.hasDepth(i);
-  return with_depth >= options_.min_initial_points;
+  return frame.withDepth() >= options_.min_initial_points;
 }
 
 TrackingResult Frontend::trackRelative(Frame& frame, TrackingResult result, const std::string& why_not_3d) {

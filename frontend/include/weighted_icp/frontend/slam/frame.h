@@ -2,6 +2,7 @@
 // One RGB-D frame as the tracker sees it: its features, their depths and the
 // camera pose estimated for it.
 
+#include <algorithm>
 #include <cstddef>
 #include <vector>
 
@@ -27,6 +28,10 @@ struct Frame {
 
   std::size_t size() const { return keypoints.size(); }
   bool hasDepth(std::size_t i) const { return depths[i] > 0.0; }
+  /// How many features have a depth.
+  std::size_t withDepth() const {
+    return static_cast<std::size_t>(std::count_if(depths.begin(), depths.end(), [](double d) { return d > 0.0; }));
+  }
 };
 
 }  // namespace weighted_icp::frontend
