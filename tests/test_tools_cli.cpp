@@ -122,11 +122,13 @@ TEST(WicpRgbdSlam, WritesEveryOutputOnTheSyntheticSequence) {
   EXPECT_EQ(trajectory.size(), 45u);
   std::ifstream report_file(out / "report.json");
   const std::string report((std::istreambuf_iterator<char>(report_file)), {});
-  for (const char* key : {"frames", "tracked_frames", "keyframes", "landmarks", "median_ms_per_frame",
-                          "p90_ms_per_frame", "skipped_frames", "ate_rmse_m"})
+  for (const char* key :
+       {"frames", "tracked_frames", "keyframes", "landmarks", "median_ms_per_frame", "p90_ms_per_frame",
+        "skipped_frames", "predicted_frames", "coasted_frames", "lost_frames", "ate_rmse_m"})
     EXPECT_NE(report.find(std::string("\"") + key + "\":"), std::string::npos) << key << " missing: " << report;
   EXPECT_LT(numberAfter(report, "ate_rmse_m"), 0.01);
   EXPECT_EQ(numberAfter(report, "tracked_frames"), 45);
+  EXPECT_EQ(numberAfter(report, "coasted_frames"), 0);  // every frame of the synthetic sequence is measured
   std::size_t minimaps = 0;
   for (const auto& entry : fs::directory_iterator(out / "minimaps")) {
     const auto map = weighted_icp::io::readLandmarkMap(entry.path().string());
