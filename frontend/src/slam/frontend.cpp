@@ -230,8 +230,10 @@ TrackingResult Frontend::trackFrame(Frame& frame, TrackingResult result) {
     return trackWithoutFeatures(frame, result, std::to_string(static_inliers.size()) + " static inliers");
 
   const Eigen::Isometry3d pose_wc = refinePose(frame, matched, static_inliers, estimate.pose_wc);
-  metric_velocity_ = last_pose_wc_->inverse() * pose_wc;
+  // One frame's motion: over frames skipped or coasted in between it would be several frames' (2D-2D's scale).
+  if (last_measured_frame_id_ + 1 == frame.id) metric_velocity_ = last_pose_wc_->inverse() * pose_wc;
   acceptPose(frame, result, TrackingStatus::Tracked, pose_wc);
+  last_tracked_frame_id_ = frame.id;
   result.inliers = static_inliers.size();
   insertKeyframeIfNeeded(frame, result, matched, static_inliers, moving.pixels);
   return result;
@@ -365,6 +367,7 @@ TrackingResult Frontend::initialize(Frame& frame, TrackingResult result) {
   motion_.update(frame.pose_wc);
   last_pose_wc_ = frame.pose_wc;
   last_measured_frame_id_ = frame.id;
+  last_tracked_frame_id_ = frame.id;
   if (dense_) dense_->acceptCurrent();
   insertKeyframe(frame, {}, {});
   result.status = TrackingStatus::Initialized;
@@ -413,15 +416,18 @@ TrackingResult Frontend::trackWithoutFeatures(Frame& frame, TrackingResult resul
 }
 
 bool Frontend::canCoast(const Frame& frame) const {
-  if (state_ != FrontendState::Tracking || !last_pose_wc_ || last_measured_frame_id_ + 1 != frame.id) return false;
+  if (state_ != FrontendState::Tracking || !last_pose_wc_ || last_tracked_frame_id_ + 1 != frame.id) return false;
   return frame.withDepth() >= options_.min_initial_points;
 }
 
 TrackingResult Frontend::trackRelative(Frame& frame, TrackingResult result, const std::string& why_not_3d) {
   if (!metric_velocity_) return lose(result, why_not_3d + ", and no metric motion yet to scale a 2D-2D estimate");
   // The last motion measured with depth, not the motion model's (which 2D-2D
-  // frames feed): a scale error would otherwise compound frame after frame.
-  const Eigen::Isometry3d predicted_in_keyframe = last_keyframe_.pose_wc.inverse() * *last_pose_wc_ * *metric_velocity_;
+  // frames feed): a scale error would otherwise compound frame after frame. Once per frame since the last measured
+  // one: frames skipped or coasted in between moved too.
+  Eigen::Isometry3d predicted_wc = *last_pose_wc_;
+  for (std::size_t id = last_measured_frame_id_; id < frame.id; ++id) predicted_wc = predicted_wc * *metric_velocity_;
+  const Eigen::Isometry3d predicted_in_keyframe = last_keyframe_.pose_wc.inverse() * predicted_wc;
   std::vector<Eigen::Vector2d> keyframe_pixels, frame_pixels;
   matchLastKeyframe(frame, keyframe_pixels, frame_pixels);
   RelativeMotion relative = estimateRelativeMotion2d2d(keyframe_pixels, frame_pixels, camera_);

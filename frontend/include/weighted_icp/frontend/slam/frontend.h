@@ -235,7 +235,8 @@ class Frontend {
   /// A frame the gate refused: SkippedLowQuality, posed by the motion model's prediction.
   TrackingResult skipLowQuality(TrackingResult result, const std::string& reason);
   /// True when a frame 3D-2D could not pose may keep the prediction instead of a 2D-2D pose: it has the depth
-  /// to start a map (its matches failed, not its sensor) and the frame before it was measured (once in a row).
+  /// to start a map (its matches failed, not its sensor) and the frame before it was tracked 3D-2D (once in a row:
+  /// not again after a 2D-2D frame, where coasting and 2D-2D alternated for 25 frames until tracking was lost).
   bool canCoast(const Frame& frame) const;
   /// True when the camera moved or turned enough since the last keyframe, or too few of its points are tracked.
   bool needsKeyframe(const Eigen::Isometry3d& pose_wc, std::size_t tracked) const;
@@ -286,7 +287,9 @@ class Frontend {
   std::optional<Eigen::Isometry3d> last_pose_wc_;
   /// The id of the frame last_pose_wc_ was measured on.
   std::size_t last_measured_frame_id_ = 0;
-  /// Motion between the last two frames tracked with 3D points: what scales 2D-2D.
+  /// The id of the last frame posed by 3D-2D tracking (or starting a segment): coasting follows only such a frame.
+  std::size_t last_tracked_frame_id_ = 0;
+  /// One frame's motion, between the last two consecutive frames tracked with 3D points: what scales 2D-2D.
   std::optional<Eigen::Isometry3d> metric_velocity_;
   Frame last_keyframe_;
   KeyframeId last_keyframe_id_ = 0;
