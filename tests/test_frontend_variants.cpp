@@ -121,7 +121,7 @@ TEST(FrontendVariants, WhenTheMotionChangesSuddenlyTheLocalMapIsMatchedAgainWith
   // of a frame without motion, every frame tracks. Fragile while PnP's RANSAC drew at most 100 sets: over eight
   // draws of the matcher's key bits 0.8-6.4 cm, five of eight losing a frame where a quarter of the matches were
   // right; with 1000 draws 0.70-1.78 cm, none lost; with a frame that still fails coasting on the prediction
-  // instead of a 2D-2D pose 0.74-1.27 cm (2026-11-26, docs/frontend_generalisation.md).
+  // instead of a 2D-2D pose 0.74-1.43 cm (2026-11-26, docs/frontend_generalisation.md).
   const VariantRun run =
       trackVariant("tum_fr3_teddy_head", 3, "jpeg,mm-depth,focal,low-light", frontend::QualityGateMode::Relative, 150);
   EXPECT_EQ(run.without_pose, 0u);
