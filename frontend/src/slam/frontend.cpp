@@ -230,8 +230,7 @@ TrackingResult Frontend::trackFrame(Frame& frame, TrackingResult result) {
     return trackWithoutFeatures(frame, result, std::to_string(static_inliers.size()) + " static inliers");
 
   const Eigen::Isometry3d pose_wc = refinePose(frame, matched, static_inliers, estimate.pose_wc);
-  // One frame's motion: over frames skipped or coasted in between it would be several frames' (2D-2D's scale).
-  if (last_measured_frame_id_ + 1 == frame.id) metric_velocity_ = last_pose_wc_->inverse() * pose_wc;
+  rememberMetricMotion(frame, pose_wc);
   acceptPose(frame, result, TrackingStatus::Tracked, pose_wc);
   last_tracked_frame_id_ = frame.id;
   result.inliers = static_inliers.size();
@@ -329,6 +328,11 @@ Eigen::Isometry3d Frontend::refinePose(const Frame& frame, const LocalMatches& m
                          options_.pnp.refine_max_iterations, DepthMeasurements{match_depths, options_.depth_noise});
 }
 
+void Frontend::rememberMetricMotion(const Frame& frame, const Eigen::Isometry3d& pose_wc) {
+  // One frame's motion: over frames skipped or coasted in between it would be several frames' (2D-2D's scale).
+  if (last_measured_frame_id_ + 1 == frame.id) metric_velocity_ = last_pose_wc_->inverse() * pose_wc;
+}
+
 void Frontend::acceptPose(Frame& frame, TrackingResult& result, TrackingStatus status,
                           const Eigen::Isometry3d& pose_wc) {
   frame.pose_wc = pose_wc;
@@ -395,8 +399,9 @@ TrackingResult Frontend::trackWithoutFeatures(Frame& frame, TrackingResult resul
     if (const auto motion = dense_->motionFromReference()) {
       // Measured with depth, so it may scale a later 2D-2D estimate. No keyframe: its points would
       // rest on a pose no map point confirms; the map grows again once 3D-2D tracking is back.
-      metric_velocity_ = *motion;
-      acceptPose(frame, result, TrackingStatus::TrackedDense, *last_pose_wc_ * *motion);
+      const Eigen::Isometry3d pose_wc = *last_pose_wc_ * *motion;
+      rememberMetricMotion(frame, pose_wc);
+      acceptPose(frame, result, TrackingStatus::TrackedDense, pose_wc);
       result.reason = why_not_3d;
       return result;
     }

@@ -96,7 +96,7 @@ enum class TrackingStatus {
   Lost,               // no pose; the next frame starts a new segment
   // Issue #11: dense odometry.
   TrackedDense,  // 3D-2D failed; pose from OpenCV's dense odometry against the last posed frame
-  /// 3D-2D failed on a frame with depth right after a measured one: posed by the motion model's prediction
+  /// 3D-2D failed on a frame with depth right after a 3D-2D-tracked one: posed by the motion model's prediction
   /// (pose_predicted), the segment goes on; a 2D-2D pose there was further off than the prediction.
   Coasted
 };
@@ -234,6 +234,9 @@ class Frontend {
   bool refusedByQualityGate(TrackingResult& result, bool must_keep = false);
   /// A frame the gate refused: SkippedLowQuality, posed by the motion model's prediction.
   TrackingResult skipLowQuality(TrackingResult result, const std::string& reason);
+  /// Keeps pose_wc's motion from the last measured pose as the metric velocity, if that pose is the previous
+  /// frame's (measured with depth: 3D-2D or dense odometry).
+  void rememberMetricMotion(const Frame& frame, const Eigen::Isometry3d& pose_wc);
   /// True when a frame 3D-2D could not pose may keep the prediction instead of a 2D-2D pose: it has the depth
   /// to start a map (its matches failed, not its sensor) and the frame before it was tracked 3D-2D (once in a row:
   /// not again after a 2D-2D frame, where coasting and 2D-2D alternated for 25 frames until tracking was lost).
