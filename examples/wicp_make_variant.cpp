@@ -26,7 +26,8 @@ int main(int argc, char** argv) {
         "wicp_make_variant [--dataset DIR [--camera fr1|fr2|fr3|FILE.yaml]] --variant KIND[,KIND...] --out DIR\n"
         "Writes DIR in the TUM layout (rgb/, depth/, rgb.txt, depth.txt, groundtruth.txt) with camera.yaml,\n"
         "variant.txt and, for bursts, bursts.txt. Kinds, applied in the order given: jpeg, mm-depth, focal,\n"
-        "unregistered, blur, low-light, burst. Without --dataset the synthetic sequence is used.\n"
+        "unregistered, blur, low-light, burst; there-and-back re-orders the frames before any other (even\n"
+        "ones forward, then odd ones back: a real revisit). Without --dataset the synthetic sequence is used.\n"
         "Exit 1 on an error (nothing written), 2 on a bad command line. Options");
     // One option per line reads as a table: not reflowed.
     // clang-format off
@@ -34,7 +35,7 @@ int main(int argc, char** argv) {
         ("help,h", "print this help")
         ("dataset", po::value(&dataset), "TUM RGB-D folder; default: the synthetic sequence")
         ("camera", po::value(&camera_spec), "fr1, fr2, fr3 or a camera YAML; default: DIR/camera.yaml, else from the folder name")
-        ("variant", po::value(&kinds)->required(), "comma-separated kinds (jpeg,mm-depth,focal,unregistered,blur,low-light,burst)")
+        ("variant", po::value(&kinds)->required(), "comma-separated kinds (jpeg,mm-depth,focal,unregistered,blur,low-light,burst,there-and-back)")
         ("out", po::value(&out_dir)->required(), "output folder (written complete or not at all)")
         ("overwrite", "replace --out if it exists and is not empty")
         ("jpeg-quality", tools::rangedValue(&options.jpeg_quality, 1, 100)->default_value(options.jpeg_quality), "jpeg: quality (1-100)")

@@ -194,6 +194,30 @@ TEST(SequenceVariants, BurstsDegradeTheListedFramesOnlyAndKeepTimestampsAndGroun
   }
 }
 
+TEST(SequenceVariants, ThereAndBackShowsEvenFramesForwardThenOddFramesBackWithTheirGroundTruth) {
+  simulation::VariantSource source = smallSynthetic(7);
+  source.groundtruth.erase(source.groundtruth.begin() + 5);  // frame 5's pose: interpolated from 4 and 6
+  const fs::path dir = scratchDir("variant") / "there_and_back";
+  const Written variant = writeAndOpen(source, kinds("there-and-back"), dir);
+  const std::vector<std::size_t> shown = {0, 2, 4, 6, 5, 3, 1};
+  ASSERT_EQ(variant.sequence.size(), shown.size());
+  double previous = -1.0;
+  for (std::size_t j = 0; j < shown.size(); ++j) {
+    const RgbdFrame original = source.load(shown[j]), read = variant.sequence.loadFrame(j, variant.camera);
+    EXPECT_EQ(cv::norm(original.color, read.color, cv::NORM_INF), 0.0) << "frame " << j;
+    EXPECT_GT(read.timestamp, previous) << "frame " << j << ": time must go on";
+    if (j < 4) EXPECT_NEAR(read.timestamp, original.timestamp, 1e-6) << "forward frames keep their time";
+    // The way back is timed at the forward part's interval, 0.1 s (every other frame).
+    if (j >= 4) EXPECT_NEAR(read.timestamp - previous, 0.1, 1e-6) << "frame " << j;
+    EXPECT_NEAR(variant.sequence.frame(j).depth_timestamp - read.timestamp, 0.01, 1e-6) << "frame " << j;
+    previous = read.timestamp;
+    const auto truth = variant.sequence.groundTruthAt(read.timestamp);
+    ASSERT_TRUE(truth) << "frame " << j;
+    EXPECT_NEAR(truth->translation().x(), 0.01 * static_cast<double>(shown[j]), 1e-6) << "frame " << j;
+  }
+  EXPECT_THROW(simulation::thereAndBack(smallSynthetic(3)), std::invalid_argument);
+}
+
 TEST(SequenceVariants, TheSameSeedWritesTheSameImages) {
   const simulation::VariantSource source = smallSynthetic(2);
   const fs::path a = scratchDir("variant") / "a", b = scratchDir("variant") / "b";

@@ -9,6 +9,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <memory>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
@@ -30,7 +32,7 @@ const std::vector<std::pair<VariantKind, const char*>>& kindNames() {
       {VariantKind::Jpeg, "jpeg"},       {VariantKind::MillimetreDepth, "mm-depth"},
       {VariantKind::Focal, "focal"},     {VariantKind::Unregistered, "unregistered"},
       {VariantKind::MotionBlur, "blur"}, {VariantKind::LowLight, "low-light"},
-      {VariantKind::Burst, "burst"}};
+      {VariantKind::Burst, "burst"},     {VariantKind::ThereAndBack, "there-and-back"}};
   return names;
 }
 
@@ -98,6 +100,27 @@ PinholeCamera variantCamera(const PinholeCamera& original, const SequenceVariant
   return camera;
 }
 
+/// The pose at `timestamp` between the two poses of the time-sorted `trajectory` around it, at most `max_gap`
+/// seconds apart (the translation interpolated linearly, the rotation by slerp); none outside the trajectory's
+/// span or across a larger gap in it.
+std::optional<Eigen::Isometry3d> poseAt(const Trajectory& sorted, double timestamp, double max_gap = 0.1) {
+  const auto after = std::lower_bound(sorted.begin(), sorted.end(), timestamp,
+                                      [](const StampedPose& p, double t) { return p.timestamp < t; });
+  if (after == sorted.end()) return std::nullopt;
+  if (after->timestamp == timestamp) return after->pose;
+  if (after == sorted.begin()) return std::nullopt;
+  const StampedPose& before = *(after - 1);
+  if (after->timestamp - before.timestamp > max_gap) return std::nullopt;
+  const double s = (timestamp - before.timestamp) / (after->timestamp - before.timestamp);
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.translation() = (1.0 - s) * before.pose.translation() + s * after->pose.translation();
+  pose.linear() = Eigen::Quaterniond(before.pose.linear())
+                      .slerp(s, Eigen::Quaterniond(after->pose.linear()))
+                      .normalized()
+                      .toRotationMatrix();
+  return pose;
+}
+
 /// Burst k (0, 1, ...) covers frames start + k period ... + length - 1; even bursts blur, odd ones add noise.
 const char* burstDegradation(std::size_t i, const SequenceVariantOptions& options) {
   if (i < options.burst_start) return nullptr;
@@ -115,6 +138,7 @@ RgbdFrame applyKinds(RgbdFrame frame, std::size_t i, PinholeCamera camera, const
     switch (kind) {
       case VariantKind::Jpeg:
       case VariantKind::MillimetreDepth: break;  // how the images are written
+      case VariantKind::ThereAndBack: break;     // the order of the frames: thereAndBack, before any frame
       case VariantKind::Focal: {
         const double scale = options.focal_length_px / camera.fx;
         frame.color = zoomImage(frame.color, camera, scale, cv::INTER_LINEAR);
@@ -255,6 +279,7 @@ VariantSource tumVariantSource(const std::string& directory, const PinholeCamera
   source.camera = camera;
   source.size = sequence->size();
   source.load = [sequence, camera](std::size_t i) { return sequence->loadFrame(i, camera); };
+  source.timestamp = [sequence](std::size_t i) { return sequence->frame(i).rgb_timestamp; };
   source.depth_timestamp = [sequence](std::size_t i) { return sequence->frame(i).depth_timestamp; };
   source.groundtruth = sequence->groundTruth();
   source.description = "TUM sequence " + directory;
@@ -267,6 +292,7 @@ VariantSource syntheticVariantSource(const SyntheticRgbdOptions& options) {
   source.camera = options.camera;
   source.size = sequence->size();
   source.load = [sequence](std::size_t i) { return sequence->frame(i).rgbd; };
+  source.timestamp = [sequence](std::size_t i) { return sequence->timestamp(i); };
   source.depth_timestamp = [sequence](std::size_t i) { return sequence->timestamp(i); };
   for (std::size_t i = 0; i < sequence->size(); ++i)
     source.groundtruth.push_back({sequence->timestamp(i), sequence->cameraToWorld(i)});
@@ -274,11 +300,51 @@ VariantSource syntheticVariantSource(const SyntheticRgbdOptions& options) {
   return source;
 }
 
-VariantSummary writeSequenceVariant(const VariantSource& source, const SequenceVariantOptions& options,
+VariantSource thereAndBack(const VariantSource& source) {
+  if (source.size < 4) throw std::invalid_argument("there and back: the source needs at least 4 frames");
+  std::vector<double> stamp(source.size);  // the source's colour timestamps
+  for (std::size_t i = 0; i < source.size; ++i)
+    stamp[i] = source.timestamp ? source.timestamp(i) : source.load(i).timestamp;
+  // Output frame j shows source frame order[j] at timestamp stamps[j].
+  std::vector<std::size_t> order;
+  for (std::size_t i = 0; i < source.size; i += 2) order.push_back(i);
+  const std::size_t forward = order.size();
+  const std::size_t last_odd = source.size % 2 == 0 ? source.size - 1 : source.size - 2;
+  for (std::size_t k = 0; k <= last_odd / 2; ++k) order.push_back(last_odd - 2 * k);
+  const double interval = (stamp[order[forward - 1]] - stamp[0]) / static_cast<double>(forward - 1);
+  auto stamps = std::make_shared<std::vector<double>>();
+  for (std::size_t j = 0; j < order.size(); ++j)
+    stamps->push_back(j < forward ? stamp[order[j]]
+                                  : stamps->at(forward - 1) + interval * static_cast<double>(j - forward + 1));
+  auto shown = std::make_shared<std::vector<std::size_t>>(std::move(order));
+
+  VariantSource result = source;
+  result.size = shown->size();
+  result.load = [source, shown, stamps](std::size_t j) {
+    RgbdFrame frame = source.load(shown->at(j));
+    frame.timestamp = stamps->at(j);
+    return frame;
+  };
+  result.timestamp = [stamps](std::size_t j) { return stamps->at(j); };
+  auto depth_offsets = std::make_shared<std::vector<double>>();
+  for (const std::size_t i : *shown) depth_offsets->push_back(source.depth_timestamp(i) - stamp[i]);
+  result.depth_timestamp = [stamps, depth_offsets](std::size_t j) { return stamps->at(j) + depth_offsets->at(j); };
+  Trajectory sorted = source.groundtruth;
+  std::sort(sorted.begin(), sorted.end(),
+            [](const StampedPose& a, const StampedPose& b) { return a.timestamp < b.timestamp; });
+  result.groundtruth.clear();
+  for (std::size_t j = 0; j < shown->size(); ++j)
+    if (const auto pose = poseAt(sorted, stamp[shown->at(j)])) result.groundtruth.push_back({stamps->at(j), *pose});
+  result.description = source.description + ", there and back";
+  return result;
+}
+
+VariantSummary writeSequenceVariant(const VariantSource& original, const SequenceVariantOptions& options,
                                     const std::string& dir, bool overwrite,
                                     const std::function<void(std::size_t)>& frame_written) {
   checkOptions(options);
-  if (source.size == 0) throw std::invalid_argument("sequence variant: the source has no frame");
+  if (original.size == 0) throw std::invalid_argument("sequence variant: the source has no frame");
+  const VariantSource source = has(options, VariantKind::ThereAndBack) ? thereAndBack(original) : original;
   VariantSummary summary;
   summary.camera = variantCamera(source.camera, options);
   summary.frames = source.size;

@@ -1,9 +1,10 @@
 #pragma once
 // Variants of an RGB-D sequence as other sensors and conditions would record
 // it (JPEG colour, depth in millimetres, another focal length, unregistered
-// depth, motion blur, low light, bursts of bad frames), written in the TUM
-// layout with a camera.yaml, so that a default chosen on one sequence can be
-// checked on others (issue #11).
+// depth, motion blur, low light, bursts of bad frames) or as a camera that
+// comes back would (there and back), written in the TUM layout with a
+// camera.yaml, so that a default chosen on one sequence can be checked on
+// others (issues #11 and #6).
 
 #include <cstddef>
 #include <cstdint>
@@ -30,10 +31,11 @@ enum class VariantKind {
   Unregistered,     // depth seen from a depth camera offset from the colour camera
   MotionBlur,       // every colour image blurred along a random direction
   LowLight,         // every colour image darkened, gamma-crushed and noisy
-  Burst             // bursts of blurred or noisy colour frames (listed in bursts.txt)
+  Burst,            // bursts of blurred or noisy colour frames (listed in bursts.txt)
+  ThereAndBack      // the frames re-ordered before any other kind: even ones forward, odd ones back (thereAndBack)
 };
 
-/// @brief "jpeg", "mm-depth", "focal", "unregistered", "blur", "low-light", "burst".
+/// @brief "jpeg", "mm-depth", "focal", "unregistered", "blur", "low-light", "burst", "there-and-back".
 /// @param kind the kind to name
 std::string toString(VariantKind kind);
 /// @brief The kind of a name written by toString; std::invalid_argument naming the
@@ -88,6 +90,8 @@ struct VariantSource {
   PinholeCamera camera;
   std::size_t size = 0;
   std::function<RgbdFrame(std::size_t)> load;
+  /// The colour image's timestamp of frame i (load(i).timestamp, without loading it).
+  std::function<double(std::size_t)> timestamp;
   std::function<double(std::size_t)> depth_timestamp;
   Trajectory groundtruth;
   std::string description;
@@ -100,6 +104,14 @@ VariantSource tumVariantSource(const std::string& directory, const PinholeCamera
 /// @brief The synthetic sequence (rendered frame by frame as the variant is written).
 /// @param options what to render
 VariantSource syntheticVariantSource(const SyntheticRgbdOptions& options);
+
+/// @brief A real revisit made from a sequence that never comes back: its even frames forward, then its odd frames
+/// backwards, so the camera returns to its start over places it saw, through images it did not (each a frame
+/// beside the one seen). The way back is timed after the last forward frame at the forward part's mean frame
+/// interval (each depth image keeps its offset from its colour image); the ground truth is the original's,
+/// interpolated at each frame's original timestamp (a frame outside it gets none).
+/// @param source the sequence; fewer than 4 frames throw std::invalid_argument
+VariantSource thereAndBack(const VariantSource& source);
 
 /// @brief What writeSequenceVariant wrote.
 struct VariantSummary {
