@@ -51,6 +51,7 @@ TEST(TrackingInformation, ALandmarkBothKeyframesSeeCancelsInTheRelativePose) {
 
   mapping::TrackingInformationOptions bare;
   bare.translation_floor_m = bare.rotation_floor_rad = 0.0;
+  bare.covariance_inflation = 1.0;  // relativePoseCovariance is without it
   // The relative covariance against the two keyframes' own covariances propagated to the edge.
   const auto separate = [&](const mapping::KeyframeSnapshot& snapshot) {
     return Covariance6d(

@@ -23,19 +23,12 @@ namespace fs = std::filesystem;
 
 namespace {
 
+using weighted_icp::testing::jsonNumber;
 using weighted_icp::testing::lastLine;
 using weighted_icp::testing::ToolRun;
 
 ToolRun runEvaluate(const std::string& arguments, const fs::path& scratch) {
   return weighted_icp::testing::runBuiltTool("wicp_evaluate", arguments, scratch);
-}
-
-/// The number `key` holds in a flat JSON object.
-double jsonNumber(const std::string& json, const std::string& key) {
-  std::smatch match;
-  if (!std::regex_search(json, match, std::regex("\"" + key + "\":(-?[0-9.eE+-]+)")))
-    throw std::runtime_error("no number " + key + " in " + json);
-  return std::stod(match[1]);
 }
 
 std::string quoted(const fs::path& path) { return "'" + path.string() + "'"; }

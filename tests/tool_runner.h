@@ -11,6 +11,7 @@
 #include <iterator>
 #include <regex>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 
 #include <Eigen/Core>
@@ -84,6 +85,14 @@ inline Eigen::Matrix4d alignTransformation(const std::string& json) {
   auto it = std::sregex_iterator(rows.begin(), rows.end(), number);
   for (int i = 0; i < 16; ++i, ++it) t(i / 4, i % 4) = std::stod(it->str());
   return t;
+}
+
+/// The number `key` holds in a flat JSON object (a tool's report); std::runtime_error when it holds none.
+inline double jsonNumber(const std::string& json, const std::string& key) {
+  std::smatch match;
+  if (!std::regex_search(json, match, std::regex("\"" + key + "\":(-?[0-9.eE+-]+)")))
+    throw std::runtime_error("no number " + key + " in " + json);
+  return std::stod(match[1]);
 }
 
 }  // namespace weighted_icp::testing

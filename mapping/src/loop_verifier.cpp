@@ -285,8 +285,8 @@ LoopVerifier::LoopVerifier(const PinholeCamera& camera, LoopVerificationOptions 
   if (!fraction(options_.ratio) || !fraction(options_.min_overlap))
     throw std::invalid_argument("LoopVerifier: ratio and min_overlap must be in [0, 1]");
   if (options_.k < 1) throw std::invalid_argument("LoopVerifier: k must be at least 1");
-  if (!positive(options_.min_pixel_sigma_px))
-    throw std::invalid_argument("LoopVerifier: min_pixel_sigma_px must be > 0");
+  if (!positive(options_.min_pixel_sigma_px) || !positive(options_.covariance_inflation))
+    throw std::invalid_argument("LoopVerifier: min_pixel_sigma_px and covariance_inflation must be > 0");
 }
 
 LoopPrior odometryPrior(const KeyframeSnapshot& map, frontend::KeyframeId query, frontend::KeyframeId match,
@@ -371,6 +371,7 @@ LoopVerification LoopVerifier::verify(const KeyframeSnapshot& query_map, fronten
                                                             pnp.rms_reprojection_px, options_.min_pixel_sigma_px)
                                            : icpInformation(query_local, match_local, overlap, query_wc, match_wc,
                                                             correction, result.constraint.query_in_match);
+  result.constraint.information /= options_.covariance_inflation;
   result.accepted = true;
   return result;
 }

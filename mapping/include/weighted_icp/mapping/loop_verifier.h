@@ -76,6 +76,11 @@ struct LoopVerificationOptions {
   /// PnP edge: the pixel noise is taken as the inliers' reprojection RMS, but never below this (pixels per
   /// coordinate), so a lucky fit does not claim sub-pixel features.
   double min_pixel_sigma_px = 0.5;
+  /// Variance factor on the accepted loop's covariance (its information is divided by it), for what the PnP or
+  /// ICP Hessian cannot see on a real sensor; 10, as TrackingInformationOptions::covariance_inflation and for the
+  /// same measurement (docs/mapping.md, "Real revisits"). Both alike keep the pose graph's optimum (but for the
+  /// floors and the Huber loss) and widen its consistency test.
+  double covariance_inflation = 10.0;
 };
 
 /// @brief What the odometry says of a loop in one session: the relative pose its (drifting) keyframe poses
