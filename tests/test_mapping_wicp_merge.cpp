@@ -133,6 +133,16 @@ TEST(WicpRgbdSlamLoops, AcceptsNoLoopOnTheTumHead) {
   EXPECT_NE(report.find("\"loops_accepted\":0"), std::string::npos) << report;
 }
 
+/// `head` played there and back (wicp_make_variant --variant there-and-back) in `scratch`; empty if that failed.
+fs::path thereAndBack(const fs::path& head, const fs::path& scratch) {
+  const fs::path dataset = scratch / "there_and_back";
+  const ToolRun variant =
+      runBuiltTool("wicp_make_variant",
+                   "--dataset " + head.string() + " --variant there-and-back --out " + dataset.string(), scratch);
+  EXPECT_EQ(variant.status, 0) << variant.err;
+  return variant.status == 0 ? dataset : fs::path();
+}
+
 // A real revisit: TUM fr3's head played there and back (wicp_make_variant --variant there-and-back: even frames
 // forward, odd ones back). The tracking Hessians describe only pixel noise, so on real images the pose graph's
 // consistency test refused about half of the true loops (9 of 17 here) until the odometry and loop covariances
@@ -141,11 +151,8 @@ TEST(WicpRgbdSlamLoops, AdmitsTheTrueLoopsOfARealRevisitAndLowersItsError) {
   const fs::path head = dataDir() / "tum_fr3_teddy_head";
   WEIGHTED_ICP_REQUIRE_FILE(head);
   const fs::path scratch = scratchDir("slam_loop_real_revisit");
-  const fs::path dataset = scratch / "there_and_back";
-  const ToolRun variant =
-      runBuiltTool("wicp_make_variant",
-                   "--dataset " + head.string() + " --variant there-and-back --out " + dataset.string(), scratch);
-  ASSERT_EQ(variant.status, 0) << variant.err;
+  const fs::path dataset = thereAndBack(head, scratch);
+  ASSERT_FALSE(dataset.empty());
   const auto slam = [&](const std::string& name, const std::string& extra) {
     const ToolRun run = runBuiltTool(
         "wicp_rgbd_slam",
@@ -182,11 +189,8 @@ TEST(WicpMerge, MergesTheWayThereAndTheWayBackOfARealRevisitWithEveryLoop) {
   const fs::path head = dataDir() / "tum_fr3_teddy_head";
   WEIGHTED_ICP_REQUIRE_FILE(head);
   const fs::path scratch = scratchDir("merge_real_revisit");
-  const fs::path dataset = scratch / "there_and_back";
-  const ToolRun variant =
-      runBuiltTool("wicp_make_variant",
-                   "--dataset " + head.string() + " --variant there-and-back --out " + dataset.string(), scratch);
-  ASSERT_EQ(variant.status, 0) << variant.err;
+  const fs::path dataset = thereAndBack(head, scratch);
+  ASSERT_FALSE(dataset.empty());
   const std::string common = "--dataset " + dataset.string() + " --deterministic --no-loop-closure ";
   const ToolRun there =
       runBuiltTool("wicp_rgbd_slam", common + "--max-frames 96 --out " + (scratch / "a").string(), scratch);
