@@ -463,7 +463,7 @@ int main(int argc, char** argv) {
   tools::installInterruptHandlers();
   return tools::runTool("wicp_rgbd_slam", [&] {
     std::string dataset, camera_spec, out_dir;
-    std::string vocabulary_path, describe = "original";
+    std::string vocabulary_path, describe = "original", gate_free_retry = "off";
     mapping::LoopEdgeSource loop_edge = mapping::LoopEdgeSource::Pnp;
     std::size_t max_frames = 0, first_frame = 0;
     mapping::LoopClosingSlamOptions closing_options;
@@ -585,6 +585,9 @@ int main(int argc, char** argv) {
          "(equalized, before 2026-11-26)")
         ("pnp", tools::namedValue(&options.frontend.pnp.method, frontend::parsePnpMethod, name),
          "RANSAC PnP solver: ap3p (AP3P sets, EPnP) or iterative (the paper's iterative 5-point solution)")
+        ("gate-free-retry", po::value(&gate_free_retry)->default_value(gate_free_retry),
+         "on: when 3D-2D fails within both projection gates, PnP once more on the descriptor matches wherever the "
+         "landmarks project (off: the 2D-2D and coasting fallbacks directly)")
         ("pnp-ransac-iterations", tools::rangedValue(&options.frontend.pnp.ransac_iterations, 1, 100000)
                                       ->default_value(options.frontend.pnp.ransac_iterations),
          "most RANSAC draws a frame's PnP makes; fewer when the inliers found already give 99 % confidence (1-100000)");
@@ -594,6 +597,7 @@ int main(int argc, char** argv) {
     if (!tools::parseCommandLine(argc, argv, description, vm)) return 0;
     try {
       frontend::setFrontendChoice(options.frontend, "describe", describe);
+      frontend::setFrontendChoice(options.frontend, "gate-free-retry", gate_free_retry);
     } catch (const std::invalid_argument& e) {
       throw po::error(std::string("--") + e.what());
     }

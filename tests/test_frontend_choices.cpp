@@ -28,6 +28,10 @@ TEST(FrontendChoices, EachKeySetsItsOption) {
   setFrontendChoice(options, "describe", "equalized");
   EXPECT_TRUE(options.features.describe_equalized);
   EXPECT_THROW(setFrontendChoice(options, "describe", "clahe"), std::invalid_argument);
+  EXPECT_FALSE(options.gate_free_retry);
+  setFrontendChoice(options, "gate-free-retry", "on");
+  EXPECT_TRUE(options.gate_free_retry);
+  EXPECT_THROW(setFrontendChoice(options, "gate-free-retry", "yes"), std::invalid_argument);
   EXPECT_EQ(options.pnp.method, PnpMethod::Iterative);
   EXPECT_EQ(options.quality.measure, QualityMeasure::Brisque);
   EXPECT_EQ(options.features.descriptor, DescriptorKind::ModifiedBrief);
@@ -38,7 +42,7 @@ TEST(FrontendChoices, EachKeySetsItsOption) {
   EXPECT_EQ(options.dense_odometry.kind, DenseOdometryKind::Icp);
   EXPECT_EQ(options.quality.mode, QualityGateMode::Absolute);
   EXPECT_EQ(options.matcher.kind, MatcherKind::KdTree);
-  EXPECT_EQ(frontendChoiceKeys().size(), 11u);
+  EXPECT_EQ(frontendChoiceKeys().size(), 12u);
 }
 
 TEST(FrontendChoices, AWrongKeyOrValueIsNamed) {

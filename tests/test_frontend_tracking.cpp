@@ -22,17 +22,18 @@ using frontend::TrackingStatus;
 
 /// Map, inline backend and front end, declared in the order they depend on each other.
 struct Tracker {
-  explicit Tracker(const PinholeCamera& camera)
-      : backend(map, camera, backendOptions()), frontend(map, backend, camera, frontendOptions()) {}
+  explicit Tracker(const PinholeCamera& camera, bool gate_free_retry = false)
+      : backend(map, camera, backendOptions()), frontend(map, backend, camera, frontendOptions(gate_free_retry)) {}
 
   static frontend::BackendOptions backendOptions() {
     frontend::BackendOptions options;
     options.background_thread = false;  // reproducible, and the map is final after each frame
     return options;
   }
-  static frontend::FrontendOptions frontendOptions() {
+  static frontend::FrontendOptions frontendOptions(bool gate_free_retry = false) {
     frontend::FrontendOptions options;
     options.quality_gate = false;  // a blank frame must count as lost, not as a bad image
+    options.gate_free_retry = gate_free_retry;
     return options;
   }
 
@@ -209,6 +210,31 @@ TEST_F(FrontendTracking, CoastingFollowsOnlyA3d2dPoseNeverA2d2dOne) {
   ASSERT_EQ(relative.status, TrackingStatus::TrackedRelative) << relative.reason;
   const frontend::TrackingResult after = tracker.frontend.track(scrambled(7));
   EXPECT_NE(after.status, TrackingStatus::Coasted) << after.reason;
+}
+
+TEST(FrontendGateFreeRetry, AFrameFarFromThePredictionIsPosedAgainstTheMapOnlyWithIt) {
+  // A fast camera (a loop in 40 frames): frames 0 and 1, then 0 again. The constant-velocity prediction is two
+  // frames' motion off, and the map's landmarks project outside both gates around it.
+  simulation::SyntheticRgbdOptions options;
+  options.frames = 2;
+  options.frames_per_loop = 40.0;
+  const simulation::SyntheticRgbdSequence sequence(options);
+  const RgbdFrame first = sequence.frame(0).rgbd, second = sequence.frame(1).rgbd;
+  RgbdFrame back = first;
+  back.timestamp = second.timestamp + (second.timestamp - first.timestamp);
+  for (const bool retry : {false, true}) {
+    Tracker tracker(options.camera, retry);
+    ASSERT_TRUE(tracker.frontend.track(first).measuredPose());
+    ASSERT_EQ(tracker.frontend.track(second).status, TrackingStatus::Tracked);
+    const frontend::TrackingResult result = tracker.frontend.track(back);
+    if (!retry) {
+      EXPECT_NE(result.status, TrackingStatus::Tracked) << "the test needs a frame outside both gates";
+      continue;
+    }
+    ASSERT_EQ(result.status, TrackingStatus::Tracked) << result.reason;
+    EXPECT_LT(result.pose_wc.translation().norm(), 0.01);
+    EXPECT_LT(Eigen::AngleAxisd(result.pose_wc.linear()).angle(), 0.01);
+  }
 }
 
 TEST_F(FrontendTracking, AFrameWithoutDepthThatCannotBeTrackedDoesNotKeepThePrediction) {

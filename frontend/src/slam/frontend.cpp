@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include <opencv2/calib3d.hpp>
@@ -198,26 +199,7 @@ TrackingResult Frontend::trackFrame(Frame& frame, TrackingResult result) {
   const std::vector<cv::DMatch> candidates = localDescriptorMatches(frame, guess_wc, gate_px);
   LocalMatches matched;
   PoseEstimate estimate;
-  std::string failure = solvePnpAgainstLocalMap(frame, candidates, guess_wc, gate_px, matched, estimate);
-  const double wide_px = options_.match_gate_without_motion_px;
-  if (!failure.empty() && gate_px < wide_px) {
-    // The prediction may be far off (the motion changed suddenly): the gate of a frame without known motion. Only
-    // regions of interest depend on the gate; a search everywhere is not repeated.
-    const bool everywhere = options_.match_region == MatchRegion::Everywhere;
-    const std::vector<cv::DMatch> searched_again =
-        everywhere ? std::vector<cv::DMatch>{} : localDescriptorMatches(frame, guess_wc, wide_px);
-    LocalMatches wide;
-    PoseEstimate wide_estimate;
-    const std::string wide_failure = solvePnpAgainstLocalMap(frame, everywhere ? candidates : searched_again, guess_wc,
-                                                             wide_px, wide, wide_estimate);
-    if (wide_failure.empty()) {
-      matched = std::move(wide);
-      estimate = std::move(wide_estimate);
-      failure.clear();
-    } else {
-      failure += "; within " + std::to_string(static_cast<int>(wide_px)) + " px: " + wide_failure;
-    }
-  }
+  const std::string failure = solveWithWiderGates(frame, candidates, guess_wc, gate_px, matched, estimate);
   result.matches = matched.size();
   if (!failure.empty()) return trackWithoutFeatures(frame, result, failure);
 
@@ -246,6 +228,38 @@ std::string Frontend::solvePnpAgainstLocalMap(const Frame& frame, const std::vec
     return std::to_string(matched.size()) + " 3D-2D matches";
   estimate = estimatePosePnp(matched.points_world, matched.pixels, camera_, guess_wc, options_.pnp);
   return estimate.ok ? std::string() : "PnP failed: " + estimate.failure;
+}
+
+std::string Frontend::solveWithWiderGates(const Frame& frame, const std::vector<cv::DMatch>& candidates,
+                                          const Eigen::Isometry3d& guess_wc, double gate_px, LocalMatches& matched,
+                                          PoseEstimate& estimate) const {
+  std::string failure = solvePnpAgainstLocalMap(frame, candidates, guess_wc, gate_px, matched, estimate);
+  // Each wider attempt replaces the result only when it succeeds. Only regions of interest depend on the gate; a
+  // search everywhere is not repeated.
+  const bool everywhere = options_.match_region == MatchRegion::Everywhere;
+  const auto attempt = [&](double wider_px, const std::string& name) {
+    const std::vector<cv::DMatch> searched_again =
+        everywhere ? std::vector<cv::DMatch>{} : localDescriptorMatches(frame, guess_wc, wider_px);
+    LocalMatches wider;
+    PoseEstimate wider_estimate;
+    const std::string wider_failure = solvePnpAgainstLocalMap(frame, everywhere ? candidates : searched_again, guess_wc,
+                                                              wider_px, wider, wider_estimate);
+    if (wider_failure.empty()) {
+      matched = std::move(wider);
+      estimate = std::move(wider_estimate);
+      failure.clear();
+    } else {
+      failure += "; " + name + ": " + wider_failure;
+    }
+  };
+  // The prediction may be far off (the motion changed suddenly): the gate of a frame without known motion.
+  const double wide_px = options_.match_gate_without_motion_px;
+  if (!failure.empty() && gate_px < wide_px)
+    attempt(wide_px, "within " + std::to_string(static_cast<int>(wide_px)) + " px");
+  // Or the prediction itself is off after frames posed without 3D-2D: wherever the landmarks project.
+  constexpr double kAnywherePx = 1e5;  // beyond any image, finite for the regions of interest's grid
+  if (!failure.empty() && options_.gate_free_retry) attempt(kAnywherePx, "anywhere");
+  return failure;
 }
 
 bool Frontend::refreshLocalMap() {

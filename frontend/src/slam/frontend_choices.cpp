@@ -29,6 +29,11 @@ const std::vector<std::pair<std::string, Setter>>& setters() {
          o.features.describe_equalized = v == "equalized";
        }},
       {"pnp", [](FrontendOptions& o, const std::string& v) { o.pnp.method = parsePnpMethod(v); }},
+      {"gate-free-retry",
+       [](FrontendOptions& o, const std::string& v) {
+         if (v != "on" && v != "off") throw std::invalid_argument("'" + v + "' (expected on or off)");
+         o.gate_free_retry = v == "on";
+       }},
       {"dense-odometry",
        [](FrontendOptions& o, const std::string& v) { o.dense_odometry.use = parseDenseOdometryUse(v); }},
       {"dense-odometry-kind",

@@ -60,6 +60,11 @@ struct FrontendOptions {
   /// lands this close to the feature; wider before the motion is known.
   double match_gate_px = 40.0;
   double match_gate_without_motion_px = 120.0;
+  /// When 3D-2D fails within both gates, PnP once more on the descriptor matches wherever the prediction puts their
+  /// landmarks, RANSAC alone judging them: after frames posed without 3D-2D (2D-2D, coasted) the prediction can be
+  /// so far off that the landmarks project outside even the wide gate and 3D-2D never comes back
+  /// (docs/frontend_generalisation.md). Off by default: measured as an option first.
+  bool gate_free_retry = false;
   std::size_t min_initial_points = 50;
   /// 2D-2D below this median parallax keeps the predicted translation.
   double min_parallax_deg = 1.0;
@@ -216,6 +221,12 @@ class Frontend {
   std::string solvePnpAgainstLocalMap(const Frame& frame, const std::vector<cv::DMatch>& candidates,
                                       const Eigen::Isometry3d& guess_wc, double gate_px, LocalMatches& matched,
                                       PoseEstimate& estimate) const;
+  /// 3D-2D against the local map: within gate_px of the prediction, then (the motion may have changed suddenly)
+  /// within the wide gate, then, with gate_free_retry, anywhere; returns why the last attempt failed, empty when one
+  /// succeeded.
+  std::string solveWithWiderGates(const Frame& frame, const std::vector<cv::DMatch>& candidates,
+                                  const Eigen::Isometry3d& guess_wc, double gate_px, LocalMatches& matched,
+                                  PoseEstimate& estimate) const;
   /// 3D-2D failed: skipped on the prediction if the quality gate refuses the image; else the dense odometry's pose
   /// when it is the fallback and registers the frame; else coasted on the prediction when canCoast; else 2D-2D.
   TrackingResult trackWithoutFeatures(Frame& frame, TrackingResult result, const std::string& why_not_3d);
