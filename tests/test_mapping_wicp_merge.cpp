@@ -133,26 +133,29 @@ TEST(WicpRgbdSlamLoops, AcceptsNoLoopOnTheTumHead) {
   EXPECT_NE(report.find("\"loops_accepted\":0"), std::string::npos) << report;
 }
 
-/// `head` played there and back (wicp_make_variant --variant there-and-back) in `scratch`; empty if that failed.
-fs::path thereAndBack(const fs::path& head, const fs::path& scratch) {
-  const fs::path dataset = scratch / "there_and_back";
-  const ToolRun variant =
-      runBuiltTool("wicp_make_variant",
-                   "--dataset " + head.string() + " --variant there-and-back --out " + dataset.string(), scratch);
-  EXPECT_EQ(variant.status, 0) << variant.err;
-  return variant.status == 0 ? dataset : fs::path();
-}
+/// A real revisit made in the test's own scratch folder: TUM fr3's head played there and back (wicp_make_variant
+/// --variant there-and-back: even frames forward, odd ones back); skipped without the shared data.
+class RealRevisit : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const fs::path head = dataDir() / "tum_fr3_teddy_head";
+    WEIGHTED_ICP_REQUIRE_FILE(head);
+    scratch_ = scratchDir(::testing::UnitTest::GetInstance()->current_test_info()->name());
+    dataset_ = scratch_ / "there_and_back";
+    const ToolRun variant =
+        runBuiltTool("wicp_make_variant",
+                     "--dataset " + head.string() + " --variant there-and-back --out " + dataset_.string(), scratch_);
+    ASSERT_EQ(variant.status, 0) << variant.err;
+  }
+  fs::path scratch_, dataset_;
+};
 
 // A real revisit: TUM fr3's head played there and back (wicp_make_variant --variant there-and-back: even frames
 // forward, odd ones back). The tracking Hessians describe only pixel noise, so on real images the pose graph's
 // consistency test refused about half of the true loops (9 of 17 here) until the odometry and loop covariances
 // were inflated 10 times (docs/mapping.md, "Real revisits").
-TEST(WicpRgbdSlamLoops, AdmitsTheTrueLoopsOfARealRevisitAndLowersItsError) {
-  const fs::path head = dataDir() / "tum_fr3_teddy_head";
-  WEIGHTED_ICP_REQUIRE_FILE(head);
-  const fs::path scratch = scratchDir("slam_loop_real_revisit");
-  const fs::path dataset = thereAndBack(head, scratch);
-  ASSERT_FALSE(dataset.empty());
+TEST_F(RealRevisit, WicpRgbdSlamAdmitsItsTrueLoopsAndLowersItsError) {
+  const fs::path &scratch = scratch_, &dataset = dataset_;
   const auto slam = [&](const std::string& name, const std::string& extra) {
     const ToolRun run = runBuiltTool(
         "wicp_rgbd_slam",
@@ -185,12 +188,8 @@ TEST(WicpRgbdSlamLoops, AdmitsTheTrueLoopsOfARealRevisitAndLowersItsError) {
 // The same real revisit cut where it turns: the way there and the way back as two sessions. Every verified loop
 // between them is true; with the covariances of 2026-11-26 the joint pose graph used 7 of 26 and the merged
 // trajectory was 1.09 cm off, with all of them 0.61 cm (docs/mapping.md, "Real revisits").
-TEST(WicpMerge, MergesTheWayThereAndTheWayBackOfARealRevisitWithEveryLoop) {
-  const fs::path head = dataDir() / "tum_fr3_teddy_head";
-  WEIGHTED_ICP_REQUIRE_FILE(head);
-  const fs::path scratch = scratchDir("merge_real_revisit");
-  const fs::path dataset = thereAndBack(head, scratch);
-  ASSERT_FALSE(dataset.empty());
+TEST_F(RealRevisit, WicpMergeJoinsTheWayThereAndTheWayBackWithEveryLoop) {
+  const fs::path &scratch = scratch_, &dataset = dataset_;
   const std::string common = "--dataset " + dataset.string() + " --deterministic --no-loop-closure ";
   const ToolRun there =
       runBuiltTool("wicp_rgbd_slam", common + "--max-frames 96 --out " + (scratch / "a").string(), scratch);

@@ -305,36 +305,39 @@ VariantSource thereAndBack(const VariantSource& source) {
   std::vector<double> stamp(source.size);  // the source's colour timestamps
   for (std::size_t i = 0; i < source.size; ++i)
     stamp[i] = source.timestamp ? source.timestamp(i) : source.load(i).timestamp;
-  // Output frame j shows source frame order[j] at timestamp stamps[j].
+  // Output frame j shows source frame `index` at `timestamp`, its depth image `depth_offset` later, as in the source.
+  struct Shown {
+    std::size_t index;
+    double timestamp, depth_offset;
+  };
   std::vector<std::size_t> order;
   for (std::size_t i = 0; i < source.size; i += 2) order.push_back(i);
   const std::size_t forward = order.size();
   const std::size_t last_odd = source.size % 2 == 0 ? source.size - 1 : source.size - 2;
   for (std::size_t k = 0; k <= last_odd / 2; ++k) order.push_back(last_odd - 2 * k);
   const double interval = (stamp[order[forward - 1]] - stamp[0]) / static_cast<double>(forward - 1);
-  auto stamps = std::make_shared<std::vector<double>>();
-  for (std::size_t j = 0; j < order.size(); ++j)
-    stamps->push_back(j < forward ? stamp[order[j]]
-                                  : stamps->at(forward - 1) + interval * static_cast<double>(j - forward + 1));
-  auto shown = std::make_shared<std::vector<std::size_t>>(std::move(order));
+  auto shown = std::make_shared<std::vector<Shown>>();
+  for (std::size_t j = 0; j < order.size(); ++j) {
+    const std::size_t i = order[j];
+    const double t = j < forward ? stamp[i] : shown->back().timestamp + interval;
+    shown->push_back({i, t, source.depth_timestamp(i) - stamp[i]});
+  }
 
   VariantSource result = source;
   result.size = shown->size();
-  result.load = [source, shown, stamps](std::size_t j) {
-    RgbdFrame frame = source.load(shown->at(j));
-    frame.timestamp = stamps->at(j);
+  result.load = [source, shown](std::size_t j) {
+    RgbdFrame frame = source.load(shown->at(j).index);
+    frame.timestamp = shown->at(j).timestamp;
     return frame;
   };
-  result.timestamp = [stamps](std::size_t j) { return stamps->at(j); };
-  auto depth_offsets = std::make_shared<std::vector<double>>();
-  for (const std::size_t i : *shown) depth_offsets->push_back(source.depth_timestamp(i) - stamp[i]);
-  result.depth_timestamp = [stamps, depth_offsets](std::size_t j) { return stamps->at(j) + depth_offsets->at(j); };
+  result.timestamp = [shown](std::size_t j) { return shown->at(j).timestamp; };
+  result.depth_timestamp = [shown](std::size_t j) { return shown->at(j).timestamp + shown->at(j).depth_offset; };
   Trajectory sorted = source.groundtruth;
   std::sort(sorted.begin(), sorted.end(),
             [](const StampedPose& a, const StampedPose& b) { return a.timestamp < b.timestamp; });
   result.groundtruth.clear();
-  for (std::size_t j = 0; j < shown->size(); ++j)
-    if (const auto pose = poseAt(sorted, stamp[shown->at(j)])) result.groundtruth.push_back({stamps->at(j), *pose});
+  for (const Shown& frame : *shown)
+    if (const auto pose = poseAt(sorted, stamp[frame.index])) result.groundtruth.push_back({frame.timestamp, *pose});
   result.description = source.description + ", there and back";
   return result;
 }
