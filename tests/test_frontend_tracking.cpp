@@ -212,6 +212,30 @@ TEST_F(FrontendTracking, CoastingFollowsOnlyA3d2dPoseNeverA2d2dOne) {
   EXPECT_NE(after.status, TrackingStatus::Coasted) << after.reason;
 }
 
+TEST_F(FrontendTracking, AVelocityIsNeverTakenFromA2d2dPose) {
+  // fr3 made dark: a 2D-2D pose 19 cm off, then a 3D-2D pose; their difference, kept as the velocity, was repeated
+  // by the coasted and 2D-2D frames after it until tracking was lost (13 -> 44 cm ATE with the gate-free retry).
+  // Here a zoomed image is posed 2D-2D some centimetres off, and the next frame is tracked 3D-2D again.
+  Tracker tracker(camera());
+  for (std::size_t i = 0; i < 5; ++i) ASSERT_TRUE(tracker.frontend.track(image(i)).measuredPose());
+  ASSERT_EQ(tracker.frontend.track(scrambled(5)).status, TrackingStatus::Coasted);
+  // The image zoomed: a 2D-2D pose moved forward that the camera never made.
+  RgbdFrame zoomed = image(6);
+  const double zoom = 1.3, cx = camera().cx, cy = camera().cy;
+  const cv::Mat warp = (cv::Mat_<double>(2, 3) << zoom, 0, cx * (1 - zoom), 0, zoom, cy * (1 - zoom));
+  cv::warpAffine(image(6).color, zoomed.color, warp, zoomed.color.size());
+  const frontend::TrackingResult relative = tracker.frontend.track(zoomed);
+  ASSERT_EQ(relative.status, TrackingStatus::TrackedRelative) << relative.reason;
+  ASSERT_GT((relative.pose_wc.translation() - truthFromFirst(6).translation()).norm(), 0.03)
+      << "the test needs a wrong 2D-2D pose";
+  ASSERT_EQ(tracker.frontend.track(image(7)).status, TrackingStatus::Tracked);
+  // The next frame coasts on the motion measured with depth (frames 3 to 4), not on the correction of frame 6.
+  const frontend::TrackingResult coasted = tracker.frontend.track(scrambled(8));
+  ASSERT_EQ(coasted.status, TrackingStatus::Coasted) << coasted.reason;
+  EXPECT_LT((coasted.pose_wc.translation() - truthFromFirst(8).translation()).norm(), 0.01);
+  EXPECT_LT(Eigen::AngleAxisd(coasted.pose_wc.linear().transpose() * truthFromFirst(8).linear()).angle(), 0.01);
+}
+
 TEST(FrontendGateFreeRetry, AFrameFarFromThePredictionIsPosedAgainstTheMapOnlyWithIt) {
   // A fast camera (a loop in 40 frames): frames 0 and 1, then 0 again. The constant-velocity prediction is two
   // frames' motion off, and the map's landmarks project outside both gates around it.

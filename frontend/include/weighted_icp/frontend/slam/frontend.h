@@ -245,8 +245,9 @@ class Frontend {
   bool refusedByQualityGate(TrackingResult& result, bool must_keep = false);
   /// A frame the gate refused: SkippedLowQuality, posed by the motion model's prediction.
   TrackingResult skipLowQuality(TrackingResult result, const std::string& reason);
-  /// Keeps pose_wc's motion from the last measured pose as the metric velocity, if that pose is the previous
-  /// frame's (measured with depth: 3D-2D or dense odometry).
+  /// Called for each pose measured with depth (3D-2D or dense odometry): keeps its motion from the previous frame as
+  /// the metric velocity if that frame was posed with depth too; after a 2D-2D frame, restarts the motion model from
+  /// the last metric velocity instead.
   void rememberMetricMotion(const Frame& frame, const Eigen::Isometry3d& pose_wc);
   /// True when a frame 3D-2D could not pose may keep the prediction instead of a 2D-2D pose: it has the depth
   /// to start a map (its matches failed, not its sensor) and the frame before it was tracked 3D-2D (once in a row:
@@ -303,7 +304,10 @@ class Frontend {
   std::size_t last_measured_frame_id_ = 0;
   /// The id of the last frame posed by 3D-2D tracking (or starting a segment): coasting follows only such a frame.
   std::size_t last_tracked_frame_id_ = 0;
-  /// One frame's motion, between the last two consecutive frames tracked with 3D points: what scales 2D-2D.
+  /// The id of the last frame posed with depth (3D-2D, dense odometry, a segment's start): velocities are measured
+  /// only between two such frames in a row.
+  std::size_t last_metric_frame_id_ = 0;
+  /// One frame's motion, between the last two consecutive frames posed with depth: what scales 2D-2D.
   std::optional<Eigen::Isometry3d> metric_velocity_;
   Frame last_keyframe_;
   KeyframeId last_keyframe_id_ = 0;
