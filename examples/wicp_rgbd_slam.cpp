@@ -463,11 +463,12 @@ int main(int argc, char** argv) {
   tools::installInterruptHandlers();
   return tools::runTool("wicp_rgbd_slam", [&] {
     std::string dataset, camera_spec, out_dir;
-    std::string vocabulary_path, describe = "original", gate_free_retry = "off";
+    std::string vocabulary_path, describe = "original";
     mapping::LoopEdgeSource loop_edge = mapping::LoopEdgeSource::Pnp;
     std::size_t max_frames = 0, first_frame = 0;
     mapping::LoopClosingSlamOptions closing_options;
     frontend::RgbdSlamOptions& options = closing_options.slam;
+    std::string gate_free_retry = options.frontend.gate_free_retry ? "on" : "off";
     simulation::SyntheticRgbdOptions synthetic;
     po::options_description description(
         "wicp_rgbd_slam [--dataset DIR] [--camera fr1|fr2|fr3|FILE.yaml] [--first-frame N] [--max-frames N]\n"
@@ -587,7 +588,7 @@ int main(int argc, char** argv) {
          "RANSAC PnP solver: ap3p (AP3P sets, EPnP) or iterative (the paper's iterative 5-point solution)")
         ("gate-free-retry", po::value(&gate_free_retry)->default_value(gate_free_retry),
          "on: when 3D-2D fails within both projection gates, PnP once more on the descriptor matches wherever the "
-         "landmarks project (off: the 2D-2D and coasting fallbacks directly)")
+         "landmarks project; off: the 2D-2D and coasting fallbacks directly (as before 2026-11-27)")
         ("pnp-ransac-iterations", tools::rangedValue(&options.frontend.pnp.ransac_iterations, 1, 100000)
                                       ->default_value(options.frontend.pnp.ransac_iterations),
          "most RANSAC draws a frame's PnP makes; fewer when the inliers found already give 99 % confidence (1-100000)");

@@ -28,6 +28,8 @@ TEST(FrontendChoices, EachKeySetsItsOption) {
   setFrontendChoice(options, "describe", "equalized");
   EXPECT_TRUE(options.features.describe_equalized);
   EXPECT_THROW(setFrontendChoice(options, "describe", "clahe"), std::invalid_argument);
+  EXPECT_TRUE(options.gate_free_retry);
+  setFrontendChoice(options, "gate-free-retry", "off");
   EXPECT_FALSE(options.gate_free_retry);
   setFrontendChoice(options, "gate-free-retry", "on");
   EXPECT_TRUE(options.gate_free_retry);

@@ -213,7 +213,7 @@ TEST_F(FrontendTracking, CoastingFollowsOnlyA3d2dPoseNeverA2d2dOne) {
 }
 
 TEST_F(FrontendTracking, AVelocityIsNeverTakenFromA2d2dPose) {
-  // fr3 made dark: a 2D-2D pose 19 cm off, then a 3D-2D pose; their difference, kept as the velocity, was repeated
+  // fr3 made dark: a 2D-2D pose, then a 3D-2D pose 26 cm from it; their difference, kept as the velocity, was repeated
   // by the coasted and 2D-2D frames after it until tracking was lost (13 -> 44 cm ATE with the gate-free retry).
   // Here a zoomed image is posed 2D-2D some centimetres off, and the next frame is tracked 3D-2D again.
   Tracker tracker(camera());

@@ -343,7 +343,7 @@ Eigen::Isometry3d Frontend::refinePose(const Frame& frame, const LocalMatches& m
 
 void Frontend::rememberMetricMotion(const Frame& frame, const Eigen::Isometry3d& pose_wc) {
   // A velocity is measured only between consecutive frames posed with depth. From a 2D-2D pose (its translation's
-  // length a guess) the difference is mostly that pose's error: repeated as a velocity, a correction of 19 cm ran
+  // length a guess) the difference is mostly that pose's error: repeated as a velocity, a correction of 26 cm ran
   // away frame after frame (docs/frontend_generalisation.md, 2026-11-27).
   if (last_metric_frame_id_ + 1 == frame.id) {
     metric_velocity_ = last_pose_wc_->inverse() * pose_wc;  // the previous frame's pose is that metric one
