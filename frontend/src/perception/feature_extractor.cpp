@@ -74,60 +74,55 @@ void assignOrientation(const cv::Mat& image, std::vector<cv::KeyPoint>& keypoint
   }
 }
 
-}  // namespace
+/// A GFTT corner with its response and the grid cell it was found in.
+struct Corner {
+  cv::Point2f pt;
+  float response;
+  int cell;
+};
 
-FeatureExtractor::FeatureExtractor(FeatureExtractorOptions options) : options_(options) {
-  validate(options_);
-  // One pyramid level: GFTT corners are single-scale.
-  orb_ = cv::ORB::create(options_.max_features, 1.2f, 1, kOrbBorder, 0, 2, cv::ORB::HARRIS_SCORE, kOrbPatchSize);
-}
-
-std::vector<cv::KeyPoint> FeatureExtractor::detectBucketed(const cv::Mat& gray) const {
-  const cv::Rect interior(kOrbBorder, kOrbBorder, gray.cols - 2 * kOrbBorder, gray.rows - 2 * kOrbBorder);
-  if (interior.width <= 0 || interior.height <= 0) return {};
-
-  // GFTT in each cell on its own, so that quality_level is relative to the
-  // cell's strongest corner: weakly textured parts of the frame keep their
-  // corners instead of losing them to one bright, busy region.
-  struct Candidate {
-    cv::Point2f pt;
-    float response;
-    int cell;
-  };
-  // The cells on OpenCV's thread pool, each into its own list, joined in cell order: the same candidates in the
-  // same order with any number of threads.
-  const int cells = options_.grid_rows * options_.grid_cols;
-  std::vector<std::vector<Candidate>> found(static_cast<std::size_t>(cells));
+/// GFTT in each cell of the grid over interior on its own, so that quality_level is relative to the cell's strongest
+/// corner: weakly textured parts of the frame keep their corners instead of losing them to one bright, busy region.
+/// Strongest first over the whole frame; ties in the order found (cells in order), whatever the number of threads.
+std::vector<Corner> cornersPerCell(const cv::Mat& gray, const cv::Rect& interior, const FeatureExtractorOptions& o) {
+  // The cells on OpenCV's thread pool, each into its own list, joined in cell order.
+  const int cells = o.grid_rows * o.grid_cols;
+  std::vector<std::vector<Corner>> found(static_cast<std::size_t>(cells));
   parallelFor(cv::Range(0, cells), [&](const cv::Range& range) {
     std::vector<cv::Point2f> corners;
     std::vector<float> responses;
     for (int cell = range.start; cell < range.end; ++cell) {
-      const int row = cell / options_.grid_cols, col = cell % options_.grid_cols;
-      const int x0 = interior.x + col * interior.width / options_.grid_cols;
-      const int y0 = interior.y + row * interior.height / options_.grid_rows;
-      const int x1 = interior.x + (col + 1) * interior.width / options_.grid_cols;
-      const int y1 = interior.y + (row + 1) * interior.height / options_.grid_rows;
+      const int row = cell / o.grid_cols, col = cell % o.grid_cols;
+      const int x0 = interior.x + col * interior.width / o.grid_cols;
+      const int y0 = interior.y + row * interior.height / o.grid_rows;
+      const int x1 = interior.x + (col + 1) * interior.width / o.grid_cols;
+      const int y1 = interior.y + (row + 1) * interior.height / o.grid_rows;
       if (x1 <= x0 || y1 <= y0) continue;
       // Pixels outside the cell still feed its gradients (no isolated border).
-      cv::goodFeaturesToTrack(gray(cv::Rect(x0, y0, x1 - x0, y1 - y0)), corners, 0, options_.quality_level,
-                              options_.min_distance_px, cv::noArray(), responses);
-      for (std::size_t i = 0; i < corners.size() && responses[i] >= options_.min_corner_response; ++i)
+      cv::goodFeaturesToTrack(gray(cv::Rect(x0, y0, x1 - x0, y1 - y0)), corners, 0, o.quality_level, o.min_distance_px,
+                              cv::noArray(), responses);
+      for (std::size_t i = 0; i < corners.size() && responses[i] >= o.min_corner_response; ++i)
         found[static_cast<std::size_t>(cell)].push_back(
             {corners[i] + cv::Point2f(static_cast<float>(x0), static_cast<float>(y0)), responses[i], cell});
     }
   });
-  std::vector<Candidate> candidates;
+  std::vector<Corner> candidates;
   for (const auto& in_cell : found) candidates.insert(candidates.end(), in_cell.begin(), in_cell.end());
-  // Strongest first over the whole frame; ties in the order found, so the
-  // result does not depend on the sort implementation.
+  // Stable: the result does not depend on the sort implementation.
   std::stable_sort(candidates.begin(), candidates.end(),
-                   [](const Candidate& a, const Candidate& b) { return a.response > b.response; });
+                   [](const Corner& a, const Corner& b) { return a.response > b.response; });
+  return candidates;
+}
 
-  // GFTT keeps min_distance_px within a cell; this occupancy grid (cells of
-  // that size) keeps it across cell borders as well.
-  const double min_distance_sq = options_.min_distance_px * options_.min_distance_px;
-  const int bin = std::max(1, static_cast<int>(std::ceil(options_.min_distance_px)));
-  const int bins_x = gray.cols / bin + 1, bins_y = gray.rows / bin + 1;
+/// Up to max_features of the candidates (strongest first), at least min_distance_px apart across cell borders too
+/// (GFTT keeps it within a cell only): first up to an equal share per cell, then the budget weak cells left goes to
+/// the strongest corners not yet taken. Returned in the candidates' order.
+std::vector<Corner> spreadCorners(const std::vector<Corner>& candidates, const cv::Size& image,
+                                  const FeatureExtractorOptions& o) {
+  // An occupancy grid with bins of min_distance_px: a corner is compared with those in the 3x3 bins around it.
+  const double min_distance_sq = o.min_distance_px * o.min_distance_px;
+  const int bin = std::max(1, static_cast<int>(std::ceil(o.min_distance_px)));
+  const int bins_x = image.width / bin + 1, bins_y = image.height / bin + 1;
   std::vector<std::vector<cv::Point2f>> occupied(static_cast<std::size_t>(bins_x * bins_y));
   const auto farFromTaken = [&](const cv::Point2f& p) {
     const int bx = static_cast<int>(p.x) / bin, by = static_cast<int>(p.y) / bin;
@@ -145,53 +140,65 @@ std::vector<cv::KeyPoint> FeatureExtractor::detectBucketed(const cv::Mat& gray) 
     taken[i] = true;
     ++total;
   };
-
-  // First up to an equal share per cell, then the budget weak cells left goes
-  // to the strongest corners not yet taken.
-  const int per_cell = options_.max_features / (options_.grid_cols * options_.grid_rows);
-  std::vector<int> taken_in_cell(static_cast<std::size_t>(options_.grid_cols * options_.grid_rows), 0);
-  for (std::size_t i = 0; i < candidates.size() && total < options_.max_features; ++i) {
+  const int per_cell = o.max_features / (o.grid_cols * o.grid_rows);
+  std::vector<int> taken_in_cell(static_cast<std::size_t>(o.grid_cols * o.grid_rows), 0);
+  for (std::size_t i = 0; i < candidates.size() && total < o.max_features; ++i) {
     int& in_cell = taken_in_cell[static_cast<std::size_t>(candidates[i].cell)];
     if (in_cell < per_cell && farFromTaken(candidates[i].pt)) {
       ++in_cell;
       take(i);
     }
   }
-  for (std::size_t i = 0; i < candidates.size() && total < options_.max_features; ++i)
+  for (std::size_t i = 0; i < candidates.size() && total < o.max_features; ++i)
     if (!taken[i] && farFromTaken(candidates[i].pt)) take(i);
-
-  std::vector<cv::Point2f> points;
-  std::vector<float> responses_taken;
+  std::vector<Corner> spread;
   for (std::size_t i = 0; i < candidates.size(); ++i)
-    if (taken[i]) {
-      points.push_back(candidates[i].pt);
-      responses_taken.push_back(candidates[i].response);
+    if (taken[i]) spread.push_back(candidates[i]);
+  return spread;
+}
+
+/// Each corner refined to a fraction of a pixel (on its own, so in chunks on the thread pool with the same result).
+/// A corner refinement would move further than kMaxSubpixelShift is not a clean corner and keeps its detected
+/// position, so the minimum distance holds to within 2 x kMaxSubpixelShift.
+void refineToSubpixel(const cv::Mat& gray, std::vector<cv::Point2f>& points) {
+  if (points.empty()) return;
+  std::vector<cv::Point2f> refined = points;
+  constexpr int kChunk = 64;
+  const int chunks = (static_cast<int>(refined.size()) + kChunk - 1) / kChunk;
+  parallelFor(cv::Range(0, chunks), [&](const cv::Range& range) {
+    for (int chunk = range.start; chunk < range.end; ++chunk) {
+      const auto first = refined.begin() + chunk * kChunk;
+      const auto last = refined.begin() + std::min<std::ptrdiff_t>((chunk + 1) * kChunk, refined.size());
+      std::vector<cv::Point2f> part(first, last);
+      cv::cornerSubPix(gray, part, cv::Size(3, 3), cv::Size(-1, -1),
+                       cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 10, 0.01));
+      std::copy(part.begin(), part.end(), first);
     }
-  if (options_.subpixel && !points.empty()) {
-    // Each corner is refined on its own, so in chunks on the thread pool with the same result.
-    std::vector<cv::Point2f> refined = points;
-    constexpr int kChunk = 64;
-    const int chunks = (static_cast<int>(refined.size()) + kChunk - 1) / kChunk;
-    parallelFor(cv::Range(0, chunks), [&](const cv::Range& range) {
-      for (int chunk = range.start; chunk < range.end; ++chunk) {
-        const auto first = refined.begin() + chunk * kChunk;
-        const auto last = refined.begin() + std::min<std::ptrdiff_t>((chunk + 1) * kChunk, refined.size());
-        std::vector<cv::Point2f> part(first, last);
-        cv::cornerSubPix(gray, part, cv::Size(3, 3), cv::Size(-1, -1),
-                         cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 10, 0.01));
-        std::copy(part.begin(), part.end(), first);
-      }
-    });
-    // Refinement is for the fraction of a pixel; a corner it would move
-    // further is not a clean corner, and keeps its detected position (so the
-    // minimum distance holds to within 2 x kMaxSubpixelShift).
-    for (std::size_t i = 0; i < points.size(); ++i)
-      if (cv::norm(refined[i] - points[i]) <= kMaxSubpixelShift) points[i] = refined[i];
-  }
+  });
+  for (std::size_t i = 0; i < points.size(); ++i)
+    if (cv::norm(refined[i] - points[i]) <= kMaxSubpixelShift) points[i] = refined[i];
+}
+
+}  // namespace
+
+FeatureExtractor::FeatureExtractor(FeatureExtractorOptions options) : options_(options) {
+  validate(options_);
+  // One pyramid level: GFTT corners are single-scale.
+  orb_ = cv::ORB::create(options_.max_features, 1.2f, 1, kOrbBorder, 0, 2, cv::ORB::HARRIS_SCORE, kOrbPatchSize);
+}
+
+std::vector<cv::KeyPoint> FeatureExtractor::detectBucketed(const cv::Mat& gray) const {
+  const cv::Rect interior(kOrbBorder, kOrbBorder, gray.cols - 2 * kOrbBorder, gray.rows - 2 * kOrbBorder);
+  if (interior.width <= 0 || interior.height <= 0) return {};
+  const std::vector<Corner> spread = spreadCorners(cornersPerCell(gray, interior, options_), gray.size(), options_);
+  std::vector<cv::Point2f> points;
+  points.reserve(spread.size());
+  for (const Corner& corner : spread) points.push_back(corner.pt);
+  if (options_.subpixel) refineToSubpixel(gray, points);
   std::vector<cv::KeyPoint> keypoints;
   keypoints.reserve(points.size());
   for (std::size_t i = 0; i < points.size(); ++i)
-    keypoints.emplace_back(points[i], static_cast<float>(kOrbPatchSize), -1.0f, responses_taken[i]);
+    keypoints.emplace_back(points[i], static_cast<float>(kOrbPatchSize), -1.0f, spread[i].response);
   return keypoints;
 }
 
