@@ -20,7 +20,8 @@ using namespace weighted_icp;
 using frontend::FrontendState;
 using frontend::TrackingStatus;
 
-/// Map, inline backend and front end, declared in the order they depend on each other.
+/// Map, inline backend and front end, declared in the order they depend on each other. The gate-free retry (on by
+/// default) is off unless asked for: these tests need frames that 3D-2D cannot pose within the gates to fall back.
 struct Tracker {
   explicit Tracker(const PinholeCamera& camera, bool gate_free_retry = false)
       : backend(map, camera, backendOptions()), frontend(map, backend, camera, frontendOptions(gate_free_retry)) {}

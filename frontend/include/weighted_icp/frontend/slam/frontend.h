@@ -63,8 +63,9 @@ struct FrontendOptions {
   /// When 3D-2D fails within both gates, PnP once more on the descriptor matches wherever the prediction puts their
   /// landmarks, RANSAC alone judging them: after frames posed without 3D-2D (2D-2D, coasted) the prediction can be
   /// so far off that the landmarks project outside even the wide gate and 3D-2D never comes back
-  /// (docs/frontend_generalisation.md, "A gate-free retry"). On since 2026-11-27: it changed no frame of the 27-row
-  /// ablation and recovered real low-light runs once 2D-2D poses no longer set the velocity.
+  /// (docs/frontend_generalisation.md, "A velocity from a 2D-2D pose, and the gate-free retry on"). On since
+  /// 2026-11-27: it changed no frame of the 27-row ablation and recovered real low-light runs and a fast-turning
+  /// camera once 2D-2D poses no longer set the velocity.
   bool gate_free_retry = true;
   std::size_t min_initial_points = 50;
   /// 2D-2D below this median parallax keeps the predicted translation.
