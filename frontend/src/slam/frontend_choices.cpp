@@ -11,6 +11,13 @@ namespace {
 
 using Setter = std::function<void(FrontendOptions&, const std::string&)>;
 
+/// A choice of two words: true for `second`, false for `first`, anything else refused naming both.
+bool secondOfTwo(const std::string& value, const std::string& first, const std::string& second) {
+  if (value != first && value != second)
+    throw std::invalid_argument("'" + value + "' (expected " + first + " or " + second + ")");
+  return value == second;
+}
+
 const std::vector<std::pair<std::string, Setter>>& setters() {
   static const std::vector<std::pair<std::string, Setter>> table = {
       {"matcher", [](FrontendOptions& o, const std::string& v) { o.matcher.kind = parseMatcherKind(v); }},
@@ -24,16 +31,11 @@ const std::vector<std::pair<std::string, Setter>>& setters() {
        [](FrontendOptions& o, const std::string& v) { o.features.equalization = parseEqualizationMethod(v); }},
       {"describe",
        [](FrontendOptions& o, const std::string& v) {
-         if (v != "original" && v != "equalized")
-           throw std::invalid_argument("'" + v + "' (expected original or equalized)");
-         o.features.describe_equalized = v == "equalized";
+         o.features.describe_equalized = secondOfTwo(v, "original", "equalized");
        }},
       {"pnp", [](FrontendOptions& o, const std::string& v) { o.pnp.method = parsePnpMethod(v); }},
       {"gate-free-retry",
-       [](FrontendOptions& o, const std::string& v) {
-         if (v != "on" && v != "off") throw std::invalid_argument("'" + v + "' (expected on or off)");
-         o.gate_free_retry = v == "on";
-       }},
+       [](FrontendOptions& o, const std::string& v) { o.gate_free_retry = secondOfTwo(v, "off", "on"); }},
       {"dense-odometry",
        [](FrontendOptions& o, const std::string& v) { o.dense_odometry.use = parseDenseOdometryUse(v); }},
       {"dense-odometry-kind",
