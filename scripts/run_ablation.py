@@ -30,7 +30,7 @@ SOURCE_DIR = Path(__file__).resolve().parent.parent
 DEFAULT_SETS = [
     ("default", ""),
     ("dense-prior", "--dense-odometry prior"),
-    ("dense-fallback", "--dense-odometry fallback"),
+    ("dense-off", "--dense-odometry off"),
     ("dense-prior+fallback", "--dense-odometry prior+fallback"),
     ("equalization-global", "--equalization global"),
     ("equalization-none", "--equalization none"),

@@ -20,8 +20,9 @@ using namespace weighted_icp;
 using frontend::FrontendState;
 using frontend::TrackingStatus;
 
-/// Map, inline backend and front end, declared in the order they depend on each other. The gate-free retry (on by
-/// default) is off unless asked for: these tests need frames that 3D-2D cannot pose within the gates to fall back.
+/// Map, inline backend and front end, declared in the order they depend on each other. The gate-free retry and the
+/// dense fallback (both on by default) are off unless asked for: these tests need frames that 3D-2D cannot pose
+/// within the gates to fall back to the features' own fallbacks (coasting, 2D-2D).
 struct Tracker {
   explicit Tracker(const PinholeCamera& camera, bool gate_free_retry = false)
       : backend(map, camera, backendOptions()), frontend(map, backend, camera, frontendOptions(gate_free_retry)) {}
@@ -35,6 +36,7 @@ struct Tracker {
     frontend::FrontendOptions options;
     options.quality_gate = false;  // a blank frame must count as lost, not as a bad image
     options.gate_free_retry = gate_free_retry;
+    options.dense_odometry.use = frontend::DenseOdometryUse::Off;
     return options;
   }
 

@@ -44,9 +44,12 @@ DenseOdometryUse parseDenseOdometryUse(const std::string& name);
 
 /// @brief Dense odometry settings; OpenCV's own defaults otherwise (depth 0-4 m,
 /// at most 0.15 m and 15 degrees between frames, else the motion is refused).
+/// Since 2026-11-27 the fallback with both terms is the default: where features fail (low light, blur) depth still
+/// registers the frame, and OpenCV's photometric term alone finds too few gradients in a dark image
+/// (docs/frontend_generalisation.md, "The dense fallback on by default"). It costs nothing on frames 3D-2D poses.
 struct DenseOdometryOptions {
-  DenseOdometryUse use = DenseOdometryUse::Off;
-  DenseOdometryKind kind = DenseOdometryKind::Rgbd;
+  DenseOdometryUse use = DenseOdometryUse::Fallback;
+  DenseOdometryKind kind = DenseOdometryKind::RgbdIcp;
 };
 
 /// @brief Motion of the current frame relative to a reference frame (the last

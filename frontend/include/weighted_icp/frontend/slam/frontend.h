@@ -232,6 +232,9 @@ class Frontend {
   /// 3D-2D failed: skipped on the prediction if the quality gate refuses the image; else the dense odometry's pose
   /// when it is the fallback and registers the frame; else coasted on the prediction when canCoast; else 2D-2D.
   TrackingResult trackWithoutFeatures(Frame& frame, TrackingResult result, const std::string& why_not_3d);
+  /// A frame posed by the dense odometry becomes a keyframe (its own points mapped at that pose) when it has the
+  /// depth to start a map, so that 3D-2D tracking has points to match again at the next frame.
+  void insertDenseKeyframe(const Frame& frame, TrackingResult& result);
   /// Pixel pairs (last keyframe, frame) of the descriptor matches between the two.
   void matchLastKeyframe(const Frame& frame, std::vector<Eigen::Vector2d>& keyframe_pixels,
                          std::vector<Eigen::Vector2d>& frame_pixels) const;
