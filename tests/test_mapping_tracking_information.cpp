@@ -92,6 +92,41 @@ TEST(TrackingInformation, ALandmarkBothKeyframesSeeCancelsInTheRelativePose) {
   EXPECT_FALSE(mapping::relativePoseCovariance(map, a, a, data.camera).has_value());
 }
 
+TEST(TrackingInformation, KeyframesWithoutALandmarkInCommonHaveNoTrackedRelativePose) {
+  // As after a frame the dense odometry posed: the newer keyframe sees only landmarks mapped from itself.
+  const SyntheticKeyframes data = syntheticKeyframes(12, false, 180.0, {0, 3});
+  mapping::KeyframeSnapshot map = data.snapshot;
+  ASSERT_EQ(map.keyframes.size(), 2u);
+  const frontend::KeyframeId a = map.keyframes.begin()->first, b = std::next(map.keyframes.begin())->first;
+  ASSERT_TRUE(mapping::relativePoseCovariance(map, a, b, data.camera).has_value());
+
+  // Every landmark b sees becomes a copy of it that only b observes: same positions, covariances and pixels.
+  frontend::MapPointId next_id = map.points.rbegin()->first + 1;
+  std::vector<frontend::MapPointId> copies;
+  for (const frontend::MapPointId id : map.keyframes.at(b).observed_points) {
+    frontend::MapPoint& original = map.points.at(id);
+    frontend::MapPoint copy = original;
+    copy.id = next_id;
+    copy.observations.clear();
+    for (auto it = original.observations.begin(); it != original.observations.end();) {
+      if (it->keyframe == b) {
+        copy.observations.push_back(*it);
+        it = original.observations.erase(it);
+      } else {
+        ++it;
+      }
+    }
+    map.points.emplace(next_id, copy);
+    copies.push_back(next_id++);
+  }
+  map.keyframes.at(b).observed_points = copies;
+  ASSERT_TRUE(mapping::keyframePoseCovariance(map, b, data.camera).has_value()) << "b is still held by its landmarks";
+  EXPECT_FALSE(mapping::relativePoseCovariance(map, a, b, data.camera).has_value());
+  const auto edges = mapping::odometryEdgeCovariances(map, {a, b}, data.camera);
+  ASSERT_EQ(edges.size(), 2u);
+  EXPECT_FALSE(edges[1].has_value()) << "the pose graph then takes the odometry noise model for this edge";
+}
+
 /// A circle of 40 keyframes whose odometry is exact but for one step (`bad`), which is 8 cm and 2 degrees off.
 DriftedLoop loopWithOneBadStep(std::size_t bad) {
   DriftedLoop loop = makeDriftedLoop(40, 2.0, 0.0, 0.0);
