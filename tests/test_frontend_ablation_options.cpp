@@ -112,7 +112,7 @@ TEST(DenseOdometryFallback, PosesFramesFeaturesCannotTrackAndMapsThem) {
   // room's planes, 2.5 cm a frame: the reason the default keeps the photometric term.
   for (const auto kind : {frontend::DenseOdometryKind::RgbdIcp, frontend::DenseOdometryKind::Rgbd}) {
     RgbdSlamOptions options;
-    if (kind != options.frontend.dense_odometry.kind) options.frontend.dense_odometry.kind = kind;
+    options.frontend.dense_odometry.kind = kind;
     const auto frames = trackWithoutUsableFeatures(options);
     for (std::size_t i = 1; i < kFrames; ++i) {
       ASSERT_EQ(frames[i].result.status, frontend::TrackingStatus::TrackedDense)

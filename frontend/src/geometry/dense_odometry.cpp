@@ -50,12 +50,15 @@ DenseOdometry::DenseOdometry(const PinholeCamera& camera, DenseOdometryKind kind
   }
 }
 
-void DenseOdometry::setCurrent(const RgbdFrame& frame) {
-  if (frame.color.empty() || frame.depth.type() != CV_32F || frame.depth.size() != frame.color.size())
+void DenseOdometry::setCurrent(const RgbdFrame& frame, const cv::Mat& gray) {
+  if (frame.color.empty() || frame.depth.type() != CV_32F || frame.depth.size() != frame.color.size() ||
+      gray.size() != frame.color.size())
     throw std::invalid_argument("DenseOdometry: frame at " + std::to_string(frame.timestamp) +
-                                " needs a colour image and CV_32F depth of its size");
-  // The odometry keeps its pyramids in the frame object, so the reference's are built once.
-  current_ = cv::rgbd::OdometryFrame::create(frame.gray().clone(), frame.depth.clone());
+                                " needs a colour image, its grey image and CV_32F depth of its size");
+  // The odometry keeps its pyramids in the frame object, so the reference's are built once. The images outlive the
+  // caller's frame: the depth and a grey image that is the caller's own colour buffer are copied.
+  const cv::Mat own_gray = gray.data == frame.color.data ? gray.clone() : gray;
+  current_ = cv::rgbd::OdometryFrame::create(own_gray, frame.depth.clone());
   computed_ = false;
   motion_.reset();
 }

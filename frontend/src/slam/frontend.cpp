@@ -79,13 +79,14 @@ double Frontend::depthAt(const cv::Mat& depth, const cv::Point2f& pixel) const {
   return z;
 }
 
-Frame Frontend::makeFrame(const RgbdFrame& image, bool& used_clahe) {
+void Frontend::requireImages(const RgbdFrame& image) {
   if (image.color.empty()) throw std::invalid_argument("frame at " + std::to_string(image.timestamp) + ": empty image");
   if (image.depth.type() != CV_32F || image.depth.size() != image.color.size())
     throw std::invalid_argument("frame at " + std::to_string(image.timestamp) +
                                 ": depth must be CV_32F metres of the colour image's size");
-  const cv::Mat gray = image.gray();
+}
 
+Frame Frontend::makeFrame(const RgbdFrame& image, const cv::Mat& gray, bool& used_clahe) {
   Frame frame;
   frame.id = next_frame_id_++;
   frame.timestamp = image.timestamp;
@@ -112,16 +113,18 @@ Frame Frontend::makeFrame(const RgbdFrame& image, bool& used_clahe) {
 
 TrackingResult Frontend::track(const RgbdFrame& input) {
   // A sensor whose depth camera is not its colour camera: its depth moved into the colour pixels first (a depth
-  // image of another type or size is left to makeFrame's error, which names the frame).
+  // image of another type or size is left to requireImages' error, which names the frame).
   RgbdFrame image = input;
   if (camera_.unregistered_depth && input.depth.type() == CV_32F && input.depth.size() == input.color.size() &&
       input.color.cols == camera_.width && input.color.rows == camera_.height)
     image.depth = registerDepthToColor(input.depth, camera_);
   TrackingResult result;
-  Frame frame = makeFrame(image, result.used_clahe);
+  requireImages(image);
+  const cv::Mat gray = image.gray();  // once a frame: the features and the dense odometry
+  Frame frame = makeFrame(image, gray, result.used_clahe);
   result.features = frame.size();
   current_color_ = image.color;
-  if (dense_) dense_->setCurrent(image);
+  if (dense_) dense_->setCurrent(image, gray);
   followMapCorrection();
   frame_quality_.reset();
   frame_decision_.reset();

@@ -64,9 +64,11 @@ class DenseOdometry {
   DenseOdometry(const PinholeCamera& camera, DenseOdometryKind kind);
 
   /// @brief The frame motions are measured for from now on (its motion, if computed, is forgotten).
-  /// Throws std::invalid_argument when depth is not CV_32F of the colour image's size.
+  /// Throws std::invalid_argument when depth is not CV_32F of the colour image's size or gray not of that size.
   /// @param frame the frame being tracked
-  void setCurrent(const RgbdFrame& frame);
+  /// @param gray  its grey image (RgbdFrame::gray), which the caller has already: kept, copied only when it shares
+  ///              the colour image's pixels (a grey input image the caller may overwrite)
+  void setCurrent(const RgbdFrame& frame, const cv::Mat& gray);
   /// @brief The current frame becomes the reference (it got a pose).
   void acceptCurrent();
   /// @brief No reference any more (e.g. after tracking was lost).

@@ -188,7 +188,10 @@ class Frontend {
     std::vector<Eigen::Vector2d> pixels;
   };
 
-  Frame makeFrame(const RgbdFrame& image, bool& used_clahe);
+  /// Throws std::invalid_argument naming the frame unless it has a colour image and CV_32F depth of its size.
+  static void requireImages(const RgbdFrame& image);
+  /// Features (from gray, the frame's grey image) with their undistorted pixels and depths.
+  Frame makeFrame(const RgbdFrame& image, const cv::Mat& gray, bool& used_clahe);
   double depthAt(const cv::Mat& depth, const cv::Point2f& pixel) const;
   /// The one place the state changes; ends the segment when tracking is lost.
   void transitionTo(FrontendState next);
