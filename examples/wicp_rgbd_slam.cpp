@@ -469,6 +469,7 @@ int main(int argc, char** argv) {
     mapping::LoopClosingSlamOptions closing_options;
     frontend::RgbdSlamOptions& options = closing_options.slam;
     std::string gate_free_retry = options.frontend.gate_free_retry ? "on" : "off";
+    std::string motion_timing = options.frontend.motion_per_period ? "period" : "frame";
     simulation::SyntheticRgbdOptions synthetic;
     po::options_description description(
         "wicp_rgbd_slam [--dataset DIR] [--camera fr1|fr2|fr3|FILE.yaml] [--first-frame N] [--max-frames N]\n"
@@ -589,6 +590,9 @@ int main(int argc, char** argv) {
         ("gate-free-retry", po::value(&gate_free_retry)->default_value(gate_free_retry),
          "on: when 3D-2D fails within both projection gates, PnP once more on the descriptor matches wherever the "
          "landmarks project; off: the 2D-2D and coasting fallbacks directly (as before 2026-11-27)")
+        ("motion-timing", po::value(&motion_timing)->default_value(motion_timing),
+         "frame: the constant-velocity prediction repeats the last motion once a frame; period: once per frame "
+         "period the timestamps count (a dropped frame: twice), better at gaps, worse in the dark (README)")
         ("pnp-ransac-iterations", tools::rangedValue(&options.frontend.pnp.ransac_iterations, 1, 100000)
                                       ->default_value(options.frontend.pnp.ransac_iterations),
          "most RANSAC draws a frame's PnP makes; fewer when the inliers found already give 99 % confidence (1-100000)");
@@ -599,6 +603,7 @@ int main(int argc, char** argv) {
     try {
       frontend::setFrontendChoice(options.frontend, "describe", describe);
       frontend::setFrontendChoice(options.frontend, "gate-free-retry", gate_free_retry);
+      frontend::setFrontendChoice(options.frontend, "motion-timing", motion_timing);
     } catch (const std::invalid_argument& e) {
       throw po::error(std::string("--") + e.what());
     }

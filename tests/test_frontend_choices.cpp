@@ -34,6 +34,12 @@ TEST(FrontendChoices, EachKeySetsItsOption) {
   setFrontendChoice(options, "gate-free-retry", "on");
   EXPECT_TRUE(options.gate_free_retry);
   EXPECT_THROW(setFrontendChoice(options, "gate-free-retry", "yes"), std::invalid_argument);
+  EXPECT_FALSE(options.motion_per_period);
+  setFrontendChoice(options, "motion-timing", "period");
+  EXPECT_TRUE(options.motion_per_period);
+  setFrontendChoice(options, "motion-timing", "frame");
+  EXPECT_FALSE(options.motion_per_period);
+  EXPECT_THROW(setFrontendChoice(options, "motion-timing", "time"), std::invalid_argument);
   EXPECT_EQ(options.pnp.method, PnpMethod::Iterative);
   EXPECT_EQ(options.quality.measure, QualityMeasure::Brisque);
   EXPECT_EQ(options.features.descriptor, DescriptorKind::ModifiedBrief);
@@ -44,7 +50,7 @@ TEST(FrontendChoices, EachKeySetsItsOption) {
   EXPECT_EQ(options.dense_odometry.kind, DenseOdometryKind::Icp);
   EXPECT_EQ(options.quality.mode, QualityGateMode::Absolute);
   EXPECT_EQ(options.matcher.kind, MatcherKind::KdTree);
-  EXPECT_EQ(frontendChoiceKeys().size(), 12u);
+  EXPECT_EQ(frontendChoiceKeys().size(), 13u);
 }
 
 TEST(FrontendChoices, AWrongKeyOrValueIsNamed) {

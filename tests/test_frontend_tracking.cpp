@@ -25,7 +25,9 @@ using frontend::TrackingStatus;
 /// within the gates to fall back to the features' own fallbacks (coasting, 2D-2D).
 struct Tracker {
   explicit Tracker(const PinholeCamera& camera, bool gate_free_retry = false)
-      : backend(map, camera, backendOptions()), frontend(map, backend, camera, frontendOptions(gate_free_retry)) {}
+      : Tracker(camera, frontendOptions(gate_free_retry)) {}
+  Tracker(const PinholeCamera& camera, const frontend::FrontendOptions& options)
+      : backend(map, camera, backendOptions()), frontend(map, backend, camera, options) {}
 
   static frontend::BackendOptions backendOptions() {
     frontend::BackendOptions options;
@@ -261,6 +263,37 @@ TEST(FrontendGateFreeRetry, AFrameFarFromThePredictionIsPosedAgainstTheMapOnlyWi
     ASSERT_EQ(result.status, TrackingStatus::Tracked) << result.reason;
     EXPECT_LT(result.pose_wc.translation().norm(), 0.01);
     EXPECT_LT(Eigen::AngleAxisd(result.pose_wc.linear()).angle(), 0.01);
+  }
+}
+
+TEST(FrontendDroppedFrames, APredictionPerPeriodCountsTheFramePeriodsTheTimestampsSay) {
+  // A fast camera (a loop in 40 frames, 9 degrees a frame): frames 0, 1, 2, then 5, the sensor having dropped 3
+  // and 4. With motion_per_period the motion model predicts three frames' motion from the timestamps; one frame's
+  // motion (the default's prediction) puts the map's landmarks outside both gates. The same images stamped as if
+  // consecutive show that the timestamps are what tracks it.
+  simulation::SyntheticRgbdOptions options;
+  options.frames = 6;
+  options.frames_per_loop = 40.0;
+  const simulation::SyntheticRgbdSequence sequence(options);
+  const std::vector<std::size_t> kept = {0, 1, 2, 5};
+  for (const bool honest_timestamps : {true, false}) {
+    frontend::FrontendOptions frontend_options = Tracker::frontendOptions();
+    frontend_options.motion_per_period = true;
+    Tracker tracker(options.camera, frontend_options);
+    frontend::TrackingResult result;
+    for (std::size_t k = 0; k < kept.size(); ++k) {
+      RgbdFrame frame = sequence.frame(kept[k]).rgbd;
+      if (!honest_timestamps) frame.timestamp = sequence.frame(k).rgbd.timestamp;
+      result = tracker.frontend.track(frame);
+      if (k + 1 < kept.size()) ASSERT_TRUE(result.measuredPose()) << "frame " << kept[k] << ": " << result.reason;
+    }
+    if (!honest_timestamps) {
+      EXPECT_NE(result.status, TrackingStatus::Tracked) << "the test needs a frame outside both gates";
+      continue;
+    }
+    ASSERT_EQ(result.status, TrackingStatus::Tracked) << result.reason;
+    const Eigen::Isometry3d truth = sequence.cameraToWorld(0).inverse() * sequence.cameraToWorld(5);
+    EXPECT_LT((result.pose_wc.translation() - truth.translation()).norm(), 0.01);
   }
 }
 

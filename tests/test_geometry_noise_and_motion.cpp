@@ -107,4 +107,70 @@ TEST(ConstantVelocity, PredictsConstantMotionExactly) {
   EXPECT_THROW(model.update(broken), std::invalid_argument);
 }
 
+TEST(FrameClock, RoundsJitterAwayAndCountsDroppedFrames) {
+  frontend::FrameClock clock;
+  EXPECT_FALSE(clock.period());
+  EXPECT_EQ(clock.periodsBetween(0.0, 10.0), 1);  // no period known yet
+  // 30 Hz with TUM-like jitter (28-36 ms), one frame dropped after the fifth.
+  const std::vector<double> intervals = {0.032, 0.028, 0.036, 0.033, 0.031, 0.064, 0.030, 0.034};
+  double t = 100.0;
+  clock.tick(t);
+  std::vector<int> steps;
+  for (const double dt : intervals) {
+    clock.tick(t + dt);
+    steps.push_back(clock.periodsBetween(t, t + dt));
+    t += dt;
+  }
+  EXPECT_EQ(steps, (std::vector<int>{1, 1, 1, 1, 1, 2, 1, 1}));
+  ASSERT_TRUE(clock.period());
+  EXPECT_NEAR(*clock.period(), 0.0325, 1e-9);  // the median, not the mean the dropped frame pulls up
+  EXPECT_EQ(clock.periodsBetween(t, t + 0.0325 * 3.4), 3);
+  EXPECT_EQ(clock.periodsBetween(t, t + 0.001), 1);  // never fewer than one
+  EXPECT_EQ(clock.periodsBetween(t, t + 1e9), frontend::FrameClock::kMaxPeriods);
+  EXPECT_EQ(clock.periodsBetween(t, t - 1.0), 1);  // not increasing
+  EXPECT_EQ(clock.periodsBetween(std::nan(""), t), 1);
+  // Timestamps that repeat or go back add nothing.
+  clock.tick(t);
+  clock.tick(t - 5.0);
+  clock.tick(std::nan(""));
+  EXPECT_NEAR(*clock.period(), 0.0325, 1e-9);
+}
+
+TEST(ConstantVelocity, PredictsPerFramePeriodWithTimestamps) {
+  const Eigen::Isometry3d step = makePose({1, 2, -0.5}, {0.02, -0.01, 0.05});
+  const Eigen::Isometry3d start = makePose({10, 0, 30}, {1, 2, 3});
+  frontend::FrameClock clock;
+  for (int k = 0; k < 5; ++k) clock.tick(0.033 * k);
+  ConstantVelocityModel model;
+  model.update(start, 0.0);
+  model.update(start * step, 0.033);
+  // One period on: the untimed prediction, exactly.
+  EXPECT_TRUE(model.predict(0.066, clock)->isApprox(*model.predict(), 1e-15));
+  // A dropped frame: two steps on.
+  EXPECT_TRUE(model.predict(0.099, clock)->isApprox(start * step * step * step, 1e-9));
+  // The last motion spanned two periods (a dropped frame before it): half of it per period.
+  model.reset();
+  model.update(start, 0.0);
+  model.update(start * step * step, 0.066);
+  EXPECT_TRUE(model.predict(0.099, clock)->isApprox(start * step * step * step, 1e-9));
+  // Without timestamps every pose is one period on.
+  model.reset();
+  model.update(start);
+  model.update(start * step);
+  EXPECT_TRUE(model.predict(5.0, clock)->isApprox(start * step * step, 1e-15));
+}
+
+TEST(ScaledMotion, IsTheSameMotionPerUnitOfTime) {
+  const Eigen::Isometry3d step = makePose({10.0, 20.0, -5.0}, {0.3, -0.2, 0.1});
+  EXPECT_TRUE(frontend::scaledMotion(step, 1.0).isApprox(step, 1e-15));
+  EXPECT_TRUE(frontend::scaledMotion(step, 0.0).isApprox(Eigen::Isometry3d::Identity(), 1e-15));
+  EXPECT_TRUE(frontend::scaledMotion(step, 3.0).isApprox(step * step * step, 1e-12));  // a screw, not a line
+  const Eigen::Isometry3d half = frontend::scaledMotion(step, 0.5);
+  EXPECT_TRUE((half * half).isApprox(step, 1e-12));
+  const Eigen::Isometry3d slide = makePose({0.0, 0.0, 0.0}, {0.3, -0.2, 0.1});  // no rotation: the small-angle form
+  EXPECT_TRUE(frontend::scaledMotion(slide, 2.5).translation().isApprox(2.5 * slide.translation(), 1e-12));
+  EXPECT_THROW(frontend::scaledMotion(step, -1.0), std::invalid_argument);
+  EXPECT_THROW(frontend::scaledMotion(step, std::nan("")), std::invalid_argument);
+}
+
 }  // namespace

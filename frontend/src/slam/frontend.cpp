@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include <opencv2/calib3d.hpp>
@@ -124,6 +125,8 @@ TrackingResult Frontend::track(const RgbdFrame& input) {
   Frame frame = makeFrame(image, gray, result.used_clahe);
   result.features = frame.size();
   current_color_ = image.color;
+  current_timestamp_ = frame.timestamp;
+  clock_.tick(frame.timestamp);
   if (dense_) dense_->setCurrent(image, gray);
   followMapCorrection();
   frame_quality_.reset();
@@ -350,14 +353,24 @@ void Frontend::rememberMetricMotion(const Frame& frame, const Eigen::Isometry3d&
   // away frame after frame (docs/frontend_generalisation.md, 2026-11-27).
   if (last_metric_frame_id_ + 1 == frame.id) {
     metric_velocity_ = last_pose_wc_->inverse() * pose_wc;  // the previous frame's pose is that metric one
+    metric_velocity_periods_ = periodsBetween(last_measured_timestamp_, frame.timestamp, 1);
   } else if (last_measured_frame_id_ + 1 == frame.id && metric_velocity_) {
     // The previous frame was posed 2D-2D: the motion model goes on from the last velocity measured with depth.
     // After coasted or skipped frames (predictions, not poses) it keeps its motion from the prediction: restarting
     // it there too was worse (fr3 made dark, ten draws: 4.47 cm mean against 4.21).
     motion_.reset();
-    motion_.update(pose_wc * metric_velocity_->inverse());
+    const std::optional<double> period = clock_.period();
+    const double spanned_seconds =
+        period ? metric_velocity_periods_ * *period : std::numeric_limits<double>::quiet_NaN();
+    motion_.update(pose_wc * metric_velocity_->inverse(), frame.timestamp - spanned_seconds);
   }
   last_metric_frame_id_ = frame.id;
+}
+
+int Frontend::periodsBetween(double t0, double t1, std::size_t frames) const {
+  // Without timestamps (no period learnt), a frame is a period.
+  if (options_.motion_per_period && clock_.period()) return clock_.periodsBetween(t0, t1);
+  return static_cast<int>(frames);
 }
 
 void Frontend::acceptPose(Frame& frame, TrackingResult& result, TrackingStatus status,
@@ -365,9 +378,10 @@ void Frontend::acceptPose(Frame& frame, TrackingResult& result, TrackingStatus s
   frame.pose_wc = pose_wc;
   result.status = status;
   setPose(result, frame.pose_wc);
-  motion_.update(frame.pose_wc);
+  motion_.update(frame.pose_wc, frame.timestamp);
   last_pose_wc_ = frame.pose_wc;
   last_measured_frame_id_ = frame.id;
+  last_measured_timestamp_ = frame.timestamp;
   if (dense_) dense_->acceptCurrent();
 }
 
@@ -395,9 +409,10 @@ TrackingResult Frontend::initialize(Frame& frame, TrackingResult result) {
   // A new segment continues from the last known pose: mini-maps stay in one frame.
   frame.pose_wc = last_pose_wc_.value_or(Eigen::Isometry3d::Identity());
   transitionTo(FrontendState::Tracking);
-  motion_.update(frame.pose_wc);
+  motion_.update(frame.pose_wc, frame.timestamp);
   last_pose_wc_ = frame.pose_wc;
   last_measured_frame_id_ = frame.id;
+  last_measured_timestamp_ = frame.timestamp;
   last_tracked_frame_id_ = frame.id;
   last_metric_frame_id_ = frame.id;
   if (dense_) dense_->acceptCurrent();
@@ -413,7 +428,7 @@ std::optional<Eigen::Isometry3d> Frontend::predictPose() {
   const DenseOdometryUse use = options_.dense_odometry.use;
   if (dense_ && (use == DenseOdometryUse::Prior || use == DenseOdometryUse::PriorAndFallback))
     if (const auto motion = dense_->motionFromReference()) return *last_pose_wc_ * *motion;
-  return motion_.predict();
+  return options_.motion_per_period ? motion_.predict(current_timestamp_, clock_) : motion_.predict();
 }
 
 TrackingResult Frontend::trackWithoutFeatures(Frame& frame, TrackingResult result, const std::string& why_not_3d) {
@@ -466,10 +481,16 @@ bool Frontend::canCoast(const Frame& frame) const {
 TrackingResult Frontend::trackRelative(Frame& frame, TrackingResult result, const std::string& why_not_3d) {
   if (!metric_velocity_) return lose(result, why_not_3d + ", and no metric motion yet to scale a 2D-2D estimate");
   // The last motion measured with depth, not the motion model's (which 2D-2D
-  // frames feed): a scale error would otherwise compound frame after frame. Once per frame since the last measured
-  // one: frames skipped or coasted in between moved too.
+  // frames feed): a scale error would otherwise compound frame after frame. Once per frame (or frame period) since
+  // the last measured frame, per one it spanned: frames skipped or coasted in between moved too.
+  const std::size_t frames = frame.id - last_measured_frame_id_;
+  const int periods = periodsBetween(last_measured_timestamp_, frame.timestamp, frames);
   Eigen::Isometry3d predicted_wc = *last_pose_wc_;
-  for (std::size_t id = last_measured_frame_id_; id < frame.id; ++id) predicted_wc = predicted_wc * *metric_velocity_;
+  if (periods == static_cast<int>(frames) && metric_velocity_periods_ == 1)
+    for (std::size_t k = 0; k < frames; ++k) predicted_wc = predicted_wc * *metric_velocity_;  // per frame, as ever
+  else
+    predicted_wc =
+        predicted_wc * scaledMotion(*metric_velocity_, static_cast<double>(periods) / metric_velocity_periods_);
   const Eigen::Isometry3d predicted_in_keyframe = last_keyframe_.pose_wc.inverse() * predicted_wc;
   std::vector<Eigen::Vector2d> keyframe_pixels, frame_pixels;
   matchLastKeyframe(frame, keyframe_pixels, frame_pixels);
@@ -537,7 +558,7 @@ void Frontend::predictPoseOf(TrackingResult& result) {
   if (!predicted) return;
   result.pose_predicted = true;
   setPose(result, *predicted);
-  motion_.update(*predicted);
+  motion_.update(*predicted, current_timestamp_);
 }
 
 void Frontend::setPose(TrackingResult& result, const Eigen::Isometry3d& pose_wc) const {

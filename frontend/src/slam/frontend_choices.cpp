@@ -36,6 +36,8 @@ const std::vector<std::pair<std::string, Setter>>& setters() {
       {"pnp", [](FrontendOptions& o, const std::string& v) { o.pnp.method = parsePnpMethod(v); }},
       {"gate-free-retry",
        [](FrontendOptions& o, const std::string& v) { o.gate_free_retry = secondOfTwo(v, "off", "on"); }},
+      {"motion-timing",
+       [](FrontendOptions& o, const std::string& v) { o.motion_per_period = secondOfTwo(v, "frame", "period"); }},
       {"dense-odometry",
        [](FrontendOptions& o, const std::string& v) { o.dense_odometry.use = parseDenseOdometryUse(v); }},
       {"dense-odometry-kind",

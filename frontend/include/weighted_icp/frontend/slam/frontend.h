@@ -16,6 +16,7 @@
 #include "weighted_icp/frontend/geometry/depth_noise_model.h"
 #include "weighted_icp/frontend/geometry/dynamic_point_filter.h"
 #include "weighted_icp/frontend/geometry/dynamic_point_history.h"
+#include "weighted_icp/frontend/geometry/frame_clock.h"
 #include "weighted_icp/frontend/geometry/keyframe_homography.h"
 #include "weighted_icp/frontend/geometry/motion_model.h"
 #include "weighted_icp/frontend/geometry/pose_estimation.h"
@@ -67,6 +68,11 @@ struct FrontendOptions {
   /// 2026-11-27: it changed no frame of the 27-row ablation and recovered real low-light runs and a fast-turning
   /// camera once 2D-2D poses no longer set the velocity.
   bool gate_free_retry = true;
+  /// The constant-velocity prediction per frame period the timestamps count (a frame the sensor dropped: twice the
+  /// last motion) instead of per frame. A better predictor on clean frames (fr3's doubled intervals: 1.14 -> 0.29 cm
+  /// off), but it doubles a noisy velocity's error too, and tracking in the dark was worse with it; off by default
+  /// (docs/frontend_generalisation.md, "A prediction per frame period, measured and left off").
+  bool motion_per_period = false;
   std::size_t min_initial_points = 50;
   /// 2D-2D below this median parallax keeps the predicted translation.
   double min_parallax_deg = 1.0;
@@ -208,6 +214,8 @@ class Frontend {
   /// Huber refinement of the pose on the static inliers, with their depths as well as pixels.
   Eigen::Isometry3d refinePose(const Frame& frame, const LocalMatches& matched, const std::vector<int>& static_inliers,
                                const Eigen::Isometry3d& pose_wc) const;
+  /// Frame periods from t0 to t1 with motion_per_period (the clock's count), else `frames`, the frames between.
+  int periodsBetween(double t0, double t1, std::size_t frames) const;
   /// Records a tracked pose in the frame, the result, the motion model and the last pose.
   void acceptPose(Frame& frame, TrackingResult& result, TrackingStatus status, const Eigen::Isometry3d& pose_wc);
   /// Makes the frame a keyframe if it moved or lost enough of the tracked points and its image is good enough.
@@ -302,6 +310,7 @@ class Frontend {
   DescriptorMatcher matcher_;
   std::optional<ImageQualityGate> quality_gate_;
   ConstantVelocityModel motion_;
+  FrameClock clock_;                    // the sensor's frame period, from every frame's timestamp
   std::optional<DenseOdometry> dense_;  // Issue #11: when options_.dense_odometry.use is not Off
 
   std::size_t next_frame_id_ = 0;
@@ -310,6 +319,8 @@ class Frontend {
   std::optional<Eigen::Isometry3d> last_pose_wc_;
   /// The id of the frame last_pose_wc_ was measured on.
   std::size_t last_measured_frame_id_ = 0;
+  /// And its timestamp.
+  double last_measured_timestamp_ = 0.0;
   /// The id of the last frame posed by 3D-2D tracking (or starting a segment): coasting follows only such a frame.
   std::size_t last_tracked_frame_id_ = 0;
   /// The id of the last frame posed with depth (3D-2D, dense odometry, a segment's start): velocities are measured
@@ -317,12 +328,15 @@ class Frontend {
   std::size_t last_metric_frame_id_ = 0;
   /// One frame's motion, between the last two consecutive frames posed with depth: what scales 2D-2D.
   std::optional<Eigen::Isometry3d> metric_velocity_;
+  /// How many frame periods it spanned (periodsBetween): two across a dropped frame.
+  int metric_velocity_periods_ = 1;
   Frame last_keyframe_;
   KeyframeId last_keyframe_id_ = 0;
   std::size_t tracked_at_last_keyframe_ = 0;
   std::map<MapPointId, int> dynamic_votes_;
-  LocalMap local_map_;     // what matcher_ is indexed on
-  cv::Mat current_color_;  // the image being tracked, for the quality gate
+  LocalMap local_map_;              // what matcher_ is indexed on
+  cv::Mat current_color_;           // the image being tracked, for the quality gate
+  double current_timestamp_ = 0.0;  // its timestamp, for the motion model's prediction
   /// Its assessment, when the gate sees every frame.
   std::optional<QualityJudgement> frame_quality_;
   /// The gate's decision on the frame being tracked, once asked (refusedByQualityGate).
