@@ -3,6 +3,7 @@
 // refused (also under perceptual aliasing), and verification recovers the
 // relative pose whatever the rotation between the two maps.
 
+#include <algorithm>
 #include <cmath>
 #include <iostream>
 #include <vector>
@@ -218,6 +219,37 @@ TEST(PlaceRecognition, ExcludesRecentAndCovisibleKeyframesAndWaitsForConsistency
   EXPECT_TRUE(recognizer.detect(8, {}, {}).empty());
   EXPECT_TRUE(recognizer.detect(9, bow, {}).empty());
   EXPECT_THROW(PlaceRecognizer(nullptr), std::invalid_argument);
+}
+
+TEST(PlaceRecognition, ProposesRecentKeyframesOfAnotherSegment) {
+  // Tracking links a keyframe to the recent ones of its own segment only: across a tracking loss the keyframes
+  // just before it are candidates.
+  VocabularyTrainingOptions options;
+  options.branching = 4;
+  options.depth = 2;
+  cv::Mat descriptors(64, 32, CV_8U), others(64, 32, CV_8U);
+  cv::randu(descriptors, 0, 256);
+  cv::randu(others, 0, 256);
+  descriptors.colRange(0, 16).setTo(0);  // words of their own, so that they weigh something (IDF)
+  others.colRange(0, 16).setTo(255);
+  const auto vocabulary =
+      std::make_shared<const BinaryVocabulary>(BinaryVocabulary::train({descriptors, others}, options));
+  PlaceRecognitionOptions place;
+  place.exclude_recent = 5;
+  place.min_normalised_score = 0.0;
+  PlaceRecognizer recognizer(vocabulary, place);
+  for (frontend::KeyframeId id = 0; id < 3; ++id) recognizer.add(id, descriptors, 0);
+  recognizer.add(3, descriptors, 1);
+  const BowVector bow = vocabulary->transform(descriptors);
+  const auto ids = [&](std::size_t segment) {
+    std::vector<frontend::KeyframeId> result;
+    for (const PlaceCandidate& c : recognizer.rank(4, bow, {}, segment)) result.push_back(c.keyframe);
+    std::sort(result.begin(), result.end());
+    return result;
+  };
+  EXPECT_EQ(ids(1), (std::vector<frontend::KeyframeId>{0, 1, 2}));  // query in segment 1: segment 0 is not recent
+  EXPECT_EQ(ids(0), (std::vector<frontend::KeyframeId>{3}));
+  EXPECT_EQ(ids(2).size(), 4u);  // a third segment: none is recent
 }
 
 }  // namespace

@@ -24,15 +24,25 @@ struct SlamRun {
   std::vector<mapping::LoopCandidateRecord> candidates;
 };
 
-/// Runs LoopClosingSlam inline (reproducible) over the whole sequence, with or without loop closure.
-SlamRun runSlam(const simulation::SyntheticRgbdSequence& sequence, bool loop_closure) {
+/// Runs LoopClosingSlam inline (reproducible) over the whole sequence, with or without loop closure; the frames in
+/// `blackout` come black and without depth (a covered lens), so tracking is lost there.
+SlamRun runSlam(const simulation::SyntheticRgbdSequence& sequence, bool loop_closure,
+                const mapping::LoopDetectorOptions& detector_options = {}, const std::set<std::size_t>& blackout = {}) {
   mapping::LoopClosingSlamOptions options;
   options.slam.backend.background_thread = false;
   options.loop_closing.background_thread = false;
   options.loop_closure = loop_closure;
-  const auto detector = std::make_shared<mapping::BowLoopDetector>(trainedVocabulary(), sequence.options().camera);
+  const auto detector =
+      std::make_shared<mapping::BowLoopDetector>(trainedVocabulary(), sequence.options().camera, detector_options);
   mapping::LoopClosingSlam slam(sequence.options().camera, mapping::asLoopDetector(detector), options);
-  for (std::size_t i = 0; i < sequence.size(); ++i) slam.process(sequence.frame(i).rgbd);
+  for (std::size_t i = 0; i < sequence.size(); ++i) {
+    RgbdFrame frame = sequence.frame(i).rgbd;
+    if (blackout.count(i)) {
+      frame.color.setTo(cv::Scalar::all(0));
+      frame.depth.setTo(0.0f);
+    }
+    slam.process(frame);
+  }
   slam.finish();
   Trajectory truth;
   for (std::size_t i = 0; i < sequence.size(); ++i) truth.push_back({sequence.timestamp(i), sequence.cameraToWorld(i)});
@@ -78,6 +88,30 @@ TEST(LoopDetector, AcceptsNoLoopOnASequenceThatNeverRevisits) {
   options.frames = 150;  // a fifth of the default 800-frame round: never back at a place seen before
   const simulation::SyntheticRgbdSequence sequence(options);
   EXPECT_EQ(runSlam(sequence, true).stats.loops_accepted, 0u);
+}
+
+TEST(LoopDetector, BridgesATrackingLossToThePlaceSeenJustBefore) {
+  // Ten frames without image or depth: tracking is lost, and the new segment starts at the last known pose while
+  // the camera moved on. Its first keyframe is verified against the previous segment's last one, and the loop edge
+  // puts the segment back; without the bridge (place recognition alone) nothing links the two.
+  simulation::SyntheticRgbdOptions options;
+  options.seed = 9;
+  options.frames = 90;
+  options.frames_per_loop = 240.0;
+  const simulation::SyntheticRgbdSequence sequence(options);
+  std::set<std::size_t> blackout;
+  for (std::size_t i = 40; i < 50; ++i) blackout.insert(i);
+  mapping::LoopDetectorOptions without_bridge;
+  without_bridge.bridge_keyframes = 0;
+  const SlamRun bridged = runSlam(sequence, true, {}, blackout);
+  const SlamRun unbridged = runSlam(sequence, true, without_bridge, blackout);
+  const auto is_bridge = [](const mapping::LoopCandidateRecord& c) { return c.reason.rfind("segment bridge", 0) == 0; };
+  ASSERT_TRUE(std::any_of(bridged.candidates.begin(), bridged.candidates.end(), [&](const auto& c) {
+    return is_bridge(c) && c.refused_by.empty();
+  })) << "no bridge verified";
+  EXPECT_GE(bridged.stats.loops_accepted, 1u);
+  EXPECT_TRUE(std::none_of(unbridged.candidates.begin(), unbridged.candidates.end(), is_bridge));
+  EXPECT_LT(bridged.ate_m, 0.5 * unbridged.ate_m) << "bridged " << bridged.ate_m << " m, not " << unbridged.ate_m;
 }
 
 TEST(LoopDetector, RefusesToBeBuiltWithoutAVocabularyOrWrapped) {

@@ -29,9 +29,20 @@ std::optional<LoopConstraint> BowLoopDetector::detect(const frontend::Map& map, 
   // Bundle adjustment may have culled it since insertion: nothing to query, nothing to add.
   if (keyframe == snapshot.keyframes.end()) return std::nullopt;
   BowVector bow = vocabulary_->transform(keyframe->second.descriptors);
+  const std::size_t segment = keyframe->second.segment;
+  if (const auto previous = bridgeCandidate(snapshot, query)) {
+    // No prior: the segment started at a guess (the last known pose), which is what the bridge corrects.
+    LoopVerification result = verifier_.verify(snapshot, query, snapshot, *previous);
+    candidates_.push_back({query, *previous, 0.0, result.refused_by, "segment bridge: " + result.reason});
+    if (result.accepted) {
+      bridged_segments_.insert(segment);
+      recognizer_.add(query, std::move(bow), segment);
+      return result.constraint;
+    }
+  }
   std::optional<LoopConstraint> loop;
   // Candidates come best first; the first verified one is the loop.
-  for (const PlaceCandidate& candidate : recognizer_.detect(query, bow, snapshot.covisible(query))) {
+  for (const PlaceCandidate& candidate : recognizer_.detect(query, bow, snapshot.covisible(query), segment)) {
     if (!snapshot.keyframes.count(candidate.keyframe)) {
       candidates_.push_back({query, candidate.keyframe, candidate.normalised_score, "culled",
                              "bundle adjustment culled the keyframe since it was added"});
@@ -46,8 +57,25 @@ std::optional<LoopConstraint> BowLoopDetector::detect(const frontend::Map& map, 
     loop = result.constraint;
     break;
   }
-  recognizer_.add(query, std::move(bow));
+  recognizer_.add(query, std::move(bow), segment);
   return loop;
+}
+
+std::optional<frontend::KeyframeId> BowLoopDetector::bridgeCandidate(const KeyframeSnapshot& snapshot,
+                                                                     frontend::KeyframeId query) const {
+  const std::size_t segment = snapshot.keyframes.at(query).segment;
+  if (segment == 0 || bridged_segments_.count(segment) || options_.bridge_keyframes == 0) return std::nullopt;
+  std::size_t earlier_in_segment = 0;
+  std::optional<frontend::KeyframeId> previous;
+  for (const auto& [id, keyframe] : snapshot.keyframes) {
+    if (id >= query) break;
+    if (keyframe.segment == segment)
+      ++earlier_in_segment;
+    else
+      previous = id;  // ids grow with time: the last one of an earlier segment
+  }
+  if (!previous || earlier_in_segment >= options_.bridge_keyframes) return std::nullopt;
+  return previous;
 }
 
 LoopDetectorStats BowLoopDetector::stats() const {

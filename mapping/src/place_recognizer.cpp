@@ -22,11 +22,11 @@ PlaceRecognizer::PlaceRecognizer(BinaryVocabulary::ConstPtr vocabulary, PlaceRec
   inverted_file_.resize(vocabulary_->wordCount());
 }
 
-const BowVector& PlaceRecognizer::add(frontend::KeyframeId keyframe, const cv::Mat& descriptors) {
-  return add(keyframe, vocabulary_->transform(descriptors));
+const BowVector& PlaceRecognizer::add(frontend::KeyframeId keyframe, const cv::Mat& descriptors, std::size_t segment) {
+  return add(keyframe, vocabulary_->transform(descriptors), segment);
 }
 
-const BowVector& PlaceRecognizer::add(frontend::KeyframeId keyframe, BowVector bow) {
+const BowVector& PlaceRecognizer::add(frontend::KeyframeId keyframe, BowVector bow, std::size_t segment) {
   for (const auto& [word, value] : bow)
     if (word >= inverted_file_.size())
       throw std::invalid_argument("PlaceRecognizer: word " + std::to_string(word) + " is not in the vocabulary");
@@ -37,6 +37,7 @@ const BowVector& PlaceRecognizer::add(frontend::KeyframeId keyframe, BowVector b
                  list.end());
     }
   for (const auto& [word, value] : bow) inverted_file_[word].emplace_back(keyframe, value);
+  segment_of_[keyframe] = segment;
   return database_[keyframe] = std::move(bow);
 }
 
@@ -47,13 +48,14 @@ std::optional<BowVector> PlaceRecognizer::bow(frontend::KeyframeId keyframe) con
 }
 
 std::vector<PlaceCandidate> PlaceRecognizer::rank(frontend::KeyframeId query, const BowVector& bow,
-                                                  const std::set<frontend::KeyframeId>& excluded) const {
+                                                  const std::set<frontend::KeyframeId>& excluded,
+                                                  std::size_t segment) const {
   // The inverted file names the keyframes sharing a word; the L1 score is then summed over the common words
   // alone (|a|+|b|-|a-b| per word), which is why a database of thousands stays fast.
   std::unordered_map<frontend::KeyframeId, double> common;
   const auto recent = [&](frontend::KeyframeId id) {
     const frontend::KeyframeId gap = id > query ? id - query : query - id;
-    return gap <= options_.exclude_recent;
+    return gap <= options_.exclude_recent && segment_of_.at(id) == segment;
   };
   for (const auto& [word, value] : bow) {
     if (word >= inverted_file_.size()) continue;
@@ -104,11 +106,12 @@ std::vector<PlaceRecognizer::Place> PlaceRecognizer::places(std::vector<PlaceCan
 }
 
 std::vector<PlaceCandidate> PlaceRecognizer::detect(frontend::KeyframeId query, const BowVector& bow,
-                                                    const std::set<frontend::KeyframeId>& excluded) {
+                                                    const std::set<frontend::KeyframeId>& excluded,
+                                                    std::size_t segment) {
   const double reference = referenceScore(query, bow);
   std::vector<PlaceCandidate> kept;
   if (reference >= options_.min_reference_score && reference > 0.0)
-    for (PlaceCandidate c : rank(query, bow, excluded)) {
+    for (PlaceCandidate c : rank(query, bow, excluded, segment)) {
       c.normalised_score = std::min(1.0, c.score / reference);
       if (c.normalised_score >= options_.min_normalised_score) kept.push_back(c);
     }

@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <memory>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -27,6 +28,11 @@ struct LoopDetectorOptions {
   DriftBounds drift;
   /// @brief false: verification without the odometry prior (any pose the geometry supports).
   bool use_odometry_prior = true;
+  /// @brief Segment bridges: each of the first this many keyframes of a segment (a new one starts after tracking
+  /// was lost, at a guess), as it arrives and until one passes, is verified against the previous segment's last
+  /// keyframe from any pose, before place recognition: the likeliest view of the same place, which place
+  /// recognition's temporal consistency proposes late if at all, once the camera has moved on. 0: off.
+  std::size_t bridge_keyframes = 3;
 };
 
 /// @brief One candidate place recognition proposed, and what geometric verification made of it.
@@ -85,7 +91,13 @@ class BowLoopDetector {
   BinaryVocabulary::ConstPtr vocabulary_;
   PlaceRecognizer recognizer_;
   LoopVerifier verifier_;
+  /// The previous segment's last keyframe when `query` is among the first bridge_keyframes of a segment not yet
+  /// bridged; nothing otherwise.
+  std::optional<frontend::KeyframeId> bridgeCandidate(const KeyframeSnapshot& snapshot,
+                                                      frontend::KeyframeId query) const;
+
   LoopDetectorOptions options_;
+  std::set<std::size_t> bridged_segments_;
   std::size_t queries_ = 0;
   std::vector<LoopCandidateRecord> candidates_;
 };

@@ -20,7 +20,8 @@ namespace weighted_icp::mapping {
 
 /// @brief When a database keyframe counts as a loop candidate.
 struct PlaceRecognitionOptions {
-  /// Keyframes whose ids are within this many of the query's are never proposed: tracking links them.
+  /// Keyframes of the query's segment whose ids are within this many of the query's are never proposed: tracking
+  /// links them. Across a tracking loss nothing does, and the keyframes just before it are the likeliest link.
   std::size_t exclude_recent = 20;
   /// Smallest normalised score (the score divided by the query's score with the keyframe just before it,
   /// DBoW2's normalisation, which makes scores comparable across scenes of different texture).
@@ -70,12 +71,14 @@ class PlaceRecognizer {
   /// @brief Describes a keyframe by its words and stores it (replacing a keyframe of the same id).
   /// @param keyframe its id
   /// @param descriptors its ORB descriptors (CV_8U, 32 columns)
+  /// @param segment its tracking segment (frontend::Keyframe::segment)
   /// @return its bag-of-words vector
-  const BowVector& add(frontend::KeyframeId keyframe, const cv::Mat& descriptors);
+  const BowVector& add(frontend::KeyframeId keyframe, const cv::Mat& descriptors, std::size_t segment = 0);
   /// @brief Stores a keyframe's vector as it is (replacing a keyframe of the same id).
   /// @param keyframe its id
   /// @param bow its bag-of-words vector (from the same vocabulary)
-  const BowVector& add(frontend::KeyframeId keyframe, BowVector bow);
+  /// @param segment its tracking segment (frontend::Keyframe::segment)
+  const BowVector& add(frontend::KeyframeId keyframe, BowVector bow, std::size_t segment = 0);
   /// @brief A stored keyframe's vector, if it is stored.
   /// @param keyframe its id
   std::optional<BowVector> bow(frontend::KeyframeId keyframe) const;
@@ -83,12 +86,13 @@ class PlaceRecognizer {
   std::size_t size() const { return database_.size(); }
 
   /// @brief Scores every stored keyframe sharing a word with `bow` (through the inverted file), leaving out
-  /// `excluded` and those within exclude_recent of `query`; best first (ties: older first).
+  /// `excluded` and those of its segment within exclude_recent of `query`; best first (ties: older first).
   /// @param query the query keyframe's id
   /// @param bow its vector
   /// @param excluded keyframes not to propose (those sharing landmarks with the query)
+  /// @param segment the query's tracking segment
   std::vector<PlaceCandidate> rank(frontend::KeyframeId query, const BowVector& bow,
-                                   const std::set<frontend::KeyframeId>& excluded) const;
+                                   const std::set<frontend::KeyframeId>& excluded, std::size_t segment = 0) const;
 
   /// @brief The query's score with the latest stored keyframe before it (0 when there is none): what scores are
   /// normalised by.
@@ -101,9 +105,10 @@ class PlaceRecognizer {
   /// @param query the query keyframe's id
   /// @param bow its vector (it need not be stored; add it afterwards so that later queries can find it)
   /// @param excluded keyframes not to propose (those sharing landmarks with the query)
+  /// @param segment the query's tracking segment
   /// @return the candidates that passed temporal consistency, best first
   std::vector<PlaceCandidate> detect(frontend::KeyframeId query, const BowVector& bow,
-                                     const std::set<frontend::KeyframeId>& excluded);
+                                     const std::set<frontend::KeyframeId>& excluded, std::size_t segment = 0);
 
   /// @brief Forgets the consistency chains (e.g. after a loop was closed, or tracking was lost).
   void resetConsistency() { groups_.clear(); }
@@ -119,6 +124,7 @@ class PlaceRecognizer {
   BinaryVocabulary::ConstPtr vocabulary_;
   PlaceRecognitionOptions options_;
   std::map<frontend::KeyframeId, BowVector> database_;
+  std::map<frontend::KeyframeId, std::size_t> segment_of_;
   /// word -> (keyframe, its weight of the word) for the keyframes containing it: scoring reads weights
   /// from here, never from the database's maps.
   std::vector<std::vector<std::pair<frontend::KeyframeId, double>>> inverted_file_;
