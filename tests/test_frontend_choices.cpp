@@ -28,18 +28,21 @@ TEST(FrontendChoices, EachKeySetsItsOption) {
   setFrontendChoice(options, "describe", "equalized");
   EXPECT_TRUE(options.features.describe_equalized);
   EXPECT_THROW(setFrontendChoice(options, "describe", "clahe"), std::invalid_argument);
-  EXPECT_TRUE(options.gate_free_retry);
-  setFrontendChoice(options, "gate-free-retry", "off");
-  EXPECT_FALSE(options.gate_free_retry);
-  setFrontendChoice(options, "gate-free-retry", "on");
-  EXPECT_TRUE(options.gate_free_retry);
-  EXPECT_THROW(setFrontendChoice(options, "gate-free-retry", "yes"), std::invalid_argument);
-  EXPECT_FALSE(options.motion_per_period);
-  setFrontendChoice(options, "motion-timing", "period");
-  EXPECT_TRUE(options.motion_per_period);
-  setFrontendChoice(options, "motion-timing", "frame");
-  EXPECT_FALSE(options.motion_per_period);
-  EXPECT_THROW(setFrontendChoice(options, "motion-timing", "time"), std::invalid_argument);
+  // Choices of two words: each word sets its value, anything else is refused.
+  struct TwoWords {
+    const char *key, *off, *on;
+    bool FrontendOptions::*flag;
+  };
+  for (const TwoWords& choice : {TwoWords{"gate-free-retry", "off", "on", &FrontendOptions::gate_free_retry},
+                                 TwoWords{"motion-timing", "frame", "period", &FrontendOptions::motion_per_period}}) {
+    setFrontendChoice(options, choice.key, choice.on);
+    EXPECT_TRUE(options.*choice.flag) << choice.key;
+    setFrontendChoice(options, choice.key, choice.off);
+    EXPECT_FALSE(options.*choice.flag) << choice.key;
+    EXPECT_THROW(setFrontendChoice(options, choice.key, "yes"), std::invalid_argument) << choice.key;
+  }
+  EXPECT_TRUE(FrontendOptions{}.gate_free_retry);  // the defaults
+  EXPECT_FALSE(FrontendOptions{}.motion_per_period);
   EXPECT_EQ(options.pnp.method, PnpMethod::Iterative);
   EXPECT_EQ(options.quality.measure, QualityMeasure::Brisque);
   EXPECT_EQ(options.features.descriptor, DescriptorKind::ModifiedBrief);

@@ -184,19 +184,24 @@ TEST(LoopVerification, AnIcpThatLeavesThePnpPoseDoesNotRefuseATrueLoop) {
   EXPECT_FALSE(verifier.verify(data.snapshot, query, data.snapshot, match).accepted);
 }
 
-TEST(PlaceRecognition, ExcludesRecentAndCovisibleKeyframesAndWaitsForConsistency) {
+/// A small vocabulary trained on two images far apart in Hamming space (half their bits differ on purpose), so that
+/// their words differ and weigh something (IDF); `descriptors` is the first image.
+BinaryVocabulary::ConstPtr twoImageVocabulary(cv::Mat& descriptors) {
   VocabularyTrainingOptions options;
   options.branching = 4;
   options.depth = 2;
-  cv::Mat descriptors(64, 32, CV_8U);
+  descriptors.create(64, 32, CV_8U);
   cv::randu(descriptors, 0, 256);
   cv::Mat others(64, 32, CV_8U);
   cv::randu(others, 0, 256);
-  // Two images far apart in Hamming space (half their bits differ on purpose), so their words differ.
   descriptors.colRange(0, 16).setTo(0);
   others.colRange(0, 16).setTo(255);
-  const auto vocabulary =
-      std::make_shared<const BinaryVocabulary>(BinaryVocabulary::train({descriptors, others}, options));
+  return std::make_shared<const BinaryVocabulary>(BinaryVocabulary::train({descriptors, others}, options));
+}
+
+TEST(PlaceRecognition, ExcludesRecentAndCovisibleKeyframesAndWaitsForConsistency) {
+  cv::Mat descriptors;
+  const auto vocabulary = twoImageVocabulary(descriptors);
   PlaceRecognitionOptions place;
   place.exclude_recent = 2;
   place.consistent_queries = 2;
@@ -224,16 +229,8 @@ TEST(PlaceRecognition, ExcludesRecentAndCovisibleKeyframesAndWaitsForConsistency
 TEST(PlaceRecognition, ProposesRecentKeyframesOfAnotherSegment) {
   // Tracking links a keyframe to the recent ones of its own segment only: across a tracking loss the keyframes
   // just before it are candidates.
-  VocabularyTrainingOptions options;
-  options.branching = 4;
-  options.depth = 2;
-  cv::Mat descriptors(64, 32, CV_8U), others(64, 32, CV_8U);
-  cv::randu(descriptors, 0, 256);
-  cv::randu(others, 0, 256);
-  descriptors.colRange(0, 16).setTo(0);  // words of their own, so that they weigh something (IDF)
-  others.colRange(0, 16).setTo(255);
-  const auto vocabulary =
-      std::make_shared<const BinaryVocabulary>(BinaryVocabulary::train({descriptors, others}, options));
+  cv::Mat descriptors;
+  const auto vocabulary = twoImageVocabulary(descriptors);
   PlaceRecognitionOptions place;
   place.exclude_recent = 5;
   place.min_normalised_score = 0.0;
