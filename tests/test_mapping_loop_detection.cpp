@@ -159,6 +159,33 @@ TEST(LoopVerification, RecoversTheRelativePoseAtAnyYaw) {
   }
 }
 
+TEST(LoopVerification, WithoutTheIcpCheckTheGeometryIsJudgedAtPnpsPose) {
+  // As a segment bridge verifies: the overlap and fitness at PnP's pose, no ICP moving it. A true loop passes; a
+  // query map whose landmarks are 35 cm off its keyframes (PnP, on the match map's landmarks and the query's pixels,
+  // still finds the camera) does not overlap there.
+  std::vector<std::size_t> frames = testing::everyNth(36, kEvery);
+  for (std::size_t f : testing::everyNth(216, kEvery, 180)) frames.push_back(f);
+  const auto data = testing::syntheticKeyframes(11, false, kFramesPerLoop, frames);
+  const frontend::KeyframeId match = 2, query = 8;
+  LoopVerificationOptions options;
+  options.icp_check = false;
+  const LoopVerifier verifier(data.camera, options);
+  const LoopVerification result = verifier.verify(data.snapshot, query, data.snapshot, match);
+  ASSERT_TRUE(result.accepted) << result.reason;
+  EXPECT_EQ(result.icp_correction_m, 0.0);
+  EXPECT_FALSE(result.icp_weighted);
+  EXPECT_TRUE(result.constraint.query_in_match.isApprox(result.pnp_query_in_match, 1e-12));
+  const auto [metres, degrees] =
+      poseError(result.constraint.query_in_match, trueQueryInMatch(data.snapshot, query, match));
+  EXPECT_LT(metres, 0.02);
+  EXPECT_LT(degrees, 0.5);
+  KeyframeSnapshot displaced = data.snapshot;  // the query's map: its landmarks 35 cm off, its keyframes not
+  for (auto& [id, point] : displaced.points) point.position += Eigen::Vector3d(0.2, 0.2, 0.2);  // off every wall
+  const LoopVerification refused = verifier.verify(displaced, query, data.snapshot, match);
+  EXPECT_FALSE(refused.accepted);
+  EXPECT_EQ(refused.refused_by, "overlap") << refused.reason;
+}
+
 TEST(LoopVerification, AnIcpThatLeavesThePnpPoseDoesNotRefuseATrueLoop) {
   // A room three times as large: landmarks metres apart on far walls, where the weighted stage's choice of the most
   // confident neighbour pulled the same way at every iteration and slid 1.3 m away from a PnP pose right to 1 cm.

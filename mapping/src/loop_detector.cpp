@@ -13,6 +13,10 @@ BinaryVocabulary::ConstPtr required(BinaryVocabulary::ConstPtr vocabulary) {
   if (!vocabulary) throw std::invalid_argument("BowLoopDetector: no vocabulary");
   return vocabulary;
 }
+LoopVerificationOptions withoutIcp(LoopVerificationOptions options) {
+  options.icp_check = false;
+  return options;
+}
 }  // namespace
 
 BowLoopDetector::BowLoopDetector(BinaryVocabulary::ConstPtr vocabulary, const PinholeCamera& camera,
@@ -20,6 +24,7 @@ BowLoopDetector::BowLoopDetector(BinaryVocabulary::ConstPtr vocabulary, const Pi
     : vocabulary_(required(std::move(vocabulary))),
       recognizer_(vocabulary_, options.recognition),
       verifier_(camera, options.verification),
+      bridge_verifier_(camera, withoutIcp(options.verification)),
       options_(std::move(options)) {}
 
 std::optional<LoopConstraint> BowLoopDetector::detect(const frontend::Map& map, frontend::KeyframeId query) {
@@ -32,7 +37,7 @@ std::optional<LoopConstraint> BowLoopDetector::detect(const frontend::Map& map, 
   const std::size_t segment = keyframe->second.segment;
   if (const auto previous = bridgeCandidate(snapshot, query)) {
     // No prior: the segment started at a guess (the last known pose), which is what the bridge corrects.
-    LoopVerification result = verifier_.verify(snapshot, query, snapshot, *previous);
+    LoopVerification result = bridge_verifier_.verify(snapshot, query, snapshot, *previous);
     candidates_.push_back({query, *previous, 0.0, result.refused_by, "segment bridge: " + result.reason});
     if (result.accepted) {
       bridged_segments_.insert(segment);

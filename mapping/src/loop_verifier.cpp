@@ -196,6 +196,18 @@ struct IcpCheck {
   std::string degenerate;  // the aligner's reason when the problem was degenerate
 };
 
+/// No ICP (LoopVerificationOptions::icp_check false): the overlap at PnP's pose (`guess`), which is the correction.
+IcpCheck checkAtPnpPose(const LandmarkCloud::Ptr& query_cloud, const LandmarkCloud::Ptr& match_cloud,
+                        const Eigen::Isometry3d& guess, const LoopVerificationOptions& options) {
+  pcl::KdTreeFLANN<LandmarkPoint> match_tree;
+  match_tree.setInputCloud(match_cloud);
+  IcpCheck check;
+  check.weighted = false;
+  check.correction = guess;
+  check.overlap = measureOverlap(*query_cloud, match_tree, guess, options.inlier_distance_m);
+  return check;
+}
+
 /// The weighted ICP from PnP's pose (`guess`), and, when its result overlaps the match cloud less than the guess does
 /// and `within_session`, plain ICP instead.
 IcpCheck checkWithIcp(const LandmarkCloud::Ptr& query_cloud, const LandmarkCloud::Ptr& match_cloud,
@@ -348,7 +360,8 @@ LoopVerification LoopVerifier::verify(const KeyframeSnapshot& query_map, fronten
   if (query_cloud->size() < 3 || match_cloud->size() < 3) return refuse("icp_landmarks", "too few landmarks for ICP");
   const Eigen::Isometry3d guess = pnp.pose_wc * query_wc.inverse();
   result.pnp_query_in_match = match_wc.inverse() * pnp.pose_wc;
-  const IcpCheck icp = checkWithIcp(query_cloud, match_cloud, guess, options_, prior.has_value());
+  const IcpCheck icp = options_.icp_check ? checkWithIcp(query_cloud, match_cloud, guess, options_, prior.has_value())
+                                          : checkAtPnpPose(query_cloud, match_cloud, guess, options_);
   if (!icp.degenerate.empty()) return refuse("icp_degenerate", "ICP degenerate: " + icp.degenerate);
   const Eigen::Isometry3d& correction = icp.correction;
   const Overlap& overlap = icp.overlap;

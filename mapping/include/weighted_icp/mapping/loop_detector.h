@@ -91,6 +91,7 @@ class BowLoopDetector {
   BinaryVocabulary::ConstPtr vocabulary_;
   PlaceRecognizer recognizer_;
   LoopVerifier verifier_;
+  LoopVerifier bridge_verifier_;  // verifier_'s options without the ICP (LoopVerificationOptions::icp_check)
   /// The previous segment's last keyframe when `query` is among the first bridge_keyframes of a segment not yet
   /// bridged; nothing otherwise.
   std::optional<frontend::KeyframeId> bridgeCandidate(const KeyframeSnapshot& snapshot,

@@ -81,6 +81,11 @@ struct LoopVerificationOptions {
   /// same measurement (docs/mapping.md, "Real revisits"). Both alike keep the pose graph's optimum (but for the
   /// floors and the Huber loss) and widen its consistency test.
   double covariance_inflation = 10.0;
+  /// false: no ICP; the clouds' overlap and fitness are measured at PnP's pose. For a segment bridge
+  /// (LoopDetectorOptions::bridge_keyframes): the new segment's first keyframe has single-view landmarks, on which
+  /// ICP slid 1.3-4.4 cm from PnP poses 0.2-1.6 cm from the truth while the overlap rose by under 0.01
+  /// (docs/mapping.md, "Bridging a tracking loss").
+  bool icp_check = true;
 };
 
 /// @brief What the odometry says of a loop in one session: the relative pose its (drifting) keyframe poses
@@ -133,6 +138,7 @@ struct LoopVerification {
   /// @brief False when, verified with an odometry prior, the weighted ICP's result overlapped the candidate's cloud
   /// less than PnP's pose did (it left the pose instead of refining it): the checks, and with LoopEdgeSource::Icp
   /// the edge, are then plain ICP's (k = 1). Without a prior the weighted ICP's result is always the one checked.
+  /// False too with LoopVerificationOptions::icp_check off (no ICP ran).
   bool icp_weighted = true;
   /// @brief How far ICP moved the PnP pose (metres, degrees).
   double icp_correction_m = 0.0, icp_correction_deg = 0.0;
