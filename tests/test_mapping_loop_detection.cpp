@@ -226,14 +226,19 @@ BinaryVocabulary::ConstPtr twoImageVocabulary(cv::Mat& descriptors) {
   return std::make_shared<const BinaryVocabulary>(BinaryVocabulary::train({descriptors, others}, options));
 }
 
+/// Place recognition with every score admitted, so that only the exclusions and the consistency decide.
+PlaceRecognitionOptions admittingEveryScore(std::size_t exclude_recent, std::size_t consistent_queries) {
+  PlaceRecognitionOptions place;
+  place.exclude_recent = exclude_recent;
+  place.consistent_queries = consistent_queries;
+  place.min_normalised_score = 0.0;
+  return place;
+}
+
 TEST(PlaceRecognition, ExcludesRecentAndCovisibleKeyframesAndWaitsForConsistency) {
   cv::Mat descriptors;
   const auto vocabulary = twoImageVocabulary(descriptors);
-  PlaceRecognitionOptions place;
-  place.exclude_recent = 2;
-  place.consistent_queries = 2;
-  place.min_normalised_score = 0.0;
-  PlaceRecognizer recognizer(vocabulary, place);
+  PlaceRecognizer recognizer(vocabulary, admittingEveryScore(2, 2));
   for (frontend::KeyframeId id = 0; id < 5; ++id) recognizer.add(id, descriptors);
   const BowVector bow = vocabulary->transform(descriptors);
   // Keyframe 4 is recent for query 6; keyframe 1 shares landmarks with it.
@@ -258,10 +263,7 @@ TEST(PlaceRecognition, ProposesRecentKeyframesOfAnotherSegment) {
   // just before it are candidates.
   cv::Mat descriptors;
   const auto vocabulary = twoImageVocabulary(descriptors);
-  PlaceRecognitionOptions place;
-  place.exclude_recent = 5;
-  place.min_normalised_score = 0.0;
-  PlaceRecognizer recognizer(vocabulary, place);
+  PlaceRecognizer recognizer(vocabulary, admittingEveryScore(5, 3));
   for (frontend::KeyframeId id = 0; id < 3; ++id) recognizer.add(id, descriptors, 0);
   recognizer.add(3, descriptors, 1);
   const BowVector bow = vocabulary->transform(descriptors);
