@@ -9,12 +9,12 @@
 namespace weighted_icp::frontend {
 
 void FrameClock::tick(double timestamp) {
-  if (!std::isfinite(timestamp)) return;
-  if (last_ && timestamp > *last_) {
+  if (!std::isfinite(timestamp) || (last_ && timestamp <= *last_)) return;
+  if (last_) {
     intervals_.push_back(timestamp - *last_);
     if (intervals_.size() > kWindow) intervals_.pop_front();
   }
-  if (!last_ || timestamp > *last_) last_ = timestamp;
+  last_ = timestamp;
 }
 
 std::optional<double> FrameClock::period() const {

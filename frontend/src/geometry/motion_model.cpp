@@ -3,6 +3,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "weighted_icp/core/skew.h"
+
 namespace weighted_icp::frontend {
 
 namespace {
@@ -11,8 +13,7 @@ namespace {
 /// of its exponential (exp of [omega, rho] translates by V(omega) * rho).
 Eigen::Matrix3d leftJacobian(const Eigen::Vector3d& omega) {
   const double theta = omega.norm();
-  Eigen::Matrix3d K;
-  K << 0.0, -omega.z(), omega.y(), omega.z(), 0.0, -omega.x(), -omega.y(), omega.x(), 0.0;
+  const Eigen::Matrix3d K = skew(omega);
   if (theta < 1e-6) return Eigen::Matrix3d::Identity() + 0.5 * K + K * K / 6.0;  // Taylor: the terms' 0/0 limits
   const double theta2 = theta * theta;
   return Eigen::Matrix3d::Identity() + (1.0 - std::cos(theta)) / theta2 * K +

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <stdexcept>
 
 #include <opencv2/calib3d.hpp>
@@ -353,16 +352,13 @@ void Frontend::rememberMetricMotion(const Frame& frame, const Eigen::Isometry3d&
   // away frame after frame (docs/frontend_generalisation.md, 2026-11-27).
   if (last_metric_frame_id_ + 1 == frame.id) {
     metric_velocity_ = last_pose_wc_->inverse() * pose_wc;  // the previous frame's pose is that metric one
-    metric_velocity_periods_ = periodsBetween(last_measured_timestamp_, frame.timestamp, 1);
+    metric_velocity_seconds_ = frame.timestamp - last_measured_timestamp_;
   } else if (last_measured_frame_id_ + 1 == frame.id && metric_velocity_) {
     // The previous frame was posed 2D-2D: the motion model goes on from the last velocity measured with depth.
     // After coasted or skipped frames (predictions, not poses) it keeps its motion from the prediction: restarting
     // it there too was worse (fr3 made dark, ten draws: 4.47 cm mean against 4.21).
     motion_.reset();
-    const std::optional<double> period = clock_.period();
-    const double spanned_seconds =
-        period ? metric_velocity_periods_ * *period : std::numeric_limits<double>::quiet_NaN();
-    motion_.update(pose_wc * metric_velocity_->inverse(), frame.timestamp - spanned_seconds);
+    motion_.update(pose_wc * metric_velocity_->inverse(), frame.timestamp - metric_velocity_seconds_);
   }
   last_metric_frame_id_ = frame.id;
 }
@@ -486,11 +482,11 @@ TrackingResult Frontend::trackRelative(Frame& frame, TrackingResult result, cons
   const std::size_t frames = frame.id - last_measured_frame_id_;
   const int periods = periodsBetween(last_measured_timestamp_, frame.timestamp, frames);
   Eigen::Isometry3d predicted_wc = *last_pose_wc_;
-  if (periods == static_cast<int>(frames) && metric_velocity_periods_ == 1)
+  const int spanned = periodsBetween(0.0, metric_velocity_seconds_, 1);  // the periods the velocity was measured over
+  if (periods == static_cast<int>(frames) && spanned == 1)
     for (std::size_t k = 0; k < frames; ++k) predicted_wc = predicted_wc * *metric_velocity_;  // per frame, as ever
   else
-    predicted_wc =
-        predicted_wc * scaledMotion(*metric_velocity_, static_cast<double>(periods) / metric_velocity_periods_);
+    predicted_wc = predicted_wc * scaledMotion(*metric_velocity_, static_cast<double>(periods) / spanned);
   const Eigen::Isometry3d predicted_in_keyframe = last_keyframe_.pose_wc.inverse() * predicted_wc;
   std::vector<Eigen::Vector2d> keyframe_pixels, frame_pixels;
   matchLastKeyframe(frame, keyframe_pixels, frame_pixels);

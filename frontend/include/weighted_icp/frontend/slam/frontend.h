@@ -328,8 +328,8 @@ class Frontend {
   std::size_t last_metric_frame_id_ = 0;
   /// One frame's motion, between the last two consecutive frames posed with depth: what scales 2D-2D.
   std::optional<Eigen::Isometry3d> metric_velocity_;
-  /// How many frame periods it spanned (periodsBetween): two across a dropped frame.
-  int metric_velocity_periods_ = 1;
+  /// The time it spanned (seconds; 0 without timestamps): two frame periods across a dropped frame.
+  double metric_velocity_seconds_ = 0.0;
   Frame last_keyframe_;
   KeyframeId last_keyframe_id_ = 0;
   std::size_t tracked_at_last_keyframe_ = 0;
