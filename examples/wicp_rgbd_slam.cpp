@@ -470,6 +470,7 @@ int main(int argc, char** argv) {
     frontend::RgbdSlamOptions& options = closing_options.slam;
     std::string gate_free_retry = options.frontend.gate_free_retry ? "on" : "off";
     std::string motion_timing = options.frontend.motion_per_period ? "period" : "frame";
+    std::string keyframe_before_loss = options.frontend.keyframe_before_loss ? "on" : "off";
     simulation::SyntheticRgbdOptions synthetic;
     po::options_description description(
         "wicp_rgbd_slam [--dataset DIR] [--camera fr1|fr2|fr3|FILE.yaml] [--first-frame N] [--max-frames N]\n"
@@ -593,6 +594,9 @@ int main(int argc, char** argv) {
         ("motion-timing", po::value(&motion_timing)->default_value(motion_timing),
          "frame: the constant-velocity prediction repeats the last motion once a frame; period: once per frame "
          "period the timestamps count (a dropped frame: twice), better at gaps, worse in the dark (README)")
+        ("keyframe-before-loss", po::value(&keyframe_before_loss)->default_value(keyframe_before_loss),
+         "on: when tracking is lost, the last frame 3D-2D tracked becomes the segment's last keyframe, for the next "
+         "segment's bridge to find; off: as before 2026-11-27 (afternoon)")
         ("pnp-ransac-iterations", tools::rangedValue(&options.frontend.pnp.ransac_iterations, 1, 100000)
                                       ->default_value(options.frontend.pnp.ransac_iterations),
          "most RANSAC draws a frame's PnP makes; fewer when the inliers found already give 99 % confidence (1-100000)");
@@ -604,6 +608,7 @@ int main(int argc, char** argv) {
       frontend::setFrontendChoice(options.frontend, "describe", describe);
       frontend::setFrontendChoice(options.frontend, "gate-free-retry", gate_free_retry);
       frontend::setFrontendChoice(options.frontend, "motion-timing", motion_timing);
+      frontend::setFrontendChoice(options.frontend, "keyframe-before-loss", keyframe_before_loss);
     } catch (const std::invalid_argument& e) {
       throw po::error(std::string("--") + e.what());
     }

@@ -33,8 +33,10 @@ TEST(FrontendChoices, EachKeySetsItsOption) {
     const char *key, *off, *on;
     bool FrontendOptions::*flag;
   };
-  for (const TwoWords& choice : {TwoWords{"gate-free-retry", "off", "on", &FrontendOptions::gate_free_retry},
-                                 TwoWords{"motion-timing", "frame", "period", &FrontendOptions::motion_per_period}}) {
+  for (const TwoWords& choice :
+       {TwoWords{"gate-free-retry", "off", "on", &FrontendOptions::gate_free_retry},
+        TwoWords{"motion-timing", "frame", "period", &FrontendOptions::motion_per_period},
+        TwoWords{"keyframe-before-loss", "off", "on", &FrontendOptions::keyframe_before_loss}}) {
     setFrontendChoice(options, choice.key, choice.on);
     EXPECT_TRUE(options.*choice.flag) << choice.key;
     setFrontendChoice(options, choice.key, choice.off);
@@ -43,6 +45,7 @@ TEST(FrontendChoices, EachKeySetsItsOption) {
   }
   EXPECT_TRUE(FrontendOptions{}.gate_free_retry);  // the defaults
   EXPECT_FALSE(FrontendOptions{}.motion_per_period);
+  EXPECT_TRUE(FrontendOptions{}.keyframe_before_loss);
   EXPECT_EQ(options.pnp.method, PnpMethod::Iterative);
   EXPECT_EQ(options.quality.measure, QualityMeasure::Brisque);
   EXPECT_EQ(options.features.descriptor, DescriptorKind::ModifiedBrief);
@@ -53,7 +56,7 @@ TEST(FrontendChoices, EachKeySetsItsOption) {
   EXPECT_EQ(options.dense_odometry.kind, DenseOdometryKind::Icp);
   EXPECT_EQ(options.quality.mode, QualityGateMode::Absolute);
   EXPECT_EQ(options.matcher.kind, MatcherKind::KdTree);
-  EXPECT_EQ(frontendChoiceKeys().size(), 13u);
+  EXPECT_EQ(frontendChoiceKeys().size(), 14u);
 }
 
 TEST(FrontendChoices, AWrongKeyOrValueIsNamed) {

@@ -168,6 +168,47 @@ TEST(RgbdSlam, AnUntrackableFrameStartsANewSegmentAndKeepsTheMap) {
   EXPECT_EQ(slam.trajectory().size(), sequence.size());  // every frame, the lost one predicted
 }
 
+// The frame tracked just before a loss becomes its segment's last keyframe, observing the points it tracked: the
+// place seen last is in the map for the next segment's bridge (docs/mapping.md, "Bridging a tracking loss").
+TEST(RgbdSlam, TheLastTrackedFrameBeforeALossBecomesAKeyframe) {
+  simulation::SyntheticRgbdOptions options = syntheticOptions(false);
+  options.frames = 45;
+  const simulation::SyntheticRgbdSequence sequence(options);
+  const auto lastKeyframeBeforeTheLoss = [&](bool keyframe_before_loss) {
+    frontend::RgbdSlamOptions slam_options = deterministic();
+    slam_options.frontend.quality_gate = false;  // a blank frame must count as lost, not as a bad image
+    slam_options.frontend.keyframe_before_loss = keyframe_before_loss;
+    frontend::RgbdSlam slam(sequence.options().camera, slam_options);
+    for (std::size_t i = 0; i < sequence.size(); ++i) {
+      RgbdFrame image = sequence.frame(i).rgbd;
+      if (i == 30) {
+        image.color.setTo(cv::Scalar::all(0));
+        image.depth.setTo(0.0f);
+        EXPECT_EQ(slam.process(image).result.status, frontend::TrackingStatus::Lost);
+        continue;
+      }
+      slam.process(image);
+    }
+    slam.finish();
+    frontend::Keyframe last;
+    for (const frontend::Keyframe& keyframe : slam.map().keyframes())
+      if (keyframe.segment == 0) last = keyframe;
+    // It observes points it tracked (first seen by earlier keyframes), not only points of its own.
+    std::size_t tracked = 0;
+    for (const auto& point : slam.map().mapPoints())
+      for (const auto& observation : point.observations)
+        tracked += observation.keyframe == last.id && point.observations.front().keyframe != last.id ? 1 : 0;
+    EXPECT_GT(tracked, 30u) << "keyframe of frame " << last.frame_id;
+    return last;
+  };
+  const frontend::Keyframe keyed = lastKeyframeBeforeTheLoss(true);
+  EXPECT_EQ(keyed.frame_id, 29u);
+  EXPECT_LT(lastKeyframeBeforeTheLoss(false).frame_id, 29u) << "frame 29 was a keyframe anyway: the test shows nothing";
+  // Where tracking put it, which on this sequence is where it was (the map starts at frame 0's pose).
+  const Eigen::Isometry3d truth = sequence.cameraToWorld(0).inverse() * sequence.cameraToWorld(29);
+  EXPECT_LT((keyed.pose_wc.translation() - truth.translation()).norm(), 0.01);
+}
+
 // A frame the quality gate refuses and tracking cannot pose (here black) is skipped: the segment goes on, nothing
 // of it is mapped, and it keeps the motion model's pose, close to the truth on a smooth path; the next frames are
 // predicted for their own time and track as before.

@@ -162,7 +162,10 @@ TEST_F(FrontendTracking, ALossEndsTheSegmentAndTheNextGoodFrameStartsANewOne) {
   EXPECT_EQ(tracker.frontend.track(blank(6)).status, TrackingStatus::Lost);
   EXPECT_EQ(tracker.frontend.state(), FrontendState::Lost);
   EXPECT_EQ(tracker.frontend.segment(), 1u);
-  EXPECT_EQ(tracker.map.keyframeCount(), keyframes);  // what was mapped stays
+  // What was mapped stays, and the last tracked frame joined it as the segment's last keyframe.
+  ASSERT_EQ(tracker.map.keyframeCount(), keyframes + 1);
+  EXPECT_EQ(tracker.map.keyframes().back().frame_id, 4u);
+  EXPECT_EQ(tracker.map.keyframes().back().segment, 0u);
 
   const frontend::TrackingResult restarted = tracker.frontend.track(image(7));
   EXPECT_EQ(restarted.status, TrackingStatus::Initialized);
@@ -171,7 +174,7 @@ TEST_F(FrontendTracking, ALossEndsTheSegmentAndTheNextGoodFrameStartsANewOne) {
   // The new segment continues from the last known pose, so mini-maps share one world frame.
   EXPECT_EQ(restarted.pose_wc.matrix(), last_tracked.pose_wc.matrix());
   const auto all_keyframes = tracker.map.keyframes();
-  ASSERT_EQ(all_keyframes.size(), keyframes + 1);
+  ASSERT_EQ(all_keyframes.size(), keyframes + 2);
   EXPECT_EQ(all_keyframes.back().segment, 1u);
   EXPECT_EQ(all_keyframes.front().segment, 0u);
   // The local map is now the new segment's only: tracking goes on from it.

@@ -154,6 +154,7 @@ bool Frontend::followMapCorrection() {
   if (last_pose_wc_) last_pose_wc_ = *delta_wc * *last_pose_wc_;
   motion_.applyCorrection(*delta_wc);
   last_keyframe_.pose_wc = *delta_wc * last_keyframe_.pose_wc;
+  if (last_unkeyed_) last_unkeyed_->frame.pose_wc = *delta_wc * last_unkeyed_->frame.pose_wc;
   local_map_ = LocalMap{};  // the revision changed too; the points moved
   return true;
 }
@@ -384,12 +385,15 @@ void Frontend::acceptPose(Frame& frame, TrackingResult& result, TrackingStatus s
 void Frontend::insertKeyframeIfNeeded(const Frame& frame, TrackingResult& result, const LocalMatches& matched,
                                       const std::vector<int>& static_inliers,
                                       const std::vector<Eigen::Vector2d>& dynamic_pixels) {
-  // The gate is asked last: it costs ~25 ms and only keyframe candidates need it.
-  if (!needsKeyframe(frame.pose_wc, static_inliers.size())) return;
-  // A candidate that barely tracks is never refused: its points may be what the next frame needs.
-  if (refusedByQualityGate(result, static_inliers.size() < options_.quality.min_tracked_to_refuse)) return;
   std::vector<std::pair<std::size_t, MapPointId>> tracked;
   for (const int m : static_inliers) tracked.push_back(matched.ids[m]);
+  // The gate is asked last: it costs ~25 ms and only keyframe candidates need it.
+  if (!needsKeyframe(frame.pose_wc, static_inliers.size())) {
+    if (options_.keyframe_before_loss) last_unkeyed_ = UnkeyedFrame{frame, std::move(tracked), dynamic_pixels};
+    return;
+  }
+  // A candidate that barely tracks is never refused: its points may be what the next frame needs.
+  if (refusedByQualityGate(result, static_inliers.size() < options_.quality.min_tracked_to_refuse)) return;
   insertKeyframe(frame, tracked, dynamic_pixels);
   setPose(result, frame.pose_wc);  // now relative to itself
   result.keyframe = true;
@@ -541,10 +545,20 @@ TrackingResult Frontend::lose(TrackingResult result, const std::string& reason) 
   predictPoseOf(result);
   // A new segment starts at the next frame that can: from depth, it tracks the scene again at once, where
   // coasting on the prediction for a few frames kept the 2D-2D fallback going and drifted (fr3 blur: 3.7 -> 36 cm).
+  keyLastTrackedFrame();
   transitionTo(FrontendState::Lost);
   result.status = TrackingStatus::Lost;
   result.reason = reason;
   return result;
+}
+
+void Frontend::keyLastTrackedFrame() {
+  if (state_ != FrontendState::Tracking || !last_unkeyed_) return;
+  // On fr3 with ten frames blacked out, the last keyframe before the loss was often ~10 frames before it, and the
+  // new segment's first keyframes found too few PnP inliers against its view to be bridged.
+  const UnkeyedFrame unkeyed = std::move(*last_unkeyed_);
+  last_unkeyed_.reset();
+  insertKeyframe(unkeyed.frame, unkeyed.tracked, unkeyed.dynamic_pixels);
 }
 
 void Frontend::predictPoseOf(TrackingResult& result) {
@@ -586,6 +600,7 @@ void Frontend::insertKeyframe(const Frame& frame, const std::vector<std::pair<st
   keyframe.depths = frame.depths;
   const KeyframeId keyframe_id = map_.addKeyframe(keyframe);
   last_keyframe_id_ = keyframe_id;
+  last_unkeyed_.reset();  // a frame older than a keyframe adds nothing
   recordKeyframePlanes(frame);
   const std::vector<bool> used = observeTrackedPoints(keyframe_id, frame, tracked);
   createMapPoints(keyframe_id, frame, used, dynamic_pixels);

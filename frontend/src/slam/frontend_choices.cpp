@@ -38,6 +38,8 @@ const std::vector<std::pair<std::string, Setter>>& setters() {
        [](FrontendOptions& o, const std::string& v) { o.gate_free_retry = secondOfTwo(v, "off", "on"); }},
       {"motion-timing",
        [](FrontendOptions& o, const std::string& v) { o.motion_per_period = secondOfTwo(v, "frame", "period"); }},
+      {"keyframe-before-loss",
+       [](FrontendOptions& o, const std::string& v) { o.keyframe_before_loss = secondOfTwo(v, "off", "on"); }},
       {"dense-odometry",
        [](FrontendOptions& o, const std::string& v) { o.dense_odometry.use = parseDenseOdometryUse(v); }},
       {"dense-odometry-kind",

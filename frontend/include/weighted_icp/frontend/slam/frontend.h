@@ -80,6 +80,9 @@ struct FrontendOptions {
   double keyframe_rotation_deg = 8.0;
   /// A keyframe when fewer than this fraction of the last keyframe's tracked points are tracked.
   double keyframe_min_tracked_ratio = 0.5;
+  /// When tracking is lost, the last frame 3D-2D tracked becomes its segment's last keyframe (if it is not one
+  /// already): the place seen just before the loss is then in the map, for the new segment's bridge to find.
+  bool keyframe_before_loss = true;
   /// New landmarks are not created this close to a feature flagged as moving.
   double dynamic_mask_radius_px = 25.0;
   /// A map point flagged as moving this many times is no longer matched
@@ -252,6 +255,8 @@ class Frontend {
   /// No measured pose for this frame: skipped if the quality gate refuses the image (the segment goes on), else
   /// tracking is lost (the segment ends). Either way, while a motion is known, the frame gets the predicted pose.
   TrackingResult lose(TrackingResult result, const std::string& reason);
+  /// Before a loss: the last 3D-2D-tracked frame, if it is not a keyframe, becomes one (options_.keyframe_before_loss).
+  void keyLastTrackedFrame();
   /// While tracking, with a motion known: the constant-velocity model's pose for this frame (pose_predicted), the
   /// model advanced by it, so the next frame is predicted for its own time.
   void predictPoseOf(TrackingResult& result);
@@ -330,6 +335,14 @@ class Frontend {
   std::optional<Eigen::Isometry3d> metric_velocity_;
   /// The time it spanned (seconds; 0 without timestamps): two frame periods across a dropped frame.
   double metric_velocity_seconds_ = 0.0;
+  /// The last frame 3D-2D tracking posed that did not become a keyframe, with what it tracked
+  /// (options_.keyframe_before_loss).
+  struct UnkeyedFrame {
+    Frame frame;
+    std::vector<std::pair<std::size_t, MapPointId>> tracked;
+    std::vector<Eigen::Vector2d> dynamic_pixels;
+  };
+  std::optional<UnkeyedFrame> last_unkeyed_;
   Frame last_keyframe_;
   KeyframeId last_keyframe_id_ = 0;
   std::size_t tracked_at_last_keyframe_ = 0;
