@@ -288,7 +288,9 @@ TEST(FrontendDroppedFrames, APredictionPerPeriodCountsTheFramePeriodsTheTimestam
       RgbdFrame frame = sequence.frame(kept[k]).rgbd;
       if (!honest_timestamps) frame.timestamp = sequence.frame(k).rgbd.timestamp;
       result = tracker.frontend.track(frame);
-      if (k + 1 < kept.size()) ASSERT_TRUE(result.measuredPose()) << "frame " << kept[k] << ": " << result.reason;
+      if (k + 1 < kept.size()) {
+        ASSERT_TRUE(result.measuredPose()) << "frame " << kept[k] << ": " << result.reason;
+      }
     }
     if (!honest_timestamps) {
       EXPECT_NE(result.status, TrackingStatus::Tracked) << "the test needs a frame outside both gates";

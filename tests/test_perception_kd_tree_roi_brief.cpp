@@ -133,7 +133,7 @@ TEST(RoiMatcher, APredictionFarOutsideTheImageIsIgnoredNotAnError) {
   std::vector<Eigen::Vector2d> predicted{{102, 101}, {598, 403}, {320, 240}, {320, 240}};
   RoiMatchOptions options;
   const auto near_only = matchInRegionsOfInterest(query, query_pixels, reference, predicted, options);
-  for (const Eigen::Vector2d far : {Eigen::Vector2d(3e9, -2e9), Eigen::Vector2d(-1e12, 5e11)}) {
+  for (const Eigen::Vector2d& far : {Eigen::Vector2d(3e9, -2e9), Eigen::Vector2d(-1e12, 5e11)}) {
     predicted[3] = far;
     std::vector<cv::DMatch> matches;
     ASSERT_NO_THROW(matches = matchInRegionsOfInterest(query, query_pixels, reference, predicted, options));

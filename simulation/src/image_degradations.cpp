@@ -96,6 +96,45 @@ cv::Mat zoomImage(const cv::Mat& image, const PinholeCamera& camera, double scal
   return zoomed;
 }
 
+PinholeCamera resizedCamera(const PinholeCamera& camera, double scale) {
+  if (!(scale > 0.0) || !std::isfinite(scale))
+    throw std::invalid_argument("resizedCamera: scale must be > 0, got " + std::to_string(scale));
+  PinholeCamera resized = camera;
+  resized.width = static_cast<int>(std::lround(camera.width * scale));
+  resized.height = static_cast<int>(std::lround(camera.height * scale));
+  if (resized.width < 16 || resized.height < 16)
+    throw std::invalid_argument("resizedCamera: " + std::to_string(camera.width) + "x" + std::to_string(camera.height) +
+                                " times " + std::to_string(scale) + " is smaller than 16x16 pixels");
+  // Pixel centres: old pixel u spans [u - 0.5, u + 0.5], which the new grid covers as [(u - 0.5) s, (u + 0.5) s].
+  const auto centre = [scale](double c) { return (c + 0.5) * scale - 0.5; };
+  resized.fx *= scale;
+  resized.fy *= scale;
+  resized.cx = centre(camera.cx);
+  resized.cy = centre(camera.cy);
+  if (resized.unregistered_depth) {
+    DepthCamera& depth = *resized.unregistered_depth;
+    depth.fx *= scale;
+    depth.fy *= scale;
+    depth.cx = centre(depth.cx);
+    depth.cy = centre(depth.cy);
+  }
+  return resized;
+}
+
+cv::Mat resizeImage(const cv::Mat& image, const PinholeCamera& camera, double scale, int interpolation) {
+  if (image.empty()) throw std::invalid_argument("resizeImage: empty image");
+  if (image.cols != camera.width || image.rows != camera.height)
+    throw std::invalid_argument("resizeImage: image is " + std::to_string(image.cols) + "x" +
+                                std::to_string(image.rows) + ", the camera " + std::to_string(camera.width) + "x" +
+                                std::to_string(camera.height));
+  const PinholeCamera resized = resizedCamera(camera, scale);
+  // Area averaging only shrinks; enlarging with it would be nearest-neighbour blocks.
+  if (interpolation == cv::INTER_AREA && scale > 1.0) interpolation = cv::INTER_LINEAR;
+  cv::Mat out;
+  cv::resize(image, out, cv::Size(resized.width, resized.height), 0.0, 0.0, interpolation);
+  return out;
+}
+
 namespace {
 /// Every pixel of the camera's (raw) image, row by row, undistorted (the pixel itself without distortion).
 std::vector<cv::Point2f> undistortedPixels(const PinholeCamera& camera) {

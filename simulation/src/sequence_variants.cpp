@@ -28,11 +28,15 @@ namespace {
 namespace fs = std::filesystem;
 
 const std::vector<std::pair<VariantKind, const char*>>& kindNames() {
-  static const std::vector<std::pair<VariantKind, const char*>> names = {
-      {VariantKind::Jpeg, "jpeg"},       {VariantKind::MillimetreDepth, "mm-depth"},
-      {VariantKind::Focal, "focal"},     {VariantKind::Unregistered, "unregistered"},
-      {VariantKind::MotionBlur, "blur"}, {VariantKind::LowLight, "low-light"},
-      {VariantKind::Burst, "burst"},     {VariantKind::ThereAndBack, "there-and-back"}};
+  static const std::vector<std::pair<VariantKind, const char*>> names = {{VariantKind::Jpeg, "jpeg"},
+                                                                         {VariantKind::MillimetreDepth, "mm-depth"},
+                                                                         {VariantKind::Focal, "focal"},
+                                                                         {VariantKind::Unregistered, "unregistered"},
+                                                                         {VariantKind::MotionBlur, "blur"},
+                                                                         {VariantKind::LowLight, "low-light"},
+                                                                         {VariantKind::Burst, "burst"},
+                                                                         {VariantKind::ThereAndBack, "there-and-back"},
+                                                                         {VariantKind::Resolution, "resolution"}};
   return names;
 }
 
@@ -55,6 +59,7 @@ void checkOptions(const SequenceVariantOptions& options) {
   require(options.jpeg_quality >= 1 && options.jpeg_quality <= 100, "JPEG quality must be in [1, 100]");
   require(options.depth_factor >= 100.0 && options.depth_factor <= 65535.0,
           "depth factor must be in [100, 65535] raw values per metre");
+  require(options.resolution_scale >= 0.25 && options.resolution_scale <= 4.0, "resolution scale must be in [0.25, 4]");
   require(options.focal_length_px >= 50.0 && options.focal_length_px <= 5000.0,
           "focal length must be in [50, 5000] px");
   require(options.depth_offset_m.allFinite() && options.depth_offset_m.norm() <= 0.5,
@@ -85,6 +90,7 @@ PinholeCamera variantCamera(const PinholeCamera& original, const SequenceVariant
   PinholeCamera camera = original;
   for (const VariantKind kind : options.kinds) {
     if (kind == VariantKind::Focal) camera = zoomedCamera(camera, options.focal_length_px / camera.fx);
+    if (kind == VariantKind::Resolution) camera = resizedCamera(camera, options.resolution_scale);
     if (kind == VariantKind::MillimetreDepth) camera.depth_factor = options.depth_factor;
     if (kind == VariantKind::Unregistered && options.describe_depth_camera) {
       DepthCamera depth{camera.fx, camera.fy, camera.cx, camera.cy, {}, {}};
@@ -146,6 +152,11 @@ RgbdFrame applyKinds(RgbdFrame frame, std::size_t i, PinholeCamera camera, const
         camera = zoomedCamera(camera, scale);
         break;
       }
+      case VariantKind::Resolution:
+        frame.color = resizeImage(frame.color, camera, options.resolution_scale, cv::INTER_AREA);
+        frame.depth = resizeImage(frame.depth, camera, options.resolution_scale, cv::INTER_NEAREST);
+        camera = resizedCamera(camera, options.resolution_scale);
+        break;
       case VariantKind::Unregistered:
         frame.depth = unregisteredDepth(frame.depth, camera, depthInColor(options));
         break;
@@ -191,6 +202,7 @@ void writeDescription(const fs::path& path, const VariantSource& source, const S
   if (has(options, VariantKind::Jpeg)) text << "\njpeg_quality: " << options.jpeg_quality;
   if (has(options, VariantKind::MillimetreDepth)) text << "\ndepth_factor: " << options.depth_factor;
   if (has(options, VariantKind::Focal)) text << "\nfocal_length_px: " << options.focal_length_px;
+  if (has(options, VariantKind::Resolution)) text << "\nresolution_scale: " << options.resolution_scale;
   if (has(options, VariantKind::Unregistered))
     text << "\ndepth_offset_m: " << options.depth_offset_m.transpose()
          << "\ndepth_rotation_deg: " << options.depth_rotation_deg;

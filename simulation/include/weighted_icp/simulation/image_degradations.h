@@ -51,6 +51,22 @@ PinholeCamera zoomedCamera(const PinholeCamera& camera, double scale);
 ///        depth (never mix a foreground and a background depth)
 cv::Mat zoomImage(const cv::Mat& image, const PinholeCamera& camera, double scale, int interpolation);
 
+/// @brief The camera of resizeImage: a sensor of another resolution with the same field of view. Focal lengths
+/// times `scale`, the principal point moved with the pixel grid ((c + 0.5) scale - 0.5), size times `scale`
+/// (rounded), distortion (normalised coordinates) and depth factor unchanged; an unregistered depth camera is
+/// resized alike.
+/// @param camera the original camera
+/// @param scale new width / old (> 0); the new size must be at least 16 x 16 pixels
+PinholeCamera resizedCamera(const PinholeCamera& camera, double scale);
+
+/// @brief The image at resizedCamera's size.
+/// @param image colour or depth image of `camera`'s size
+/// @param camera its camera
+/// @param scale new width / old (> 0)
+/// @param interpolation cv::INTER_AREA for colour (each new pixel averages the old ones it covers; bilinear when
+///        enlarging), cv::INTER_NEAREST for depth (never mix a foreground and a background depth)
+cv::Mat resizeImage(const cv::Mat& image, const PinholeCamera& camera, double scale, int interpolation);
+
 /// @brief Depth as an unregistered sensor delivers it: seen from a depth
 /// camera at `depth_in_color` (its pose in the colour camera's frame) with the
 /// colour camera's intrinsics and no lens distortion, but indexed as if it were

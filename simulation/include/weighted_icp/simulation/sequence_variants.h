@@ -32,10 +32,11 @@ enum class VariantKind {
   MotionBlur,       // every colour image blurred along a random direction
   LowLight,         // every colour image darkened, gamma-crushed and noisy
   Burst,            // bursts of blurred or noisy colour frames (listed in bursts.txt)
-  ThereAndBack      // the frames re-ordered before any other kind: even ones forward, odd ones back (thereAndBack)
+  ThereAndBack,     // the frames re-ordered before any other kind: even ones forward, odd ones back (thereAndBack)
+  Resolution        // another sensor resolution, same field of view: images and camera resized by resolution_scale
 };
 
-/// @brief "jpeg", "mm-depth", "focal", "unregistered", "blur", "low-light", "burst", "there-and-back".
+/// @brief "jpeg", "mm-depth", "focal", "unregistered", "blur", "low-light", "burst", "there-and-back", "resolution".
 /// @param kind the kind to name
 std::string toString(VariantKind kind);
 /// @brief The kind of a name written by toString; std::invalid_argument naming the
@@ -54,6 +55,8 @@ struct SequenceVariantOptions {
   double depth_factor = 1000.0;
   /// The new horizontal focal length; fy is scaled by the same factor.
   double focal_length_px = 585.0;
+  /// Resolution: new width / old (0.5: 640x480 becomes 320x240), in [0.25, 4].
+  double resolution_scale = 0.5;
   /// The depth camera's position in the colour camera's frame (a Kinect's IR
   /// camera sits about 2.5 cm beside its colour camera) and its rotation about y.
   Eigen::Vector3d depth_offset_m{0.025, 0.0, 0.0};
