@@ -258,22 +258,28 @@ std::string defaultMatcherName() { return frontend::matcherKindName(frontend::De
 
 }  // namespace
 
+/// The constructor's docstring; its option keys are read from the front end's table, so that none is left out.
+const std::string& slamInitDoc() {
+  static const std::string doc = [] {
+    std::string keys;
+    for (const std::string& key : frontend::frontendChoiceKeys()) keys += (keys.empty() ? "" : ", ") + key;
+    return "camera: a Camera, 'fr1'|'fr2'|'fr3' or a YAML path. deterministic runs bundle adjustment inline "
+           "(reproducible) instead of in its own thread. options: the front end's choices by wicp_rgbd_slam's "
+           "option names and values, e.g. {'quality-measure': 'brisque', 'pnp': 'iterative'} (keys: " +
+           keys + "; options win over the matcher argument); a wrong key or value raises ValueError.";
+  }();
+  return doc;
+}
+
 void bindFrontend(py::module_& m) {
   bindCamera(m);
   bindTrackResult(m);
   py::class_<PythonSlam>(m, "RgbdSlam",
                          "The RGB-D SLAM front end (wicp_rgbd_slam's): feed frames with track(), or a TUM folder "
                          "with run(); read the trajectory, keyframes and landmarks.")
-      .def(
-          py::init(&makeSlam), py::arg("camera") = "fr1", py::arg("minimap_keyframes") = 10,
-          py::arg("matcher") = defaultMatcherName(), py::arg("quality_gate") = true, py::arg("deterministic") = false,
-          py::arg("options") = std::map<std::string, std::string>{},
-          "camera: a Camera, 'fr1'|'fr2'|'fr3' or a YAML path. deterministic runs bundle adjustment inline "
-          "(reproducible) instead of in its own thread. options: the papers' techniques by wicp_rgbd_slam's "
-          "option names and values, e.g. {'quality-measure': 'brisque', 'pnp': 'iterative'} (keys: "
-          "matcher, quality-gate, quality-measure, descriptor, match-region, dynamic-distance, equalization, describe, "
-          "pnp, dense-odometry, dense-odometry-kind; options win over the matcher argument); a wrong key or "
-          "value raises ValueError.")
+      .def(py::init(&makeSlam), py::arg("camera") = "fr1", py::arg("minimap_keyframes") = 10,
+           py::arg("matcher") = defaultMatcherName(), py::arg("quality_gate") = true, py::arg("deterministic") = false,
+           py::arg("options") = std::map<std::string, std::string>{}, slamInitDoc().c_str())
       .def("track", &PythonSlam::track, py::arg("rgb"), py::arg("depth"), py::arg("timestamp"), py::arg("bgr") = false,
            "Tracks one frame: rgb (H, W, 3) uint8 in RGB order (bgr=True: OpenCV's order, not copied) or (H, W) "
            "grey; depth (H, W) uint16 raw (divided by the camera's depth_factor) or float32 metres. The GIL is "
