@@ -164,6 +164,38 @@ TEST(SequenceVariants, ResolutionVariantSeesEachPointWhereItsIntrinsicsSay) {
                std::invalid_argument);
 }
 
+// A noisier depth sensor: errors of coefficient z^2 around the true depth, in patches when correlated, holes kept.
+TEST(SequenceVariants, NoisyDepthGrowsWithTheSquareOfTheDistanceAndComesInPatches) {
+  cv::Mat depth(240, 320, CV_32F, cv::Scalar(2.0f));
+  depth(cv::Rect(0, 0, 160, 240)).setTo(1.0f);
+  depth.at<float>(100, 200) = 0.0f;  // no reading
+  const auto measure = [&](double correlation_px) {
+    cv::RNG rng(3);
+    const cv::Mat noisy = simulation::noisyDepth(depth, 0.01, correlation_px, rng);
+    EXPECT_EQ(noisy.at<float>(100, 200), 0.0f);
+    cv::Mat error = noisy - depth;
+    cv::Scalar near_mean, near_sigma, far_mean, far_sigma;
+    cv::meanStdDev(error(cv::Rect(10, 10, 140, 220)), near_mean, near_sigma);
+    cv::meanStdDev(error(cv::Rect(170, 10, 140, 80)), far_mean, far_sigma);
+    EXPECT_NEAR(near_sigma[0], 0.01, 0.002);  // 0.01 * 1^2
+    EXPECT_NEAR(far_sigma[0], 0.04, 0.008);   // 0.01 * 2^2
+    EXPECT_NEAR(far_mean[0], 0.0, 0.01);
+    // Correlation of horizontal neighbours' errors on the far half.
+    double products = 0.0, squares = 0.0;
+    for (int v = 10; v < 90; ++v)
+      for (int u = 170; u < 309; ++u) {
+        products += error.at<float>(v, u) * error.at<float>(v, u + 1);
+        squares += error.at<float>(v, u) * error.at<float>(v, u);
+      }
+    return products / squares;
+  };
+  EXPECT_LT(std::abs(measure(0.0)), 0.1);
+  EXPECT_GT(measure(2.0), 0.8);
+  cv::RNG rng(1);
+  EXPECT_THROW(simulation::noisyDepth(depth, -0.01, 2.0, rng), std::invalid_argument);
+  EXPECT_THROW(simulation::noisyDepth(cv::Mat(4, 4, CV_8U), 0.01, 2.0, rng), std::invalid_argument);
+}
+
 TEST(SequenceVariants, UnregisteredDepthIsSeenFromTheOffsetCamera) {
   // A near square (1 m) in front of a wall (2 m): seen from 2.5 cm to the
   // right, the square moves fx * 0.025 / 1 px to the left, the wall half that.

@@ -55,6 +55,37 @@ cv::Mat addGaussianNoise(const cv::Mat& image, double sigma, cv::RNG& rng) {
   return noisy;
 }
 
+cv::Mat noisyDepth(const cv::Mat& depth, double coefficient, double correlation_px, cv::RNG& rng) {
+  if (depth.empty() || depth.type() != CV_32F) throw std::invalid_argument("noisyDepth: depth must be CV_32F metres");
+  if (!(coefficient >= 0.0) || !std::isfinite(coefficient))
+    throw std::invalid_argument("noisyDepth: coefficient must be >= 0");
+  if (!(correlation_px >= 0.0) || !std::isfinite(correlation_px))
+    throw std::invalid_argument("noisyDepth: correlation must be >= 0 px");
+  cv::Mat field(depth.size(), CV_32F);
+  rng.fill(field, cv::RNG::NORMAL, 0.0, 1.0);
+  if (correlation_px > 0.0) {
+    cv::GaussianBlur(field, field, cv::Size(), correlation_px, correlation_px, cv::BORDER_REFLECT);
+    cv::Scalar mean, stddev;
+    cv::meanStdDev(field, mean, stddev);
+    if (stddev[0] > 0.0) field = (field - mean[0]) / stddev[0];  // unit variance again
+  }
+  cv::Mat noisy = depth.clone();
+  for (int v = 0; v < noisy.rows; ++v) {
+    float* row = noisy.ptr<float>(v);
+    const float* n = field.ptr<float>(v);
+    for (int u = 0; u < noisy.cols; ++u) {
+      const float z = row[u];
+      if (!(z > 0.0f) || !std::isfinite(z)) {
+        row[u] = 0.0f;
+        continue;
+      }
+      const float measured = z + static_cast<float>(coefficient) * z * z * n[u];
+      row[u] = measured > 0.0f ? measured : 0.0f;
+    }
+  }
+  return noisy;
+}
+
 cv::Mat lowLight(const cv::Mat& image, double gain, double gamma, double noise_sigma, cv::RNG& rng) {
   requireEightBit(image, "lowLight");
   if (!(gain > 0.0 && gain <= 1.0)) throw std::invalid_argument("lowLight: gain must be in (0, 1]");

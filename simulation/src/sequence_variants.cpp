@@ -36,7 +36,8 @@ const std::vector<std::pair<VariantKind, const char*>>& kindNames() {
                                                                          {VariantKind::LowLight, "low-light"},
                                                                          {VariantKind::Burst, "burst"},
                                                                          {VariantKind::ThereAndBack, "there-and-back"},
-                                                                         {VariantKind::Resolution, "resolution"}};
+                                                                         {VariantKind::Resolution, "resolution"},
+                                                                         {VariantKind::DepthNoise, "depth-noise"}};
   return names;
 }
 
@@ -59,6 +60,10 @@ void checkOptions(const SequenceVariantOptions& options) {
   require(options.jpeg_quality >= 1 && options.jpeg_quality <= 100, "JPEG quality must be in [1, 100]");
   require(options.depth_factor >= 100.0 && options.depth_factor <= 65535.0,
           "depth factor must be in [100, 65535] raw values per metre");
+  require(options.depth_noise_coefficient >= 0.0 && options.depth_noise_coefficient <= 0.1,
+          "depth noise coefficient must be in [0, 0.1] m per square metre");
+  require(options.depth_noise_correlation_px >= 0.0 && options.depth_noise_correlation_px <= 50.0,
+          "depth noise correlation must be in [0, 50] px");
   require(options.resolution_scale >= 0.25 && options.resolution_scale <= 4.0, "resolution scale must be in [0.25, 4]");
   require(options.focal_length_px >= 50.0 && options.focal_length_px <= 5000.0,
           "focal length must be in [50, 5000] px");
@@ -157,6 +162,9 @@ RgbdFrame applyKinds(RgbdFrame frame, std::size_t i, PinholeCamera camera, const
         frame.depth = resizeImage(frame.depth, camera, options.resolution_scale, cv::INTER_NEAREST);
         camera = resizedCamera(camera, options.resolution_scale);
         break;
+      case VariantKind::DepthNoise:
+        frame.depth = noisyDepth(frame.depth, options.depth_noise_coefficient, options.depth_noise_correlation_px, rng);
+        break;
       case VariantKind::Unregistered:
         frame.depth = unregisteredDepth(frame.depth, camera, depthInColor(options));
         break;
@@ -203,6 +211,9 @@ void writeDescription(const fs::path& path, const VariantSource& source, const S
   if (has(options, VariantKind::MillimetreDepth)) text << "\ndepth_factor: " << options.depth_factor;
   if (has(options, VariantKind::Focal)) text << "\nfocal_length_px: " << options.focal_length_px;
   if (has(options, VariantKind::Resolution)) text << "\nresolution_scale: " << options.resolution_scale;
+  if (has(options, VariantKind::DepthNoise))
+    text << "\ndepth_noise_coefficient: " << options.depth_noise_coefficient
+         << "\ndepth_noise_correlation_px: " << options.depth_noise_correlation_px;
   if (has(options, VariantKind::Unregistered))
     text << "\ndepth_offset_m: " << options.depth_offset_m.transpose()
          << "\ndepth_rotation_deg: " << options.depth_rotation_deg;

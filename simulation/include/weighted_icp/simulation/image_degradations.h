@@ -24,6 +24,16 @@ cv::Mat motionBlur(const cv::Mat& image, double length_px, double angle_deg);
 /// @param rng the source of the noise (seeded by the caller for determinism)
 cv::Mat addGaussianNoise(const cv::Mat& image, double sigma, cv::RNG& rng);
 
+/// @brief Depth as a noisier sensor measures it (a stereo depth camera: its error grows with the square of the
+/// distance): z + coefficient z^2 n, n a unit-variance Gaussian field, smoothed over `correlation_px` (a sensor's
+/// errors come in patches, not per pixel; 0: independent pixels) and scaled back to unit variance. Pixels without
+/// a reading (0, not finite) stay 0; a reading pushed to 0 or below becomes 0 (no reading).
+/// @param depth CV_32F metres
+/// @param coefficient metres per square metre (>= 0): 0.0015 is about a Kinect v1's, 0.01 a consumer stereo camera's
+/// @param correlation_px the smoothing Gaussian's sigma in pixels (>= 0)
+/// @param rng the source of the noise
+cv::Mat noisyDepth(const cv::Mat& depth, double coefficient, double correlation_px, cv::RNG& rng);
+
 /// @brief A low-light exposure: value = 255 gain (value / 255)^gamma, then
 /// read noise of `noise_sigma` grey levels (a dark image's noise is relatively
 /// larger, which is what makes low light hard).

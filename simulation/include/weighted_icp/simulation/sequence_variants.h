@@ -33,10 +33,12 @@ enum class VariantKind {
   LowLight,         // every colour image darkened, gamma-crushed and noisy
   Burst,            // bursts of blurred or noisy colour frames (listed in bursts.txt)
   ThereAndBack,     // the frames re-ordered before any other kind: even ones forward, odd ones back (thereAndBack)
-  Resolution        // another sensor resolution, same field of view: images and camera resized by resolution_scale
+  Resolution,       // another sensor resolution, same field of view: images and camera resized by resolution_scale
+  DepthNoise        // noisier depth: z + depth_noise_coefficient z^2 n, n correlated over depth_noise_correlation_px
 };
 
-/// @brief "jpeg", "mm-depth", "focal", "unregistered", "blur", "low-light", "burst", "there-and-back", "resolution".
+/// @brief "jpeg", "mm-depth", "focal", "unregistered", "blur", "low-light", "burst", "there-and-back", "resolution",
+/// "depth-noise".
 /// @param kind the kind to name
 std::string toString(VariantKind kind);
 /// @brief The kind of a name written by toString; std::invalid_argument naming the
@@ -57,6 +59,10 @@ struct SequenceVariantOptions {
   double focal_length_px = 585.0;
   /// Resolution: new width / old (0.5: 640x480 becomes 320x240), in [0.25, 4].
   double resolution_scale = 0.5;
+  /// Depth noise: sigma = coefficient z^2 (m); 0.01 is a consumer stereo depth camera's (2 % at 2 m), several times
+  /// a Kinect v1's. Its errors are correlated over about correlation_px pixels.
+  double depth_noise_coefficient = 0.01;
+  double depth_noise_correlation_px = 2.0;
   /// The depth camera's position in the colour camera's frame (a Kinect's IR
   /// camera sits about 2.5 cm beside its colour camera) and its rotation about y.
   Eigen::Vector3d depth_offset_m{0.025, 0.0, 0.0};
