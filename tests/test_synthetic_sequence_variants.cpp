@@ -128,15 +128,20 @@ TEST(SequenceVariants, FocalVariantSeesEachPointWhereItsIntrinsicsSay) {
 // the resized images show it (depth, and colour averaged over the pixels the new one covers).
 TEST(SequenceVariants, ResolutionVariantSeesEachPointWhereItsIntrinsicsSay) {
   const simulation::VariantSource source = smallSynthetic(2);
-  for (const double scale : {0.5, 2.0}) {
+  // 0.33: 160x120 becomes 53x40, each axis scaled by its own rounded ratio.
+  for (const double scale : {0.5, 2.0, 0.33}) {
     simulation::SequenceVariantOptions options = kinds("resolution");
     options.resolution_scale = scale;
     const Written variant =
         writeAndOpen(source, options, scratchDir("variant") / ("resolution_" + std::to_string(scale)));
-    EXPECT_EQ(variant.camera.width, static_cast<int>(source.camera.width * scale));
-    EXPECT_EQ(variant.camera.height, static_cast<int>(source.camera.height * scale));
-    EXPECT_DOUBLE_EQ(variant.camera.fx, source.camera.fx * scale);
-    EXPECT_DOUBLE_EQ(variant.camera.cx, (source.camera.cx + 0.5) * scale - 0.5);
+    EXPECT_EQ(variant.camera.width, std::lround(source.camera.width * scale));
+    EXPECT_EQ(variant.camera.height, std::lround(source.camera.height * scale));
+    const double sx = static_cast<double>(variant.camera.width) / source.camera.width;
+    const double sy = static_cast<double>(variant.camera.height) / source.camera.height;
+    EXPECT_NEAR(variant.camera.fx, source.camera.fx * sx, 1e-9);
+    EXPECT_NEAR(variant.camera.fy, source.camera.fy * sy, 1e-9);
+    EXPECT_NEAR(variant.camera.cx, (source.camera.cx + 0.5) * sx - 0.5, 1e-9);
+    EXPECT_NEAR(variant.camera.cy, (source.camera.cy + 0.5) * sy - 0.5, 1e-9);
     const RgbdFrame original = source.load(0), resized = variant.sequence.loadFrame(0, variant.camera);
     ASSERT_EQ(resized.color.cols, variant.camera.width);
     ASSERT_EQ(resized.depth.rows, variant.camera.height);

@@ -136,18 +136,21 @@ PinholeCamera resizedCamera(const PinholeCamera& camera, double scale) {
   if (resized.width < 16 || resized.height < 16)
     throw std::invalid_argument("resizedCamera: " + std::to_string(camera.width) + "x" + std::to_string(camera.height) +
                                 " times " + std::to_string(scale) + " is smaller than 16x16 pixels");
-  // Pixel centres: old pixel u spans [u - 0.5, u + 0.5], which the new grid covers as [(u - 0.5) s, (u + 0.5) s].
-  const auto centre = [scale](double c) { return (c + 0.5) * scale - 0.5; };
-  resized.fx *= scale;
-  resized.fy *= scale;
-  resized.cx = centre(camera.cx);
-  resized.cy = centre(camera.cy);
+  // The sizes are rounded: each axis scales by its own exact ratio, as cv::resize maps it. Pixel centres: old pixel
+  // u spans [u - 0.5, u + 0.5], which the new grid covers as [(u - 0.5) s, (u + 0.5) s].
+  const double sx = static_cast<double>(resized.width) / camera.width;
+  const double sy = static_cast<double>(resized.height) / camera.height;
+  const auto centre = [](double c, double s) { return (c + 0.5) * s - 0.5; };
+  resized.fx *= sx;
+  resized.fy *= sy;
+  resized.cx = centre(camera.cx, sx);
+  resized.cy = centre(camera.cy, sy);
   if (resized.unregistered_depth) {
     DepthCamera& depth = *resized.unregistered_depth;
-    depth.fx *= scale;
-    depth.fy *= scale;
-    depth.cx = centre(depth.cx);
-    depth.cy = centre(depth.cy);
+    depth.fx *= sx;
+    depth.fy *= sy;
+    depth.cx = centre(depth.cx, sx);
+    depth.cy = centre(depth.cy, sy);
   }
   return resized;
 }

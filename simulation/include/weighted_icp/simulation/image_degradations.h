@@ -61,10 +61,10 @@ PinholeCamera zoomedCamera(const PinholeCamera& camera, double scale);
 ///        depth (never mix a foreground and a background depth)
 cv::Mat zoomImage(const cv::Mat& image, const PinholeCamera& camera, double scale, int interpolation);
 
-/// @brief The camera of resizeImage: a sensor of another resolution with the same field of view. Focal lengths
-/// times `scale`, the principal point moved with the pixel grid ((c + 0.5) scale - 0.5), size times `scale`
-/// (rounded), distortion (normalised coordinates) and depth factor unchanged; an unregistered depth camera is
-/// resized alike.
+/// @brief The camera of resizeImage: a sensor of another resolution with the same field of view. Size times `scale`
+/// (rounded), focal lengths times each axis' exact ratio s (new size / old), the principal point moved with the pixel
+/// grid ((c + 0.5) s - 0.5), distortion (normalised coordinates) and depth factor unchanged; an unregistered depth
+/// camera is resized alike.
 /// @param camera the original camera
 /// @param scale new width / old (> 0); the new size must be at least 16 x 16 pixels
 PinholeCamera resizedCamera(const PinholeCamera& camera, double scale);
