@@ -345,6 +345,8 @@ TEST(CloudIo, OnlyAWellFormedPlyHeaderReachesPcl) {
       {"orphan_property", "ply\nformat ascii 1.0\nproperty float x\nend_header\n", "line 3: a property before"},
       {"many_elements", start + "element a 100\nproperty uchar v\nelement b 100\nproperty uchar v\nend_header\n",
        "element instances in all"},  // each within the file's size, together beyond it
+      // PCL's reader asserted (aborting the process) on an obj_info line not at the line's start (a fuzzed file).
+      {"indented_obj_info", start + " obj_info float\nend_header\n", "line 5: a header line starting with white space"},
   };
   for (const auto& [name, text, error] : cases) {
     const fs::path path = scratch / (name + ".ply");

@@ -222,6 +222,17 @@ TEST(TumSequence, MissingImageFileIsNamedWithItsLine) {
   EXPECT_NE(error.find("101.005000.png"), std::string::npos) << error;
 }
 
+// A name the file system refuses (longer than it allows) is named with its list's line, not left to
+// std::filesystem's error, which names neither (a fuzzed list).
+TEST(TumSequence, AnImageNameTheFileSystemRefusesIsNamedWithItsLine) {
+  const fs::path dir = writeSequence("tum_name_too_long", 2);
+  writeFile(dir / "rgb.txt", "# color images\n100.000000 rgb/" + std::string(5000, 'x') + ".png\n");
+  const std::string error = errorOf([&] { io::TumSequence::open(dir.string()); });
+  EXPECT_NE(error.find((dir / "rgb.txt").string() + ":2:"), std::string::npos) << error;
+  EXPECT_NE(error.find("cannot use the image file name"), std::string::npos) << error;
+  EXPECT_LT(error.size(), 1000u) << "the name is clipped";
+}
+
 TEST(TumSequence, ImageProblemsAreNamedWhenLoading) {
   const fs::path dir = writeSequence("tum_bad_images", 4);
   // Frame 0: depth of another size. Frame 1: colour that is not an image.

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <sstream>
 #include <stdexcept>
 #include <vector>
@@ -66,6 +67,9 @@ void requireWellFormedPlyHeader(std::istream& in, const std::string& path, std::
   while (next()) {
     const auto w = words(line);
     if (w.empty()) fail("an empty line in the header");
+    // PCL's reader takes the keyword from the words but checks it at the line's start (an assertion, for obj_info).
+    if (std::isspace(static_cast<unsigned char>(line[0])))
+      fail("a header line starting with white space (a keyword starts its line)");
     if (w[0] == "comment" || w[0] == "obj_info") continue;
     if (w[0] == "end_header") {
       if (w.size() != 1) fail("end_header followed by more on its line");

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <filesystem>
 #include <stdexcept>
+#include <system_error>
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -28,8 +29,19 @@ std::string shownImagePath(const fs::path& folder, const std::string& entry) {
 
 std::string sizeText(const cv::Mat& image) { return std::to_string(image.cols) + "x" + std::to_string(image.rows); }
 
+/// Empty when `path` is a regular file, else why not in words. Asked without exceptions: std::filesystem's (a name
+/// too long for the file system, a permission) would not name the list that gave the path.
+std::string whyNotAnImageFile(const std::string& path) {
+  std::error_code error;
+  const fs::file_status status = fs::status(path, error);
+  if (status.type() == fs::file_type::not_found || (!error && !fs::is_regular_file(status)))
+    return "no such image file";
+  if (error) return "cannot use the image file name (" + error.message() + ")";
+  return {};
+}
+
 cv::Mat readImage(const std::string& path, int flags) {
-  if (!fs::is_regular_file(path)) throw std::runtime_error(path + ": no such image file");
+  if (const std::string why = whyNotAnImageFile(path); !why.empty()) throw std::runtime_error(path + ": " + why);
   cv::Mat image = cv::imread(path, flags);
   if (image.empty()) throw std::runtime_error(path + ": cannot read the image (unreadable or not an image format)");
   return image;
@@ -59,11 +71,11 @@ TumSequence TumSequence::open(const std::string& directory) {
     frame.rgb_path = (folder / rgb[r].fields[0]).string();
     frame.depth_path = (folder / depth[d].fields[0]).string();
     // Checked now, so a long run does not stop at its 500th frame.
-    if (!fs::is_regular_file(frame.rgb_path))
-      throw std::runtime_error(rgb_list + ":" + std::to_string(rgb[r].line) + ": no such image file " +
+    if (const std::string why = whyNotAnImageFile(frame.rgb_path); !why.empty())
+      throw std::runtime_error(rgb_list + ":" + std::to_string(rgb[r].line) + ": " + why + " " +
                                shownImagePath(folder, rgb[r].fields[0]));
-    if (!fs::is_regular_file(frame.depth_path))
-      throw std::runtime_error(depth_list + ":" + std::to_string(depth[d].line) + ": no such image file " +
+    if (const std::string why = whyNotAnImageFile(frame.depth_path); !why.empty())
+      throw std::runtime_error(depth_list + ":" + std::to_string(depth[d].line) + ": " + why + " " +
                                shownImagePath(folder, depth[d].fields[0]));
     sequence.frames_.push_back(std::move(frame));
   }
