@@ -26,8 +26,9 @@ int main(int argc, char** argv) {
         "wicp_make_variant [--dataset DIR [--camera fr1|fr2|fr3|FILE.yaml]] --variant KIND[,KIND...] --out DIR\n"
         "Writes DIR in the TUM layout (rgb/, depth/, rgb.txt, depth.txt, groundtruth.txt) with camera.yaml,\n"
         "variant.txt and, for bursts, bursts.txt. Kinds, applied in the order given: jpeg, mm-depth, focal,\n"
-        "unregistered, blur, low-light, burst, resolution, depth-noise; there-and-back re-orders the frames before any other (even\n"
-        "ones forward, then odd ones back: a real revisit). Without --dataset the synthetic sequence is used.\n"
+        "unregistered, blur, low-light, burst, resolution, depth-noise; there-and-back re-orders the frames\n"
+        "before any other (even ones forward, then odd ones back: a real revisit). Without --dataset the\n"
+        "synthetic sequence is used.\n"
         "Exit 1 on an error (nothing written), 2 on a bad command line. Options");
     // One option per line reads as a table: not reflowed.
     // clang-format off
