@@ -34,10 +34,9 @@ std::string sizeText(const cv::Mat& image) { return std::to_string(image.cols) +
 std::string whyNotAnImageFile(const std::string& path) {
   std::error_code error;
   const fs::file_status status = fs::status(path, error);
-  if (status.type() == fs::file_type::not_found || (!error && !fs::is_regular_file(status)))
-    return "no such image file";
+  if (status.type() == fs::file_type::not_found) return "no such image file";
   if (error) return "cannot use the image file name (" + error.message() + ")";
-  return {};
+  return fs::is_regular_file(status) ? std::string() : "no such image file";
 }
 
 cv::Mat readImage(const std::string& path, int flags) {

@@ -385,16 +385,19 @@ void Frontend::acceptPose(Frame& frame, TrackingResult& result, TrackingStatus s
 void Frontend::insertKeyframeIfNeeded(const Frame& frame, TrackingResult& result, const LocalMatches& matched,
                                       const std::vector<int>& static_inliers,
                                       const std::vector<Eigen::Vector2d>& dynamic_pixels) {
-  std::vector<std::pair<std::size_t, MapPointId>> tracked;
-  for (const int m : static_inliers) tracked.push_back(matched.ids[m]);
+  const auto trackedPoints = [&] {
+    std::vector<std::pair<std::size_t, MapPointId>> tracked;
+    for (const int m : static_inliers) tracked.push_back(matched.ids[m]);
+    return tracked;
+  };
   // The gate is asked last: it costs ~25 ms and only keyframe candidates need it.
   if (!needsKeyframe(frame.pose_wc, static_inliers.size())) {
-    if (options_.keyframe_before_loss) last_unkeyed_ = UnkeyedFrame{frame, std::move(tracked), dynamic_pixels};
+    if (options_.keyframe_before_loss) last_unkeyed_ = UnkeyedFrame{frame, trackedPoints(), dynamic_pixels};
     return;
   }
   // A candidate that barely tracks is never refused: its points may be what the next frame needs.
   if (refusedByQualityGate(result, static_inliers.size() < options_.quality.min_tracked_to_refuse)) return;
-  insertKeyframe(frame, tracked, dynamic_pixels);
+  insertKeyframe(frame, trackedPoints(), dynamic_pixels);
   setPose(result, frame.pose_wc);  // now relative to itself
   result.keyframe = true;
 }
@@ -556,8 +559,7 @@ void Frontend::keyLastTrackedFrame() {
   if (state_ != FrontendState::Tracking || !last_unkeyed_) return;
   // On fr3 with ten frames blacked out, the last keyframe before the loss was often ~10 frames before it, and the
   // new segment's first keyframes found too few PnP inliers against its view to be bridged.
-  const UnkeyedFrame unkeyed = std::move(*last_unkeyed_);
-  last_unkeyed_.reset();
+  const UnkeyedFrame unkeyed = std::move(*last_unkeyed_);  // insertKeyframe clears last_unkeyed_
   insertKeyframe(unkeyed.frame, unkeyed.tracked, unkeyed.dynamic_pixels);
 }
 
