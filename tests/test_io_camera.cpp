@@ -97,6 +97,42 @@ TEST(Camera, AnUnregisteredDepthCameraRoundTripsAndNeedsAllItsKeys) {
   EXPECT_EQ(far.find("depth_fx"), std::string::npos) << far;
 }
 
+// A depth camera of its own resolution (an Azure Kinect's 640x576 depth beside 1280x720 colour): both sizes or
+// neither, only with the depth camera, never 0.
+TEST(Camera, ADepthCameraOfItsOwnSizeRoundTripsAndNeedsBothSides) {
+  const auto dir = weighted_icp::testing::scratchDir("camera_depth_size");
+  PinholeCamera camera = tumCamera(1);
+  camera.unregistered_depth = DepthCamera{290.0, 290.5, 157.0, 118.0, {0.025, 0.0, 0.0}, {}, 320, 240};
+  EXPECT_EQ(camera.depthImageSize(), cv::Size(320, 240));
+  const std::string path = (dir / "camera.yaml").string();
+  io::saveCamera(camera, path);
+  const PinholeCamera loaded = io::loadCamera(path);
+  ASSERT_TRUE(loaded.unregistered_depth.has_value());
+  EXPECT_EQ(loaded.depthImageSize(), cv::Size(320, 240));
+  EXPECT_EQ(loaded.unregistered_depth->cx, 157.0);
+  // Without the sizes, the colour image's.
+  camera.unregistered_depth->width = camera.unregistered_depth->height = 0;
+  io::saveCamera(camera, path);
+  EXPECT_EQ(io::loadCamera(path).depthImageSize(), cv::Size(640, 480));
+  const std::string depth_camera =
+      "depth_fx: 290\ndepth_fy: 290\ndepth_cx: 157\ndepth_cy: 118\ndepth_tx: 0.025\n"
+      "depth_ty: 0\ndepth_tz: 0\ndepth_rx: 0\ndepth_ry: 0\ndepth_rz: 0\n";
+  const auto error = [&](const std::string& name, const std::string& extra) {
+    writeFile(dir / name, std::string(kCompleteYaml) + extra);
+    return errorOf((dir / name).string());
+  };
+  const std::string one_side = error("one_side.yaml", depth_camera + "depth_width: 320\n");
+  EXPECT_NE(one_side.find("depth_height is missing"), std::string::npos) << one_side;
+  const std::string alone = error("alone.yaml", "depth_width: 320\ndepth_height: 240\n");
+  EXPECT_NE(alone.find("depth_width and depth_height need the depth camera's keys"), std::string::npos) << alone;
+  const std::string zero = error("zero.yaml", depth_camera + "depth_width: 0\ndepth_height: 240\n");
+  EXPECT_NE(zero.find("depth_width must be between 1"), std::string::npos) << zero;
+  EXPECT_EQ(zero.find("depth_height"), std::string::npos) << zero;
+  // The depth camera's principal point is judged against its own image: 157 is far outside a 64-pixel-wide one.
+  const std::string outside = error("outside.yaml", depth_camera + "depth_width: 64\ndepth_height: 240\n");
+  EXPECT_NE(outside.find("depth_cx must be between"), std::string::npos) << outside;
+}
+
 TEST(Camera, HandWrittenYamlLoads) {
   const auto dir = weighted_icp::testing::scratchDir("camera_hand_written");
   writeFile(dir / "camera.yaml", kCompleteYaml);

@@ -265,6 +265,24 @@ TEST(TumSequence, ImageProblemsAreNamedWhenLoading) {
   EXPECT_NE(error.find(sequence.frame(3).rgb_path), std::string::npos) << error;
 }
 
+// A depth camera of its own resolution: depth images of its size load (in metres, not resized), others are named
+// with the size the camera file gives.
+TEST(TumSequence, DepthImagesOfTheDepthCamerasOwnSizeLoad) {
+  const fs::path dir = writeSequence("tum_depth_camera_size", 2);
+  cv::imwrite((dir / "depth" / "100.005000.png").string(), cv::Mat(24, 32, CV_16UC1, cv::Scalar(5000)));
+  const io::TumSequence sequence = io::TumSequence::open(dir.string());
+  PinholeCamera camera = smallCamera();
+  camera.unregistered_depth = DepthCamera{30.0, 30.0, 15.5, 11.5, {0.025, 0.0, 0.0}, {}, 32, 24};
+  const RgbdFrame frame = sequence.loadFrame(0, camera);
+  EXPECT_EQ(frame.color.size(), cv::Size(64, 48));
+  ASSERT_EQ(frame.depth.size(), cv::Size(32, 24));
+  EXPECT_FLOAT_EQ(frame.depth.at<float>(10, 10), 5000.0f / static_cast<float>(camera.depth_factor));
+  const std::string error = errorOf([&] { sequence.loadFrame(1, camera); });  // 64x48 depth
+  EXPECT_NE(error.find(sequence.frame(1).depth_path), std::string::npos) << error;
+  EXPECT_NE(error.find("64x48"), std::string::npos) << error;
+  EXPECT_NE(error.find("depth camera's is 32x24"), std::string::npos) << error;
+}
+
 TEST(TumSequence, ListsThatNeverMatchAreRefused) {
   const fs::path dir = writeSequence("tum_no_pairs", 2);
   writeFile(dir / "depth.txt", "500.0 depth/100.005000.png\n");

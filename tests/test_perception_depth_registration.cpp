@@ -1,5 +1,6 @@
 // registerDepthToColor: the depth an unregistered sensor delivers (simulated by simulation::unregisteredDepth,
 // with fr1's lens distortion) moved back into the colour camera's pixels.
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -76,6 +77,52 @@ TEST(DepthRegistration, GivesOpenCvsRegisteredDepths) {
   EXPECT_LT(static_cast<double>(only_one) / both, 0.01);
 }
 
+// A depth camera of another resolution than the colour camera's, 2.5 cm aside (an Azure Kinect's 640x576 depth
+// beside 1280x720 colour, ScanNet's 640x480 beside 1296x968): every colour pixel gets the depth it shows, with no
+// cracks where a depth pixel spans several colour pixels.
+TEST(DepthRegistration, ADepthCameraOfAnotherResolutionCoversTheColourImage) {
+  const PinholeCamera colour = tumCamera(1);
+  Eigen::Isometry3d depth_in_color = Eigen::Isometry3d::Identity();
+  depth_in_color.linear() = Eigen::AngleAxisd(0.5 * M_PI / 180.0, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  depth_in_color.translation() = Eigen::Vector3d(0.025, 0.0, 0.0);
+  const cv::Mat truth = boxBeforeAWall(colour);
+  PinholeCamera full = colour;  // the depth camera at the colour camera's resolution
+  full.unregistered_depth =
+      DepthCamera{colour.fx, colour.fy, colour.cx, colour.cy, {0.025, 0.0, 0.0}, {0.0, 0.5 * M_PI / 180.0, 0.0}};
+  const cv::Mat full_raw = simulation::unregisteredDepth(truth, colour, depth_in_color);
+  for (const double scale : {0.5, 0.37, 2.0}) {
+    const PinholeCamera camera = simulation::depthResizedCamera(full, scale);
+    const cv::Mat raw = simulation::depthResizedImage(full_raw, full, scale);
+    ASSERT_EQ(raw.size(), camera.depthImageSize());
+    ASSERT_EQ(raw.cols, std::lround(colour.width * scale));
+    const cv::Mat ours = registerDepthToColor(raw, camera), theirs = registerDepthWithOpenCv(raw, camera);
+    ASSERT_EQ(ours.size(), cv::Size(colour.width, colour.height));
+    ASSERT_EQ(theirs.size(), cv::Size(colour.width, colour.height));
+    // The wall rises 3 mm a colour pixel: a colour pixel shows the nearest depth of a footprint about 1.5 depth
+    // pixels wide (+ 4 mm of the resampling), a depth pixel spanning 1 / scale colour pixels.
+    const float tolerance = 0.003f * static_cast<float>(std::max(2.0, 1.5 / scale)) + 0.004f;
+    std::size_t judged = 0, right = 0, missing = 0, right_opencv = 0, missing_opencv = 0;
+    for (int v = 40; v < colour.height - 40; ++v)
+      for (int u = 60; u < colour.width - 60; ++u) {
+        const bool near_edge =
+            std::abs(u - 250) < 25 || std::abs(u - 410) < 25 || std::abs(v - 150) < 25 || std::abs(v - 290) < 25;
+        if (near_edge) continue;
+        ++judged;
+        const float z = truth.at<float>(v, u), got = ours.at<float>(v, u), opencv = theirs.at<float>(v, u);
+        missing += !(got > 0.0f);
+        missing_opencv += !(opencv > 0.0f);
+        right += std::abs(got - z) < tolerance;
+        right_opencv += std::abs(opencv - z) < tolerance;
+      }
+    ASSERT_GT(judged, 100000u);
+    EXPECT_GT(static_cast<double>(right) / judged, 0.99) << "scale " << scale << ": " << missing << " missing";
+    EXPECT_LT(static_cast<double>(missing) / judged, 0.001) << "scale " << scale;
+    // OpenCV's, given the depth resized to the colour image's size (registerDepth reads it over that size).
+    EXPECT_GT(static_cast<double>(right_opencv) / judged, 0.98) << "scale " << scale;
+    EXPECT_LT(static_cast<double>(missing_opencv) / judged, 0.001) << "scale " << scale;
+  }
+}
+
 TEST(DepthRegistration, RefusesACameraWithoutADepthCameraAndAnotherImage) {
   PinholeCamera camera = tumCamera(3);
   const cv::Mat depth(camera.height, camera.width, CV_32F, cv::Scalar(1.0f));
@@ -85,6 +132,11 @@ TEST(DepthRegistration, RefusesACameraWithoutADepthCameraAndAnotherImage) {
   EXPECT_THROW(registerDepthToColor(depth(cv::Rect(0, 0, 320, 240)).clone(), camera), std::invalid_argument);
   cv::Mat millimetres(camera.height, camera.width, CV_16U, cv::Scalar(1000));
   EXPECT_THROW(registerDepthToColor(millimetres, camera), std::invalid_argument);
+  // A depth camera of its own size takes depth of that size only.
+  camera.unregistered_depth->width = 320;
+  camera.unregistered_depth->height = 240;
+  EXPECT_THROW(registerDepthToColor(depth, camera), std::invalid_argument);
+  EXPECT_EQ(registerDepthToColor(depth(cv::Rect(0, 0, 320, 240)).clone(), camera).size(), depth.size());
 }
 
 }  // namespace

@@ -6,8 +6,11 @@
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <tuple>
+#include <vector>
 
 #include <gtest/gtest.h>
+#include <opencv2/calib3d.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -167,6 +170,64 @@ TEST(SequenceVariants, ResolutionVariantSeesEachPointWhereItsIntrinsicsSay) {
   too_small.resolution_scale = 0.05;
   EXPECT_THROW(simulation::writeSequenceVariant(source, too_small, (scratchDir("variant") / "tiny").string()),
                std::invalid_argument);
+}
+
+// A depth camera of another resolution than the colour camera's, registered or not, with lens distortion or not:
+// every depth pixel shows, through the depth camera's intrinsics and pose, the depth the source shows at the
+// (distorted) colour pixel its point projects to. The colour images are left as they are.
+TEST(SequenceVariants, DepthResolutionVariantSeesEachPointWhereTheDepthCameraSays) {
+  const fs::path dir = scratchDir("variant_depth_resolution");
+  simulation::VariantSource distorted = smallSynthetic(2);
+  distorted.camera.distortion = {0.2, -0.4, 0.001, -0.002, 0.3};
+  int case_index = 0;
+  for (const auto& [source, names, scale] :
+       {std::tuple{smallSynthetic(2), "depth-resolution", 0.5}, std::tuple{distorted, "depth-resolution", 0.5},
+        std::tuple{smallSynthetic(2), "unregistered,depth-resolution", 0.37},
+        std::tuple{distorted, "unregistered,depth-resolution", 2.0}}) {
+    const std::string what =
+        std::string(names) + " " + std::to_string(scale) + (source.camera.hasDistortion() ? " distorted" : "");
+    simulation::SequenceVariantOptions options = kinds(names);
+    options.depth_resolution_scale = scale;
+    const Written variant = writeAndOpen(source, options, dir / std::to_string(case_index++));
+    ASSERT_TRUE(variant.camera.unregistered_depth.has_value()) << what;
+    const DepthCamera& sensor = *variant.camera.unregistered_depth;
+    EXPECT_EQ(variant.camera.depthImageSize(),
+              cv::Size(std::lround(source.camera.width * scale), std::lround(source.camera.height * scale)))
+        << what;
+    const RgbdFrame original = source.load(0), read = variant.sequence.loadFrame(0, variant.camera);
+    EXPECT_EQ(cv::norm(read.color, original.color, cv::NORM_INF), 0.0) << what;
+    ASSERT_EQ(read.depth.size(), variant.camera.depthImageSize()) << what;
+    PinholeCamera depth_camera;
+    depth_camera.fx = sensor.fx;
+    depth_camera.fy = sensor.fy;
+    depth_camera.cx = sensor.cx;
+    depth_camera.cy = sensor.cy;
+    const Eigen::Isometry3d depth_in_color = sensor.depthInColor();
+    std::size_t checked = 0, agree = 0;
+    for (int v = 2; v < read.depth.rows - 2; ++v)
+      for (int u = 2; u < read.depth.cols - 2; ++u) {
+        const float z = read.depth.at<float>(v, u);
+        if (!(z > 0.0f)) continue;
+        const Eigen::Vector3d point = depth_in_color * depth_camera.backProject(u, v, z);
+        std::vector<cv::Point2f> pixel;
+        cv::projectPoints(
+            std::vector<cv::Point3f>{cv::Point3f(static_cast<float>(point.x()), static_cast<float>(point.y()),
+                                                 static_cast<float>(point.z()))},
+            cv::Vec3d(), cv::Vec3d(), source.camera.cameraMatrix(), source.camera.distortionCoefficients(), pixel);
+        const int pu = static_cast<int>(std::lround(pixel[0].x)), pv = static_cast<int>(std::lround(pixel[0].y));
+        if (pu < 1 || pv < 1 || pu >= original.depth.cols - 1 || pv >= original.depth.rows - 1) continue;
+        ++checked;
+        // The box's edges move by a pixel in the resampling: the depth there is one of the two sides'.
+        agree += std::abs(original.depth.at<float>(pv, pu) - point.z()) < 0.02 * point.z();
+      }
+    ASSERT_GT(checked, 300u) << what;
+    EXPECT_GT(static_cast<double>(agree) / checked, 0.95) << what;
+  }
+  // After the kinds that assume the depth image is the colour image's size only.
+  simulation::SequenceVariantOptions wrong_order = kinds("depth-resolution,focal");
+  EXPECT_THROW(simulation::writeSequenceVariant(smallSynthetic(2), wrong_order, (dir / "wrong_order").string()),
+               std::invalid_argument);
+  EXPECT_FALSE(fs::exists(dir / "wrong_order"));
 }
 
 // A noisier depth sensor: errors of coefficient z^2 around the true depth, in patches when correlated, holes kept.

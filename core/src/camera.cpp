@@ -16,6 +16,12 @@ Eigen::Isometry3d DepthCamera::depthInColor() const {
   return pose;
 }
 
+cv::Size PinholeCamera::depthImageSize() const {
+  if (unregistered_depth && unregistered_depth->width > 0 && unregistered_depth->height > 0)
+    return {unregistered_depth->width, unregistered_depth->height};
+  return {width, height};
+}
+
 cv::Matx33d PinholeCamera::cameraMatrix() const { return {fx, 0.0, cx, 0.0, fy, cy, 0.0, 0.0, 1.0}; }
 
 Eigen::Matrix3d PinholeCamera::intrinsicMatrix() const {

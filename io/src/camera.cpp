@@ -96,8 +96,14 @@ std::vector<KeyProblem> invalidKeys(const PinholeCamera& camera) {
   if (const auto& depth = camera.unregistered_depth) {
     inRange("depth_fx", depth->fx, kMinFocal, kMaxFocal);
     inRange("depth_fy", depth->fy, kMinFocal, kMaxFocal);
-    principal("depth_cx", depth->cx, camera.width);
-    principal("depth_cy", depth->cy, camera.height);
+    // Its own image size, both or neither (0 x 0: the colour image's size).
+    const bool sized = depth->width != 0 || depth->height != 0;
+    if (sized && (depth->width <= 0 || depth->width > kMaxImageSide))
+      problems.push_back({"depth_width", "must be between 1 and " + std::to_string(kMaxImageSide)});
+    if (sized && (depth->height <= 0 || depth->height > kMaxImageSide))
+      problems.push_back({"depth_height", "must be between 1 and " + std::to_string(kMaxImageSide)});
+    principal("depth_cx", depth->cx, sized ? depth->width : camera.width);
+    principal("depth_cy", depth->cy, sized ? depth->height : camera.height);
     for (std::size_t i = 0; i < 3; ++i) {
       inRange(kDepthCameraKeys[4 + i], depth->translation_m[i], -kMaxDepthCameraOffset, kMaxDepthCameraOffset);
       inRange(kDepthCameraKeys[7 + i], depth->rotation_rad[i], -M_PI, M_PI);
@@ -170,15 +176,28 @@ std::map<std::string, std::size_t> requirePlainYamlLayout(const std::string& pat
   return key_lines;
 }
 
-/// The optional unregistered depth camera: none of its keys, or all of them (the missing ones reported).
-template <typename ReadReal>
-void readDepthCamera(const cv::FileStorage& storage, const ReadReal& real, PinholeCamera& camera) {
+/// The optional unregistered depth camera: none of its keys, or all of them (the missing ones reported); its image
+/// size (depth_width, depth_height) optional, both or neither, and only with the depth camera.
+template <typename ReadReal, typename ReadInteger>
+void readDepthCamera(const cv::FileStorage& storage, const ReadReal& real, const ReadInteger& integer,
+                     std::vector<KeyProblem>& problems, PinholeCamera& camera) {
   bool any = false;
   for (const char* key : kDepthCameraKeys) any |= !storage[key].empty();
-  if (!any) return;
+  const bool sized = !storage["depth_width"].empty() || !storage["depth_height"].empty();
+  if (!any) {
+    if (sized) problems.push_back({"depth_width", "and depth_height need the depth camera's keys (depth_fx ...)"});
+    return;
+  }
   DepthCamera depth;
   const auto values = depthCameraValues(depth);
   for (std::size_t i = 0; i < values.size(); ++i) real(kDepthCameraKeys[i], *values[i]);
+  if (sized) {
+    integer("depth_width", depth.width);
+    integer("depth_height", depth.height);
+    // Given as 0: not the "same as colour" default, a mistake.
+    if (depth.width == 0) depth.width = -1;
+    if (depth.height == 0) depth.height = -1;
+  }
   camera.unregistered_depth = depth;
 }
 
@@ -225,7 +244,7 @@ PinholeCamera readCameraFile(const std::string& path) {
   integer("width", camera.width);
   integer("height", camera.height);
   real("depth_factor", camera.depth_factor);
-  readDepthCamera(storage, real, camera);
+  readDepthCamera(storage, real, integer, problems, camera);
   // A key already reported as missing or not a number holds its default: report it once.
   const std::size_t unread = problems.size();
   for (auto& problem : invalidKeys(camera)) {
@@ -257,6 +276,8 @@ void saveCamera(const PinholeCamera& camera, const std::string& path) {
   if (const auto& depth = camera.unregistered_depth) {
     const auto values = depthCameraValues(*depth);
     for (std::size_t i = 0; i < values.size(); ++i) storage << kDepthCameraKeys[i] << *values[i];
+    if (depth->width != 0 || depth->height != 0)
+      storage << "depth_width" << depth->width << "depth_height" << depth->height;
   }
   const std::string text = storage.releaseAndGetString();
   writeAtomically(path, [&](const std::string& temporary) {

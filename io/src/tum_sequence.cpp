@@ -112,12 +112,18 @@ RgbdFrame TumSequence::loadFrame(std::size_t index, const PinholeCamera& camera)
     throw std::runtime_error(paths.depth_path + ": a depth image must be 16-bit single-channel, found " +
                              std::to_string(raw_depth.channels()) + " channel(s) of " +
                              std::to_string(8 * raw_depth.elemSize1()) + " bits");
-  if (raw_depth.size() != images.color.size())
+  const cv::Size depth_size = camera.depthImageSize();
+  if (depth_size == cv::Size(camera.width, camera.height) && raw_depth.size() != images.color.size())
     throw std::runtime_error(paths.depth_path + ": depth image is " + sizeText(raw_depth) + " but the colour image " +
                              paths.rgb_path + " is " + sizeText(images.color));
   if (images.color.cols != camera.width || images.color.rows != camera.height)
     throw std::runtime_error(paths.rgb_path + ": image is " + sizeText(images.color) + " but the camera's is " +
                              std::to_string(camera.width) + "x" + std::to_string(camera.height));
+  // A depth camera of its own resolution (depth_width, depth_height in the camera file).
+  if (raw_depth.size() != depth_size)
+    throw std::runtime_error(paths.depth_path + ": depth image is " + sizeText(raw_depth) +
+                             " but the camera's depth camera's is " + std::to_string(depth_size.width) + "x" +
+                             std::to_string(depth_size.height));
   images.depth = depthFromRaw(raw_depth, camera.depth_factor);
   return images;
 }

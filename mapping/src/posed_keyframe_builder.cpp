@@ -9,6 +9,7 @@
 
 #include <opencv2/calib3d.hpp>
 
+#include "weighted_icp/frontend/perception/depth_registration.h"
 #include "weighted_icp/mapping/binary_vocabulary.h"
 
 namespace weighted_icp::mapping {
@@ -58,12 +59,18 @@ std::vector<Projected> projectPrevious(const frontend::Map& map, frontend::Keyfr
 PosedKeyframeBuilder::PosedKeyframeBuilder(const PinholeCamera& camera, PosedKeyframeOptions options)
     : camera_(camera), options_(options), extractor_(options.features) {}
 
-frontend::KeyframeId PosedKeyframeBuilder::add(const RgbdFrame& frame, std::size_t frame_id,
+frontend::KeyframeId PosedKeyframeBuilder::add(const RgbdFrame& input, std::size_t frame_id,
                                                const Eigen::Isometry3d& pose_wc) {
-  if (frame.color.empty() || frame.depth.empty() || frame.depth.type() != CV_32FC1 ||
-      frame.color.size() != frame.depth.size())
-    throw std::invalid_argument("PosedKeyframeBuilder: frame " + std::to_string(frame_id) +
-                                " needs colour and CV_32F depth of the same size");
+  const cv::Size depth_size = camera_.depthImageSize();
+  if (input.color.empty() || input.depth.empty() || input.depth.type() != CV_32FC1 ||
+      input.color.size() != cv::Size(camera_.width, camera_.height) || input.depth.size() != depth_size)
+    throw std::invalid_argument("PosedKeyframeBuilder: frame " + std::to_string(frame_id) + " needs colour of " +
+                                std::to_string(camera_.width) + "x" + std::to_string(camera_.height) +
+                                " and CV_32F depth of " + std::to_string(depth_size.width) + "x" +
+                                std::to_string(depth_size.height));
+  // An unregistered sensor's depth moved into the colour pixels first, as the front end does.
+  RgbdFrame frame = input;
+  if (camera_.unregistered_depth) frame.depth = frontend::registerDepthToColor(input.depth, camera_);
   const frontend::ExtractedFeatures features = extractor_.extract(frame.gray());
   frontend::Keyframe keyframe;
   keyframe.frame_id = frame_id;

@@ -127,6 +127,17 @@ cv::Mat zoomImage(const cv::Mat& image, const PinholeCamera& camera, double scal
   return zoomed;
 }
 
+namespace {
+/// The depth camera's intrinsics for its image resized by sx (columns) and sy (rows): pixel u spans [u - 0.5,
+/// u + 0.5], which the new grid covers as [(u - 0.5) s, (u + 0.5) s].
+void scaleIntrinsics(DepthCamera& depth, double sx, double sy) {
+  depth.fx *= sx;
+  depth.fy *= sy;
+  depth.cx = (depth.cx + 0.5) * sx - 0.5;
+  depth.cy = (depth.cy + 0.5) * sy - 0.5;
+}
+}  // namespace
+
 PinholeCamera resizedCamera(const PinholeCamera& camera, double scale) {
   if (!(scale > 0.0) || !std::isfinite(scale))
     throw std::invalid_argument("resizedCamera: scale must be > 0, got " + std::to_string(scale));
@@ -147,12 +158,53 @@ PinholeCamera resizedCamera(const PinholeCamera& camera, double scale) {
   resized.cy = centre(camera.cy, sy);
   if (resized.unregistered_depth) {
     DepthCamera& depth = *resized.unregistered_depth;
-    depth.fx *= sx;
-    depth.fy *= sy;
-    depth.cx = centre(depth.cx, sx);
-    depth.cy = centre(depth.cy, sy);
+    if (depth.width > 0 && depth.height > 0) {  // a depth camera of its own size: resized by its own ratios
+      const cv::Size old_size = camera.depthImageSize();
+      depth.width = std::max(1, static_cast<int>(std::lround(old_size.width * scale)));
+      depth.height = std::max(1, static_cast<int>(std::lround(old_size.height * scale)));
+      scaleIntrinsics(depth, static_cast<double>(depth.width) / old_size.width,
+                      static_cast<double>(depth.height) / old_size.height);
+    } else {
+      scaleIntrinsics(depth, sx, sy);
+    }
   }
   return resized;
+}
+
+PinholeCamera depthResizedCamera(const PinholeCamera& camera, double scale) {
+  if (!(scale > 0.0) || !std::isfinite(scale))
+    throw std::invalid_argument("depthResizedCamera: scale must be > 0, got " + std::to_string(scale));
+  PinholeCamera resized = camera;
+  if (!resized.unregistered_depth)  // registered depth: a depth camera where the colour camera is, undistorted
+    resized.unregistered_depth = DepthCamera{camera.fx, camera.fy, camera.cx, camera.cy, {}, {}};
+  DepthCamera& depth = *resized.unregistered_depth;
+  const cv::Size old_size = camera.depthImageSize();
+  depth.width = static_cast<int>(std::lround(old_size.width * scale));
+  depth.height = static_cast<int>(std::lround(old_size.height * scale));
+  if (depth.width < 16 || depth.height < 16)
+    throw std::invalid_argument("depthResizedCamera: " + std::to_string(old_size.width) + "x" +
+                                std::to_string(old_size.height) + " times " + std::to_string(scale) +
+                                " is smaller than 16x16 pixels");
+  scaleIntrinsics(depth, static_cast<double>(depth.width) / old_size.width,
+                  static_cast<double>(depth.height) / old_size.height);
+  return resized;
+}
+
+cv::Mat depthResizedImage(const cv::Mat& depth, const PinholeCamera& camera, double scale) {
+  const cv::Size old_size = camera.depthImageSize();
+  if (depth.type() != CV_32F || depth.size() != old_size)
+    throw std::invalid_argument("depthResizedImage: depth must be CV_32F of the depth camera's " +
+                                std::to_string(old_size.width) + "x" + std::to_string(old_size.height) + ", found " +
+                                std::to_string(depth.cols) + "x" + std::to_string(depth.rows));
+  const PinholeCamera resized = depthResizedCamera(camera, scale);
+  // Registered depth is indexed by the raw (distorted) colour pixels: first as the undistorted depth camera at the
+  // colour camera's place sees it.
+  const cv::Mat undistorted = !camera.unregistered_depth && camera.hasDistortion()
+                                  ? unregisteredDepth(depth, camera, Eigen::Isometry3d::Identity())
+                                  : depth;
+  cv::Mat out;
+  cv::resize(undistorted, out, resized.depthImageSize(), 0.0, 0.0, cv::INTER_NEAREST);
+  return out;
 }
 
 cv::Mat resizeImage(const cv::Mat& image, const PinholeCamera& camera, double scale, int interpolation) {

@@ -28,16 +28,18 @@ namespace {
 namespace fs = std::filesystem;
 
 const std::vector<std::pair<VariantKind, const char*>>& kindNames() {
-  static const std::vector<std::pair<VariantKind, const char*>> names = {{VariantKind::Jpeg, "jpeg"},
-                                                                         {VariantKind::MillimetreDepth, "mm-depth"},
-                                                                         {VariantKind::Focal, "focal"},
-                                                                         {VariantKind::Unregistered, "unregistered"},
-                                                                         {VariantKind::MotionBlur, "blur"},
-                                                                         {VariantKind::LowLight, "low-light"},
-                                                                         {VariantKind::Burst, "burst"},
-                                                                         {VariantKind::ThereAndBack, "there-and-back"},
-                                                                         {VariantKind::Resolution, "resolution"},
-                                                                         {VariantKind::DepthNoise, "depth-noise"}};
+  static const std::vector<std::pair<VariantKind, const char*>> names = {
+      {VariantKind::Jpeg, "jpeg"},
+      {VariantKind::MillimetreDepth, "mm-depth"},
+      {VariantKind::Focal, "focal"},
+      {VariantKind::Unregistered, "unregistered"},
+      {VariantKind::MotionBlur, "blur"},
+      {VariantKind::LowLight, "low-light"},
+      {VariantKind::Burst, "burst"},
+      {VariantKind::ThereAndBack, "there-and-back"},
+      {VariantKind::Resolution, "resolution"},
+      {VariantKind::DepthNoise, "depth-noise"},
+      {VariantKind::DepthResolution, "depth-resolution"}};
   return names;
 }
 
@@ -65,6 +67,17 @@ void checkOptions(const SequenceVariantOptions& options) {
   require(options.depth_noise_correlation_px >= 0.0 && options.depth_noise_correlation_px <= 50.0,
           "depth noise correlation must be in [0, 50] px");
   require(options.resolution_scale >= 0.25 && options.resolution_scale <= 4.0, "resolution scale must be in [0.25, 4]");
+  require(options.depth_resolution_scale >= 0.25 && options.depth_resolution_scale <= 4.0,
+          "depth resolution scale must be in [0.25, 4]");
+  if (has(options, VariantKind::DepthResolution)) {
+    // The kinds that move or resize the depth image as the colour camera's come first: they assume its size.
+    const auto at = [&](VariantKind kind) { return std::find(options.kinds.begin(), options.kinds.end(), kind); };
+    for (const VariantKind kind : {VariantKind::Focal, VariantKind::Resolution, VariantKind::Unregistered})
+      require(at(kind) < at(VariantKind::DepthResolution) || !has(options, kind),
+              "depth-resolution must come after " + toString(kind));
+    require(!has(options, VariantKind::Unregistered) || options.describe_depth_camera,
+            "depth-resolution needs the unregistered depth camera described in camera.yaml");
+  }
   require(options.focal_length_px >= 50.0 && options.focal_length_px <= 5000.0,
           "focal length must be in [50, 5000] px");
   require(options.depth_offset_m.allFinite() && options.depth_offset_m.norm() <= 0.5,
@@ -89,6 +102,20 @@ Eigen::Isometry3d depthInColor(const SequenceVariantOptions& options) {
   return depth_in_color;
 }
 
+/// The camera with the unregistered variant's depth camera: the colour camera's intrinsics, no distortion, the
+/// variant's pose.
+PinholeCamera withDepthCamera(PinholeCamera camera, const SequenceVariantOptions& options) {
+  DepthCamera depth{camera.fx, camera.fy, camera.cx, camera.cy, {}, {}};
+  const Eigen::Isometry3d pose = depthInColor(options);
+  const Eigen::AngleAxisd rotation(pose.linear());
+  for (int i = 0; i < 3; ++i) {
+    depth.translation_m[static_cast<std::size_t>(i)] = pose.translation()[i];
+    depth.rotation_rad[static_cast<std::size_t>(i)] = rotation.angle() * rotation.axis()[i];
+  }
+  camera.unregistered_depth = depth;
+  return camera;
+}
+
 /// The camera the variant is read with: the kinds that change it, in order. An unregistered variant's camera file
 /// names its depth camera (as a real sensor's calibration would), so that the front end can register the depth.
 PinholeCamera variantCamera(const PinholeCamera& original, const SequenceVariantOptions& options) {
@@ -97,16 +124,8 @@ PinholeCamera variantCamera(const PinholeCamera& original, const SequenceVariant
     if (kind == VariantKind::Focal) camera = zoomedCamera(camera, options.focal_length_px / camera.fx);
     if (kind == VariantKind::Resolution) camera = resizedCamera(camera, options.resolution_scale);
     if (kind == VariantKind::MillimetreDepth) camera.depth_factor = options.depth_factor;
-    if (kind == VariantKind::Unregistered && options.describe_depth_camera) {
-      DepthCamera depth{camera.fx, camera.fy, camera.cx, camera.cy, {}, {}};
-      const Eigen::Isometry3d pose = depthInColor(options);
-      const Eigen::AngleAxisd rotation(pose.linear());
-      for (int i = 0; i < 3; ++i) {
-        depth.translation_m[static_cast<std::size_t>(i)] = pose.translation()[i];
-        depth.rotation_rad[static_cast<std::size_t>(i)] = rotation.angle() * rotation.axis()[i];
-      }
-      camera.unregistered_depth = depth;
-    }
+    if (kind == VariantKind::Unregistered && options.describe_depth_camera) camera = withDepthCamera(camera, options);
+    if (kind == VariantKind::DepthResolution) camera = depthResizedCamera(camera, options.depth_resolution_scale);
   }
   return camera;
 }
@@ -167,6 +186,11 @@ RgbdFrame applyKinds(RgbdFrame frame, std::size_t i, PinholeCamera camera, const
         break;
       case VariantKind::Unregistered:
         frame.depth = unregisteredDepth(frame.depth, camera, depthInColor(options));
+        if (options.describe_depth_camera) camera = withDepthCamera(camera, options);
+        break;
+      case VariantKind::DepthResolution:
+        frame.depth = depthResizedImage(frame.depth, camera, options.depth_resolution_scale);
+        camera = depthResizedCamera(camera, options.depth_resolution_scale);
         break;
       case VariantKind::MotionBlur:
         frame.color = motionBlur(frame.color, options.blur_length_px, rng.uniform(0.0, 180.0));
@@ -211,6 +235,8 @@ void writeDescription(const fs::path& path, const VariantSource& source, const S
   if (has(options, VariantKind::MillimetreDepth)) text << "\ndepth_factor: " << options.depth_factor;
   if (has(options, VariantKind::Focal)) text << "\nfocal_length_px: " << options.focal_length_px;
   if (has(options, VariantKind::Resolution)) text << "\nresolution_scale: " << options.resolution_scale;
+  if (has(options, VariantKind::DepthResolution))
+    text << "\ndepth_resolution_scale: " << options.depth_resolution_scale;
   if (has(options, VariantKind::DepthNoise))
     text << "\ndepth_noise_coefficient: " << options.depth_noise_coefficient
          << "\ndepth_noise_correlation_px: " << options.depth_noise_correlation_px;

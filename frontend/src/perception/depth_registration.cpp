@@ -9,6 +9,7 @@
 #include <vector>
 
 #include <Eigen/Geometry>
+#include <opencv2/imgproc.hpp>
 #include <opencv2/rgbd.hpp>
 
 namespace weighted_icp::frontend {
@@ -59,23 +60,47 @@ struct RowProjection {
   }
 };
 
+/// How many colour pixels a depth pixel covers along each axis: at least 2 x 2 (as registerDepth's depth dilation:
+/// a depth image seen from a little aside leaves no one-pixel cracks), and more where the depth camera's pixels are
+/// larger than the colour camera's (a lower-resolution depth sensor): neighbouring depth pixels land `scale` colour
+/// pixels apart, so a footprint of at least scale + 0.5 pixels leaves no crack between them.
+struct Footprint {
+  /// A depth camera of a 32nd of the colour camera's resolution is no sensor: a bound on the work per pixel.
+  static constexpr int kMaxSide = 32;
+  int columns = 2, rows = 2;
+  /// The footprint's first column is floor(u - shift_u) for a depth pixel landing at column u (2 pixels: floor(u)).
+  float shift_u = 0.0f, shift_v = 0.0f;
+
+  Footprint(const PinholeCamera& colour, const DepthCamera& sensor)
+      : columns(std::clamp(static_cast<int>(std::ceil(colour.fx / sensor.fx + 0.5)), 2, kMaxSide)),
+        rows(std::clamp(static_cast<int>(std::ceil(colour.fy / sensor.fy + 0.5)), 2, kMaxSide)),
+        shift_u(0.5f * static_cast<float>(columns - 2)),
+        shift_v(0.5f * static_cast<float>(rows - 2)) {}
+};
+
 /// Writes one row's projections into `registered` (infinity where nothing landed yet): each measured depth pixel
-/// onto the 2 x 2 colour pixels around where it lands (as registerDepth's depth dilation: a depth image seen from a
-/// little aside leaves no one-pixel cracks), the nearer depth kept where two surfaces land on one pixel.
-/// @param depth the row's depths (0, NaN or infinite: unmeasured)
+/// onto the colour pixels of its footprint around where it lands, the nearer depth kept where two surfaces land on
+/// one pixel.
+/// @param depth the row's depths (0, NaN or infinite: unmeasured), `columns` of them
 /// @param target_u,target_v,target_z where each lands (RowProjection)
+/// @param footprint the colour pixels each covers
 /// @param registered CV_32F of the colour image's size
-void splatRow(const float* depth, const float* target_u, const float* target_v, const float* target_z,
-              cv::Mat& registered) {
+void splatRow(const float* depth, std::size_t columns, const float* target_u, const float* target_v,
+              const float* target_z, const Footprint& footprint, cv::Mat& registered) {
   const float width = static_cast<float>(registered.cols), height = static_cast<float>(registered.rows);
   const float unseen = std::numeric_limits<float>::infinity();
-  for (int u = 0; u < registered.cols; ++u) {
-    const float z = depth[u], pz = target_z[u], uc = target_u[u], vc = target_v[u];
-    // Unmeasured, behind the colour camera, or outside its image.
-    if (!(z > 0.0f) || !(z < unseen) || !(pz > 0.0f)) continue;
-    if (!(uc > -1.0f && vc > -1.0f && uc < width && vc < height)) continue;
-    const int u0 = static_cast<int>(uc + 1.0f) - 1, v0 = static_cast<int>(vc + 1.0f) - 1;  // floor, as uc, vc > -1
-    if (u0 >= 0 && v0 >= 0 && u0 + 1 < registered.cols && v0 + 1 < registered.rows) {
+  const bool two_by_two = footprint.columns == 2 && footprint.rows == 2;
+  for (std::size_t u = 0; u < columns; ++u) {
+    const float z = depth[u], pz = target_z[u], uc = target_u[u] - footprint.shift_u,
+                vc = target_v[u] - footprint.shift_v;
+    // Unmeasured, behind the colour camera, or its footprint outside the colour image.
+    if (!(z > 0.0f) || !(pz > 0.0f) || !(z < unseen)) continue;
+    const int reach_u = footprint.columns - 1, reach_v = footprint.rows - 1;
+    if (!(uc > static_cast<float>(-reach_u) && vc > static_cast<float>(-reach_v) && uc < width && vc < height))
+      continue;
+    const int u0 = static_cast<int>(uc + static_cast<float>(reach_u)) - reach_u;  // floor, as uc + reach_u > 0
+    const int v0 = static_cast<int>(vc + static_cast<float>(reach_v)) - reach_v;
+    if (two_by_two && u0 >= 0 && v0 >= 0 && u0 + 1 < registered.cols && v0 + 1 < registered.rows) {
       float* top = registered.ptr<float>(v0) + u0;
       float* bottom = registered.ptr<float>(v0 + 1) + u0;
       top[0] = std::min(top[0], pz);
@@ -84,30 +109,46 @@ void splatRow(const float* depth, const float* target_u, const float* target_v, 
       bottom[1] = std::min(bottom[1], pz);
       continue;
     }
-    for (int tv = v0; tv <= v0 + 1; ++tv) {
-      if (tv < 0 || tv >= registered.rows) continue;
+    for (int tv = std::max(v0, 0); tv < std::min(v0 + footprint.rows, registered.rows); ++tv) {
       float* target = registered.ptr<float>(tv);
-      for (int tu = u0; tu <= u0 + 1; ++tu)
-        if (tu >= 0 && tu < registered.cols) target[tu] = std::min(target[tu], pz);
+      for (int tu = std::max(u0, 0); tu < std::min(u0 + footprint.columns, registered.cols); ++tu)
+        target[tu] = std::min(target[tu], pz);
     }
   }
 }
 
-/// Throws std::invalid_argument unless the camera has a depth camera and the depth is CV_32F of its size.
+/// Throws std::invalid_argument unless the camera has a depth camera and the depth is CV_32F of its image size.
 void checkInputs(const char* function, const cv::Mat& depth, const PinholeCamera& camera) {
   if (!camera.unregistered_depth)
     throw std::invalid_argument(std::string(function) + ": the camera has no unregistered depth camera");
-  if (depth.type() != CV_32F || depth.cols != camera.width || depth.rows != camera.height)
-    throw std::invalid_argument(std::string(function) + ": depth must be CV_32F metres of " +
-                                std::to_string(camera.width) + "x" + std::to_string(camera.height) + ", found " +
-                                std::to_string(depth.cols) + "x" + std::to_string(depth.rows));
+  const cv::Size size = camera.depthImageSize();
+  if (depth.type() != CV_32F || depth.size() != size)
+    throw std::invalid_argument(std::string(function) + ": depth must be CV_32F metres of the depth camera's " +
+                                std::to_string(size.width) + "x" + std::to_string(size.height) + ", found " +
+                                std::to_string(depth.cols) + "x" + std::to_string(depth.rows) +
+                                (depth.type() == CV_32F ? "" : " not of CV_32F"));
 }
 
 }  // namespace
 
 cv::Mat registerDepthWithOpenCv(const cv::Mat& depth, const PinholeCamera& camera) {
   checkInputs("registerDepthWithOpenCv", depth, camera);
-  const DepthCamera& sensor = *camera.unregistered_depth;
+  DepthCamera sensor = *camera.unregistered_depth;
+  // registerDepth reads the depth image over the output's size (OpenCV 4.6: a smaller one is read out of bounds, a
+  // larger one only in part): a depth image of another size is first resized to the colour image's (nearest), its
+  // intrinsics with it.
+  cv::Mat measured;
+  if (depth.cols != camera.width || depth.rows != camera.height) {
+    cv::resize(depth, measured, cv::Size(camera.width, camera.height), 0.0, 0.0, cv::INTER_NEAREST);
+    const double sx = static_cast<double>(camera.width) / depth.cols,
+                 sy = static_cast<double>(camera.height) / depth.rows;
+    sensor.fx *= sx;
+    sensor.fy *= sy;
+    sensor.cx = (sensor.cx + 0.5) * sx - 0.5;
+    sensor.cy = (sensor.cy + 0.5) * sy - 0.5;
+  } else {
+    measured = depth.clone();
+  }
   const cv::Matx33f depth_matrix(static_cast<float>(sensor.fx), 0.0f, static_cast<float>(sensor.cx), 0.0f,
                                  static_cast<float>(sensor.fy), static_cast<float>(sensor.cy), 0.0f, 0.0f, 1.0f);
   cv::Matx33f color_matrix;
@@ -116,11 +157,11 @@ cv::Mat registerDepthWithOpenCv(const cv::Mat& depth, const PinholeCamera& camer
   cv::Matx44f depth_to_color;
   for (int r = 0; r < 4; ++r)
     for (int c = 0; c < 4; ++c) depth_to_color(r, c) = static_cast<float>(pose(r, c));
-  cv::Mat coefficients, measured = depth.clone(), registered;
+  cv::Mat coefficients, registered;
   camera.distortionCoefficients().convertTo(coefficients, CV_32F);
-  measured.setTo(std::numeric_limits<float>::quiet_NaN(), ~(depth > 0.0f));  // a float image's "no depth"
-  cv::rgbd::registerDepth(depth_matrix, color_matrix, coefficients, depth_to_color, measured, depth.size(), registered,
-                          true);
+  measured.setTo(std::numeric_limits<float>::quiet_NaN(), ~(measured > 0.0f));  // a float image's "no depth"
+  cv::rgbd::registerDepth(depth_matrix, color_matrix, coefficients, depth_to_color, measured,
+                          cv::Size(camera.width, camera.height), registered, true);
   registered.setTo(0.0f, registered != registered);
   return registered;
 }
@@ -145,7 +186,8 @@ cv::Mat registerDepthToColor(const cv::Mat& depth, const PinholeCamera& camera) 
   const float fx = static_cast<float>(camera.fx), fy = static_cast<float>(camera.fy);
   const float cx = static_cast<float>(camera.cx), cy = static_cast<float>(camera.cy);
   const float unseen = std::numeric_limits<float>::infinity();
-  cv::Mat registered(depth.size(), CV_32F);
+  const Footprint footprint(camera, sensor);
+  cv::Mat registered(camera.height, camera.width, CV_32F);
   std::fill(registered.ptr<float>(0), registered.ptr<float>(0) + registered.total(), unseen);  // continuous, new
   // Per row, first every pixel's projection (no branch: the compiler vectorises it), then the scatter.
   const std::size_t columns = static_cast<std::size_t>(depth.cols);
@@ -159,7 +201,7 @@ cv::Mat registerDepthToColor(const cv::Mat& depth, const PinholeCamera& camera) 
       projection.project<true>(row, columns, distortion, target_u.data(), target_v.data(), target_z.data());
     else
       projection.project<false>(row, columns, distortion, target_u.data(), target_v.data(), target_z.data());
-    splatRow(row, target_u.data(), target_v.data(), target_z.data(), registered);
+    splatRow(row, columns, target_u.data(), target_v.data(), target_z.data(), footprint, registered);
   }
   for (float *value = registered.ptr<float>(0), *end = value + registered.total(); value != end; ++value)
     if (*value == unseen) *value = 0.0f;

@@ -86,6 +86,23 @@ void Frontend::requireImages(const RgbdFrame& image) {
                                 ": depth must be CV_32F metres of the colour image's size");
 }
 
+RgbdFrame Frontend::withRegisteredDepth(const RgbdFrame& input) const {
+  const cv::Size depth_size = camera_.depthImageSize();
+  const auto size = [](int width, int height) { return std::to_string(width) + "x" + std::to_string(height); };
+  if (input.color.cols != camera_.width || input.color.rows != camera_.height)
+    throw std::invalid_argument("frame at " + std::to_string(input.timestamp) + ": the colour image is " +
+                                size(input.color.cols, input.color.rows) + ", the camera's " +
+                                size(camera_.width, camera_.height));
+  if (input.depth.type() != CV_32F || input.depth.size() != depth_size)
+    throw std::invalid_argument(
+        "frame at " + std::to_string(input.timestamp) + ": depth must be CV_32F metres of the depth camera's size " +
+        size(depth_size.width, depth_size.height) + ", found " + size(input.depth.cols, input.depth.rows) +
+        (input.depth.type() == CV_32F ? "" : " not of CV_32F"));
+  RgbdFrame image = input;
+  image.depth = registerDepthToColor(input.depth, camera_);
+  return image;
+}
+
 Frame Frontend::makeFrame(const RgbdFrame& image, const cv::Mat& gray, bool& used_clahe) {
   Frame frame;
   frame.id = next_frame_id_++;
@@ -112,12 +129,8 @@ Frame Frontend::makeFrame(const RgbdFrame& image, const cv::Mat& gray, bool& use
 }
 
 TrackingResult Frontend::track(const RgbdFrame& input) {
-  // A sensor whose depth camera is not its colour camera: its depth moved into the colour pixels first (a depth
-  // image of another type or size is left to requireImages' error, which names the frame).
-  RgbdFrame image = input;
-  if (camera_.unregistered_depth && input.depth.type() == CV_32F && input.depth.size() == input.color.size() &&
-      input.color.cols == camera_.width && input.color.rows == camera_.height)
-    image.depth = registerDepthToColor(input.depth, camera_);
+  // A sensor whose depth camera is not its colour camera: its depth moved into the colour pixels first.
+  const RgbdFrame image = camera_.unregistered_depth ? withRegisteredDepth(input) : input;
   TrackingResult result;
   requireImages(image);
   const cv::Mat gray = image.gray();  // once a frame: the features and the dense odometry

@@ -20,6 +20,9 @@ struct DepthCamera {
   double fx = 0.0, fy = 0.0, cx = 0.0, cy = 0.0;
   /// @brief x_colour = R x_depth + t: the translation t (metres) and R as a rotation vector (radians).
   std::array<double, 3> translation_m{}, rotation_rad{};
+  /// @brief The depth images' size in pixels when it is not the colour images' (an Azure Kinect's 640x576 depth
+  /// beside 1280x720 colour); 0 x 0 (the default): the colour images' size.
+  int width = 0, height = 0;
 
   /// @brief The depth camera's pose in the colour camera's frame (maps depth-camera coordinates to colour-camera
   /// coordinates).
@@ -36,6 +39,9 @@ struct PinholeCamera {
   /// one (frontend::registerDepthToColor). Unset: depth pixel (u, v) is colour pixel (u, v).
   std::optional<DepthCamera> unregistered_depth;
 
+  /// @brief The size of the depth images the sensor delivers: the unregistered depth camera's own when it has one,
+  /// else the colour images' (width x height).
+  cv::Size depthImageSize() const;
   /// @brief The 3x3 intrinsic matrix as OpenCV takes it.
   cv::Matx33d cameraMatrix() const;
   /// @brief The same 3x3 intrinsic matrix K for Eigen arithmetic (homographies, fundamental matrices).

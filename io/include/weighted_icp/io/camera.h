@@ -18,7 +18,9 @@ using weighted_icp::tumCamera;
 /// keys fx, fy, cx, cy, k1, k2, p1, p2, k3, width, height, depth_factor, and for depth images not registered
 /// to the colour images the depth camera (PinholeCamera::unregistered_depth), all ten keys or none: depth_fx,
 /// depth_fy, depth_cx, depth_cy, its position in the colour camera's frame depth_tx, depth_ty, depth_tz (metres,
-/// at most 1 m each) and its rotation vector depth_rx, depth_ry, depth_rz (radians, at most pi each).
+/// at most 1 m each) and its rotation vector depth_rx, depth_ry, depth_rz (radians, at most pi each); with them,
+/// optionally, the depth images' size depth_width and depth_height when it is not the colour images' (both or
+/// neither).
 /// Throws std::runtime_error naming the file and every missing or invalid key.
 /// @param preset_or_path a TUM preset name or a file path
 PinholeCamera loadCamera(const std::string& preset_or_path);

@@ -44,8 +44,9 @@ class TumSequence {
   /// camera.depth_factor; the timestamp is the colour image's.
   /// Throws std::runtime_error naming the file: unreadable image, depth not
   /// 16-bit single-channel, colour and depth of different sizes, or a size
-  /// other than the camera's; std::invalid_argument for a camera whose
-  /// depth_factor is not > 0.
+  /// other than the camera's (the depth image: the size of the camera's depth
+  /// camera, PinholeCamera::depthImageSize, which may differ from the colour
+  /// image's); std::invalid_argument for a camera whose depth_factor is not > 0.
   RgbdFrame loadFrame(std::size_t index, const PinholeCamera& camera) const;
 
   bool hasGroundTruth() const { return !groundtruth_.empty(); }

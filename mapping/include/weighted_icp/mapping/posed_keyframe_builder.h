@@ -43,7 +43,9 @@ class PosedKeyframeBuilder {
   static std::string getClassName() { return "PosedKeyframeBuilder"; }
 
   /// @brief Extracts the frame's features and adds it as the next keyframe.
-  /// @param frame colour and metric depth of the same size; anything else throws std::invalid_argument
+  /// @param frame colour of the camera's size and metric CV_32F depth of its depth camera's
+  /// (PinholeCamera::depthImageSize; registered to the colour camera first when it is unregistered); anything
+  /// else throws std::invalid_argument
   /// @param frame_id its index in the sequence
   /// @param pose_wc its camera-to-world pose
   /// @return the keyframe's id

@@ -77,6 +77,22 @@ PinholeCamera resizedCamera(const PinholeCamera& camera, double scale);
 ///        enlarging), cv::INTER_NEAREST for depth (never mix a foreground and a background depth)
 cv::Mat resizeImage(const cv::Mat& image, const PinholeCamera& camera, double scale, int interpolation);
 
+/// @brief The camera of a depth sensor of another resolution than the colour camera's (an Azure Kinect's, ScanNet's):
+/// the depth camera's images resized by `scale` (same field of view, its intrinsics as resizedCamera scales them),
+/// the colour camera unchanged. A camera with registered depth first gets a depth camera where the colour camera
+/// is: its intrinsics without its distortion, no offset.
+/// @param camera the original camera
+/// @param scale new depth width / old (> 0); the new depth size must be at least 16 x 16 pixels
+PinholeCamera depthResizedCamera(const PinholeCamera& camera, double scale);
+
+/// @brief The depth image at depthResizedCamera's depth size (nearest: never mix a foreground and a background
+/// depth). Registered depth of a camera with lens distortion is first re-sampled as the undistorted depth camera
+/// sees it (unregisteredDepth with no offset).
+/// @param depth CV_32F metres of `camera`'s depth size (PinholeCamera::depthImageSize)
+/// @param camera its camera
+/// @param scale new depth width / old (> 0)
+cv::Mat depthResizedImage(const cv::Mat& depth, const PinholeCamera& camera, double scale);
+
 /// @brief Depth as an unregistered sensor delivers it: seen from a depth
 /// camera at `depth_in_color` (its pose in the colour camera's frame) with the
 /// colour camera's intrinsics and no lens distortion, but indexed as if it were

@@ -34,11 +34,14 @@ enum class VariantKind {
   Burst,            // bursts of blurred or noisy colour frames (listed in bursts.txt)
   ThereAndBack,     // the frames re-ordered before any other kind: even ones forward, odd ones back (thereAndBack)
   Resolution,       // another sensor resolution, same field of view: images and camera resized by resolution_scale
-  DepthNoise        // noisier depth: z + depth_noise_coefficient z^2 n, n correlated over depth_noise_correlation_px
+  DepthNoise,       // noisier depth: z + depth_noise_coefficient z^2 n, n correlated over depth_noise_correlation_px
+  DepthResolution   // a depth camera of another resolution than the colour camera's (depth_resolution_scale), named
+                    // in camera.yaml with its own size (depth_width, depth_height); after focal, resolution and
+                    // unregistered
 };
 
 /// @brief "jpeg", "mm-depth", "focal", "unregistered", "blur", "low-light", "burst", "there-and-back", "resolution",
-/// "depth-noise".
+/// "depth-noise", "depth-resolution".
 /// @param kind the kind to name
 std::string toString(VariantKind kind);
 /// @brief The kind of a name written by toString; std::invalid_argument naming the
@@ -59,6 +62,8 @@ struct SequenceVariantOptions {
   double focal_length_px = 585.0;
   /// Resolution: new width / old (0.5: 640x480 becomes 320x240), in [0.25, 4].
   double resolution_scale = 0.5;
+  /// Depth resolution: new depth width / colour width, in [0.25, 4] (0.5: 320x240 depth beside 640x480 colour).
+  double depth_resolution_scale = 0.5;
   /// Depth noise: sigma = coefficient z^2 (m); 0.01 is a consumer stereo depth camera's (2 % at 2 m), several times
   /// a Kinect v1's. Its errors are correlated over about correlation_px pixels.
   double depth_noise_coefficient = 0.01;

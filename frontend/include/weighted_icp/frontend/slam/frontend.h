@@ -168,8 +168,9 @@ class Frontend {
 
   /// Throws std::invalid_argument for an empty image, mismatched colour and
   /// depth sizes or a depth image that is not CV_32F. With the camera's
-  /// unregistered_depth set, the depth is first registered to the colour
-  /// camera (registerDepthToColor).
+  /// unregistered_depth set, the depth (of the depth camera's size,
+  /// PinholeCamera::depthImageSize) is first registered to the colour
+  /// camera (registerDepthToColor), and the colour image must be the camera's size.
   TrackingResult track(const RgbdFrame& image);
 
   /// Applies a pose-graph correction posted to the map (Map::postCorrection)
@@ -199,6 +200,10 @@ class Frontend {
 
   /// Throws std::invalid_argument naming the frame unless it has a colour image and CV_32F depth of its size.
   static void requireImages(const RgbdFrame& image);
+  /// The frame with its depth registered to the colour camera (the camera has an unregistered depth camera); throws
+  /// std::invalid_argument naming the frame when the colour image is not the camera's size or the depth not the
+  /// depth camera's.
+  RgbdFrame withRegisteredDepth(const RgbdFrame& input) const;
   /// Features (from gray, the frame's grey image) with their undistorted pixels and depths.
   Frame makeFrame(const RgbdFrame& image, const cv::Mat& gray, bool& used_clahe);
   double depthAt(const cv::Mat& depth, const cv::Point2f& pixel) const;
