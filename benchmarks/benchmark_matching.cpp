@@ -15,9 +15,11 @@
 #include <iostream>
 #include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <benchmark/benchmark.h>
+#include <opencv2/imgproc.hpp>
 
 #include "benchmark_arguments.h"
 #include "test_perception_support.h"
@@ -178,6 +180,26 @@ void registerBenchmarks() {
                                  camera, &frontend::registerDepthWithOpenCv)
         ->Unit(benchmark::kMillisecond)
         ->MeasureProcessCPUTime();
+    // A depth camera of half the colour camera's resolution (each depth pixel drawn over 3 x 3 colour pixels).
+    PinholeCamera half = camera;
+    DepthCamera& sensor = *half.unregistered_depth;
+    sensor = {camera.fx / 2,
+              camera.fy / 2,
+              (camera.cx + 0.5) / 2 - 0.5,
+              (camera.cy + 0.5) / 2 - 0.5,
+              sensor.translation_m,
+              sensor.rotation_rad,
+              camera.width / 2,
+              camera.height / 2};
+    cv::Mat half_depth;
+    cv::resize(depth, half_depth, half.depthImageSize(), 0.0, 0.0, cv::INTER_NEAREST);
+    for (const auto& [name, function] :
+         {std::pair{"ours", &frontend::registerDepthToColor}, std::pair{"opencv", &frontend::registerDepthWithOpenCv}})
+      benchmark::RegisterBenchmark(
+          (std::string("BM_RegisterDepth/") + name + "/half_resolution_depth/" + s.name).c_str(), BM_RegisterDepth,
+          half_depth, half, function)
+          ->Unit(benchmark::kMillisecond)
+          ->MeasureProcessCPUTime();
   }
 }
 

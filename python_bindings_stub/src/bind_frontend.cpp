@@ -72,7 +72,7 @@ class PythonSlam {
     RgbdFrame frame;
     frame.timestamp = timestamp;
     frame.color = colorImage(color, bgr);
-    frame.depth = depthImage(depth, frame.color.size());
+    frame.depth = depthImage(depth);
     // The front end keeps a header of the image until the next frame: the arrays stay alive that long.
     color_owner_ = color;
     depth_owner_ = depth;
@@ -149,13 +149,16 @@ class PythonSlam {
     return converted;
   }
 
-  cv::Mat depthImage(const py::array& depth, const cv::Size& size) const {
+  cv::Mat depthImage(const py::array& depth) const {
     const bool raw = depth.dtype().is(py::dtype::of<std::uint16_t>());
     if (depth.ndim() != 2 || !(raw || depth.dtype().is(py::dtype::of<float>())))
       throw py::value_error("depth must be an (H, W) uint16 (raw, depth_factor units) or float32 (metres) array");
-    requireCameraSize(depth, "depth");
+    // A depth camera of its own resolution (camera.yaml's depth_width, depth_height) delivers images of its size.
+    const cv::Size size = camera_.depthImageSize();
     if (depth.shape(0) != size.height || depth.shape(1) != size.width)
-      throw py::value_error("depth and rgb differ in size");
+      throw py::value_error("depth is " + std::to_string(depth.shape(1)) + "x" + std::to_string(depth.shape(0)) +
+                            " but the camera's depth images are " + std::to_string(size.width) + "x" +
+                            std::to_string(size.height));
     const py::array contiguous = py::array::ensure(depth, py::array::c_style);
     cv::Mat view(size, raw ? CV_16UC1 : CV_32F, const_cast<void*>(contiguous.data()));
     if (raw) return depthFromRaw(view, camera_.depth_factor);
@@ -225,6 +228,14 @@ void bindCamera(py::module_& m) {
       .def_readwrite("height", &PinholeCamera::height, "Image height (pixels).")
       .def_readwrite("depth_factor", &PinholeCamera::depth_factor, "Raw depth value per metre.")
       .def_readwrite("distortion", &PinholeCamera::distortion, "k1 k2 p1 p2 k3.")
+      .def_property_readonly(
+          "depth_size",
+          [](const PinholeCamera& c) {
+            const cv::Size size = c.depthImageSize();
+            return py::make_tuple(size.width, size.height);
+          },
+          "(width, height) of the depth images: the depth camera's own (camera.yaml's depth_width, depth_height) "
+          "or the colour images'.")
       .def("__repr__", [](const PinholeCamera& c) {
         return "<Camera fx=" + std::to_string(c.fx) + " fy=" + std::to_string(c.fy) + " cx=" + std::to_string(c.cx) +
                " cy=" + std::to_string(c.cy) + " " + std::to_string(c.width) + "x" + std::to_string(c.height) + ">";

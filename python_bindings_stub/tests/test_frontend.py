@@ -62,7 +62,7 @@ def test_run_tum_names_a_missing_folder_and_reads_a_folders_camera_file(tmp_path
     (tmp_path / "camera.yaml").write_text(
         "%YAML:1.0\nfx: 585.\nfy: 585.\ncx: 320.\ncy: 240.\nk1: 0.\nk2: 0.\np1: 0.\np2: 0.\nk3: 0.\n"
         "width: 640\nheight: 480\ndepth_factor: 1000.\n")
-    # The folder's camera is read (as wicp_rgbd_slam reads it); it has no frames, which is the next error.
+#The folder's camera is read (as wicp_rgbd_slam reads it); it has no frames, which is the next error.
     with pytest.raises(RuntimeError, match="rgb.txt"):
         wi.run_tum(str(tmp_path))
 
@@ -79,8 +79,28 @@ def test_track_refuses_wrong_images() -> None:
         slam.track(rgb, depth.astype(np.int32), 0.0)
     with pytest.raises(ValueError, match="camera"):
         wi.RgbdSlam(camera=5)  # type: ignore[arg-type]
-    # A black frame without depth is not an error: the tracker reports it.
+    with pytest.raises(ValueError, match="depth is 320x240 but the camera's depth images are 640x480"):
+        slam.track(rgb, depth[:240, :320], 0.0)
+#A black frame without depth is not an error : the tracker reports it.
     assert not slam.track(rgb, depth, 0.0).has_pose
+
+
+def test_a_depth_camera_of_its_own_size_takes_depth_of_that_size(tmp_path: Path) -> None:
+    camera_file = tmp_path / "camera.yaml"
+    camera_file.write_text(
+        "%YAML:1.0\nfx: 525.\nfy: 525.\ncx: 319.5\ncy: 239.5\nk1: 0\nk2: 0\np1: 0\np2: 0\nk3: 0\n"
+        "width: 640\nheight: 480\ndepth_factor: 1000.\ndepth_fx: 262.5\ndepth_fy: 262.5\ndepth_cx: 159.5\n"
+        "depth_cy: 119.5\ndepth_tx: 0.025\ndepth_ty: 0\ndepth_tz: 0\ndepth_rx: 0\ndepth_ry: 0\ndepth_rz: 0\n"
+        "depth_width: 320\ndepth_height: 240\n"
+    )
+    camera = wi.Camera.load(str(camera_file))
+    assert camera.depth_size == (320, 240)
+    assert wi.Camera.tum(1).depth_size == (640, 480)
+    slam = wi.RgbdSlam(camera)
+    rgb = np.zeros((480, 640, 3), dtype=np.uint8)
+    with pytest.raises(ValueError, match="depth is 640x480 but the camera's depth images are 320x240"):
+        slam.track(rgb, np.zeros((480, 640), dtype=np.uint16), 0.0)
+    assert not slam.track(rgb, np.zeros((240, 320), dtype=np.uint16), 0.0).has_pose
 
 
 def test_options_choose_the_papers_techniques_by_the_tools_names(tum_folder: Path) -> None:
@@ -103,6 +123,6 @@ def test_the_constructors_help_names_every_option_key() -> None:
     listed = doc.split("(keys: ")[1].split(";")[0].split(", ")
     assert {"gate-free-retry", "motion-timing", "keyframe-before-loss"} <= set(listed)
     for key in listed:
-        # A key the front end knows: its value is what is refused, not the key.
+#A key the front end knows : its value is what is refused, not the key.
         with pytest.raises(ValueError, match=f"options: {key}: "):
             wi.RgbdSlam("fr1", options={key: "no-such-value"})

@@ -201,6 +201,9 @@ class Camera:
     height: int
     depth_factor: float
     distortion: List[float]
+    @property
+    def depth_size(self) -> Tuple[int, int]:
+        """(width, height) of the depth images: the depth camera's own or the colour images'."""
     def __init__(self) -> None: ...
     @staticmethod
     def load(spec: str) -> Camera:

@@ -82,7 +82,7 @@ struct Footprint {
 /// onto the colour pixels of its footprint around where it lands, the nearer depth kept where two surfaces land on
 /// one pixel.
 /// @param depth the row's depths (0, NaN or infinite: unmeasured), `columns` of them
-/// @param target_u,target_v,target_z where each lands (RowProjection)
+/// @param target_u,target_v,target_z where each lands (RowProjection), the pixel less the footprint's shift
 /// @param footprint the colour pixels each covers
 /// @param registered CV_32F of the colour image's size
 void splatRow(const float* depth, std::size_t columns, const float* target_u, const float* target_v,
@@ -90,16 +90,15 @@ void splatRow(const float* depth, std::size_t columns, const float* target_u, co
   const float width = static_cast<float>(registered.cols), height = static_cast<float>(registered.rows);
   const float unseen = std::numeric_limits<float>::infinity();
   const bool two_by_two = footprint.columns == 2 && footprint.rows == 2;
+  const int reach_u = footprint.columns - 1, reach_v = footprint.rows - 1;
+  const float min_u = static_cast<float>(-reach_u), min_v = static_cast<float>(-reach_v);
   for (std::size_t u = 0; u < columns; ++u) {
-    const float z = depth[u], pz = target_z[u], uc = target_u[u] - footprint.shift_u,
-                vc = target_v[u] - footprint.shift_v;
+    const float z = depth[u], pz = target_z[u], uc = target_u[u], vc = target_v[u];
     // Unmeasured, behind the colour camera, or its footprint outside the colour image.
-    if (!(z > 0.0f) || !(pz > 0.0f) || !(z < unseen)) continue;
-    const int reach_u = footprint.columns - 1, reach_v = footprint.rows - 1;
-    if (!(uc > static_cast<float>(-reach_u) && vc > static_cast<float>(-reach_v) && uc < width && vc < height))
-      continue;
-    const int u0 = static_cast<int>(uc + static_cast<float>(reach_u)) - reach_u;  // floor, as uc + reach_u > 0
-    const int v0 = static_cast<int>(vc + static_cast<float>(reach_v)) - reach_v;
+    if (!(z > 0.0f) || !(z < unseen) || !(pz > 0.0f)) continue;
+    if (!(uc > min_u && vc > min_v && uc < width && vc < height)) continue;
+    const int u0 = static_cast<int>(uc - min_u) - reach_u;  // floor, as uc + reach_u > 0
+    const int v0 = static_cast<int>(vc - min_v) - reach_v;
     if (two_by_two && u0 >= 0 && v0 >= 0 && u0 + 1 < registered.cols && v0 + 1 < registered.rows) {
       float* top = registered.ptr<float>(v0) + u0;
       float* bottom = registered.ptr<float>(v0 + 1) + u0;
@@ -184,9 +183,11 @@ cv::Mat registerDepthToColor(const cv::Mat& depth, const PinholeCamera& camera) 
   const bool distorted = camera.hasDistortion();
   const Distortion distortion(camera);
   const float fx = static_cast<float>(camera.fx), fy = static_cast<float>(camera.fy);
-  const float cx = static_cast<float>(camera.cx), cy = static_cast<float>(camera.cy);
-  const float unseen = std::numeric_limits<float>::infinity();
+  // The footprint's shift folded into the principal point: the projection gives its first pixel's corner.
   const Footprint footprint(camera, sensor);
+  const float cx = static_cast<float>(camera.cx) - footprint.shift_u;
+  const float cy = static_cast<float>(camera.cy) - footprint.shift_v;
+  const float unseen = std::numeric_limits<float>::infinity();
   cv::Mat registered(camera.height, camera.width, CV_32F);
   std::fill(registered.ptr<float>(0), registered.ptr<float>(0) + registered.total(), unseen);  // continuous, new
   // Per row, first every pixel's projection (no branch: the compiler vectorises it), then the scatter.
