@@ -24,6 +24,13 @@ cv::Mat boxBeforeAWall(const PinholeCamera& camera) {
   return depth;
 }
 
+/// The pixels of a 640x480 boxBeforeAWall image that are judged: away from the image border (what the depth camera
+/// does not see) and the box's edges (occlusions).
+bool judged(int u, int v) {
+  if (u < 60 || u >= 640 - 60 || v < 40 || v >= 480 - 40) return false;
+  return !(std::abs(u - 250) < 25 || std::abs(u - 410) < 25 || std::abs(v - 150) < 25 || std::abs(v - 290) < 25);
+}
+
 TEST(DepthRegistration, UndoesTheDepthCameraOffsetWithTheColourCamerasDistortion) {
   PinholeCamera camera = tumCamera(1);  // k1 = 0.26: the registration must use the colour camera's distortion
   Eigen::Isometry3d depth_in_color = Eigen::Isometry3d::Identity();
@@ -37,22 +44,19 @@ TEST(DepthRegistration, UndoesTheDepthCameraOffsetWithTheColourCamerasDistortion
   const cv::Mat registered = registerDepthToColor(raw, camera);
   ASSERT_EQ(registered.type(), CV_32F);
   ASSERT_EQ(registered.size(), truth.size());
-  // Away from the image border (what the depth camera does not see) and the box's edges (occlusions):
-  std::size_t judged = 0, right_before = 0, right_after = 0, missing = 0;
-  for (int v = 40; v < camera.height - 40; ++v)
-    for (int u = 60; u < camera.width - 60; ++u) {
-      const bool near_edge =
-          std::abs(u - 250) < 25 || std::abs(u - 410) < 25 || std::abs(v - 150) < 25 || std::abs(v - 290) < 25;
-      if (near_edge) continue;
-      ++judged;
+  std::size_t pixels = 0, right_before = 0, right_after = 0, missing = 0;
+  for (int v = 0; v < camera.height; ++v)
+    for (int u = 0; u < camera.width; ++u) {
+      if (!judged(u, v)) continue;
+      ++pixels;
       const float z = truth.at<float>(v, u), got = registered.at<float>(v, u);
       missing += !(got > 0.0f);
       right_after += std::abs(got - z) < 0.01f;
       right_before += std::abs(raw.at<float>(v, u) - z) < 0.01f;
     }
-  ASSERT_GT(judged, 100000u);
-  EXPECT_GT(static_cast<double>(right_after) / judged, 0.99) << missing << " missing";
-  EXPECT_LT(static_cast<double>(right_before) / judged, 0.99) << "the offset moved nothing: the test proves nothing";
+  ASSERT_GT(pixels, 100000u);
+  EXPECT_GT(static_cast<double>(right_after) / pixels, 0.99) << missing << " missing";
+  EXPECT_LT(static_cast<double>(right_before) / pixels, 0.99) << "the offset moved nothing: the test proves nothing";
 }
 
 TEST(DepthRegistration, GivesOpenCvsRegisteredDepths) {
@@ -101,25 +105,23 @@ TEST(DepthRegistration, ADepthCameraOfAnotherResolutionCoversTheColourImage) {
     // The wall rises 3 mm a colour pixel: a colour pixel shows the nearest depth of a footprint about 1.5 depth
     // pixels wide (+ 4 mm of the resampling), a depth pixel spanning 1 / scale colour pixels.
     const float tolerance = 0.003f * static_cast<float>(std::max(2.0, 1.5 / scale)) + 0.004f;
-    std::size_t judged = 0, right = 0, missing = 0, right_opencv = 0, missing_opencv = 0;
-    for (int v = 40; v < colour.height - 40; ++v)
-      for (int u = 60; u < colour.width - 60; ++u) {
-        const bool near_edge =
-            std::abs(u - 250) < 25 || std::abs(u - 410) < 25 || std::abs(v - 150) < 25 || std::abs(v - 290) < 25;
-        if (near_edge) continue;
-        ++judged;
+    std::size_t pixels = 0, right = 0, missing = 0, right_opencv = 0, missing_opencv = 0;
+    for (int v = 0; v < colour.height; ++v)
+      for (int u = 0; u < colour.width; ++u) {
+        if (!judged(u, v)) continue;
+        ++pixels;
         const float z = truth.at<float>(v, u), got = ours.at<float>(v, u), opencv = theirs.at<float>(v, u);
         missing += !(got > 0.0f);
         missing_opencv += !(opencv > 0.0f);
         right += std::abs(got - z) < tolerance;
         right_opencv += std::abs(opencv - z) < tolerance;
       }
-    ASSERT_GT(judged, 100000u);
-    EXPECT_GT(static_cast<double>(right) / judged, 0.99) << "scale " << scale << ": " << missing << " missing";
-    EXPECT_LT(static_cast<double>(missing) / judged, 0.001) << "scale " << scale;
+    ASSERT_GT(pixels, 100000u);
+    EXPECT_GT(static_cast<double>(right) / pixels, 0.99) << "scale " << scale << ": " << missing << " missing";
+    EXPECT_LT(static_cast<double>(missing) / pixels, 0.001) << "scale " << scale;
     // OpenCV's, given the depth resized to the colour image's size (registerDepth reads it over that size).
-    EXPECT_GT(static_cast<double>(right_opencv) / judged, 0.98) << "scale " << scale;
-    EXPECT_LT(static_cast<double>(missing_opencv) / judged, 0.001) << "scale " << scale;
+    EXPECT_GT(static_cast<double>(right_opencv) / pixels, 0.98) << "scale " << scale;
+    EXPECT_LT(static_cast<double>(missing_opencv) / pixels, 0.001) << "scale " << scale;
   }
 }
 
