@@ -228,6 +228,8 @@ TEST(SequenceVariants, DepthResolutionVariantSeesEachPointWhereTheDepthCameraSay
   EXPECT_THROW(simulation::writeSequenceVariant(smallSynthetic(2), wrong_order, (dir / "wrong_order").string()),
                std::invalid_argument);
   EXPECT_FALSE(fs::exists(dir / "wrong_order"));
+  EXPECT_THROW(simulation::zoomedCamera(simulation::depthResizedCamera(smallSynthetic(2).camera, 0.5), 1.2),
+               std::invalid_argument);
 }
 
 // A noisier depth sensor: errors of coefficient z^2 around the true depth, in patches when correlated, holes kept.

@@ -104,6 +104,8 @@ PinholeCamera zoomedCamera(const PinholeCamera& camera, double scale) {
   PinholeCamera zoomed = camera;
   zoomed.fx *= scale;
   zoomed.fy *= scale;
+  if (camera.depthImageSize() != cv::Size(camera.width, camera.height))
+    throw std::invalid_argument("zoomedCamera: the depth camera's images are not the colour images' size");
   if (zoomed.unregistered_depth) {  // its image is zoomed about the colour camera's principal point too
     DepthCamera& depth = *zoomed.unregistered_depth;
     depth.fx *= scale;

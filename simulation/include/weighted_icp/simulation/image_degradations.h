@@ -46,7 +46,8 @@ cv::Mat lowLight(const cv::Mat& image, double gain, double gamma, double noise_s
 
 /// @brief The camera of zoomImage: focal lengths times `scale`, the principal
 /// point, distortion (in normalised coordinates, unchanged by a zoom about the
-/// principal point), size and depth factor unchanged.
+/// principal point), size and depth factor unchanged. An unregistered depth camera's image is zoomed about the
+/// colour camera's principal point too, so it must be of the colour image's size (std::invalid_argument otherwise).
 /// @param camera the original camera
 /// @param scale new focal length / old (> 0)
 PinholeCamera zoomedCamera(const PinholeCamera& camera, double scale);
