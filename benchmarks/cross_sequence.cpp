@@ -10,7 +10,7 @@
 //
 //   wicp_benchmark_cross_sequence --scratch DIR [--data DIR] [--max-frames N]
 //                                 [--synthetic-frames N] [--sequences LIST] [--variants LIST] [--runs LIST]
-//                                 [--trajectories DIR]
+//                                 [--resolution-scale S] [--depth-resolution-scale S] [--trajectories DIR]
 
 #include <cmath>
 #include <filesystem>
@@ -94,9 +94,11 @@ Sequence load(const fs::path& dir, const std::string& name) {
 }
 
 /// The base itself (variant "original") or a variant, written into the scratch folder and read back.
-Sequence prepare(const Base& base, const std::string& variant, const fs::path& scratch) {
+/// @param parameters the kinds' parameters (--resolution-scale, --depth-resolution-scale); its kinds are ignored
+Sequence prepare(const Base& base, const std::string& variant, const fs::path& scratch,
+                 const simulation::SequenceVariantOptions& parameters) {
   const fs::path dir = scratch / (base.name + "_" + variant);
-  simulation::SequenceVariantOptions options;
+  simulation::SequenceVariantOptions options = parameters;
   // "original" rewrites the frames unchanged (PNG, same camera): the same path as every variant.
   options.kinds = variant == "original" ? std::vector<simulation::VariantKind>{} : kindsOf(variant);
   if (options.kinds.empty()) {
@@ -161,6 +163,7 @@ int main(int argc, char** argv) {
                 sequences = "fr1_head,fr3_head,synthetic";
     std::size_t max_frames = 0, synthetic_frames = 150;
     std::vector<std::string> choices;
+    simulation::SequenceVariantOptions parameters;
     po::options_description description("wicp_benchmark_cross_sequence options");
     // clang-format off
     description.add_options()
@@ -172,6 +175,8 @@ int main(int argc, char** argv) {
         ("sequences", po::value(&sequences)->default_value(sequences), "comma-separated: fr1_head, fr3_head, synthetic")
         ("variants", po::value(&variants)->default_value(variants), "comma-separated variants (kinds of wicp_make_variant, or kinect; a+b combines two, e.g. kinect+blur)")
         ("runs", po::value(&runs)->default_value(runs), "comma-separated: default, relative-brisque, absolute, paper, no-gate, opencv")
+        ("resolution-scale", po::value(&parameters.resolution_scale)->default_value(parameters.resolution_scale), "variant resolution: new width / old (0.25-4)")
+        ("depth-resolution-scale", po::value(&parameters.depth_resolution_scale)->default_value(parameters.depth_resolution_scale), "variant depth-resolution: depth width / colour width (0.25-4)")
         ("frontend-option", po::value(&choices)->composing(),
          "KEY=VALUE, repeatable: a front-end choice by wicp_rgbd_slam's option name (pnp=iterative, "
          "descriptor=modified-brief, dense-odometry=prior, ...), applied to every run but opencv")
@@ -237,7 +242,7 @@ int main(int argc, char** argv) {
     std::cout << std::endl;
     for (const Base& base : bases)
       for (const std::string& variant : variant_names) {
-        const Sequence sequence = prepare(base, variant, scratch);
+        const Sequence sequence = prepare(base, variant, scratch, parameters);
         std::cout << "| " << sequence.name << " | " << sequence.frames.size() << " |";
         std::string timing[2] = {"–", "–"};
         std::optional<Trajectory> ours, opencv;
