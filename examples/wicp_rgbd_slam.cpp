@@ -471,6 +471,8 @@ int main(int argc, char** argv) {
     std::string gate_free_retry = options.frontend.gate_free_retry ? "on" : "off";
     std::string motion_timing = options.frontend.motion_per_period ? "period" : "frame";
     std::string keyframe_before_loss = options.frontend.keyframe_before_loss ? "on" : "off";
+    const int default_width = options.frontend.features.max_working_width;
+    std::string feature_width = default_width > 0 ? std::to_string(default_width) : "full";
     simulation::SyntheticRgbdOptions synthetic;
     po::options_description description(
         "wicp_rgbd_slam [--dataset DIR] [--camera fr1|fr2|fr3|FILE.yaml] [--first-frame N] [--max-frames N]\n"
@@ -597,6 +599,9 @@ int main(int argc, char** argv) {
         ("keyframe-before-loss", po::value(&keyframe_before_loss)->default_value(keyframe_before_loss),
          "on: when tracking is lost, the last frame 3D-2D tracked becomes the segment's last keyframe, for the next "
          "segment's bridge to find; off: as before 2026-11-27 (afternoon)")
+        ("feature-width", po::value(&feature_width)->default_value(feature_width),
+         "N: frames wider than N pixels are halved (until they are not) for finding and describing features, "
+         "the keypoints kept in the frame's pixels; full: every frame at its own size")
         ("pnp-ransac-iterations", tools::rangedValue(&options.frontend.pnp.ransac_iterations, 1, 100000)
                                       ->default_value(options.frontend.pnp.ransac_iterations),
          "most RANSAC draws a frame's PnP makes; fewer when the inliers found already give 99 % confidence (1-100000)");
@@ -609,6 +614,7 @@ int main(int argc, char** argv) {
       frontend::setFrontendChoice(options.frontend, "gate-free-retry", gate_free_retry);
       frontend::setFrontendChoice(options.frontend, "motion-timing", motion_timing);
       frontend::setFrontendChoice(options.frontend, "keyframe-before-loss", keyframe_before_loss);
+      frontend::setFrontendChoice(options.frontend, "feature-width", feature_width);
     } catch (const std::invalid_argument& e) {
       throw po::error(std::string("--") + e.what());
     }

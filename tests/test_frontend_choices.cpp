@@ -56,7 +56,15 @@ TEST(FrontendChoices, EachKeySetsItsOption) {
   EXPECT_EQ(options.dense_odometry.kind, DenseOdometryKind::Icp);
   EXPECT_EQ(options.quality.mode, QualityGateMode::Absolute);
   EXPECT_EQ(options.matcher.kind, MatcherKind::KdTree);
-  EXPECT_EQ(frontendChoiceKeys().size(), 14u);
+  EXPECT_EQ(frontendChoiceKeys().size(), 15u);
+  // The width features are sought in: full or pixels.
+  setFrontendChoice(options, "feature-width", "full");
+  EXPECT_EQ(options.features.max_working_width, 0);
+  setFrontendChoice(options, "feature-width", "800");
+  EXPECT_EQ(options.features.max_working_width, 800);
+  for (const char* wrong : {"10", "800px", "", "half", "-960"})
+    EXPECT_THROW(setFrontendChoice(options, "feature-width", wrong), std::invalid_argument) << wrong;
+  EXPECT_EQ(options.features.max_working_width, 800);
 }
 
 TEST(FrontendChoices, AWrongKeyOrValueIsNamed) {

@@ -230,6 +230,34 @@ TEST(FeatureExtractor, DescribesAnEqualisedFrameAsItIsSoThatItsCornersMatchAcros
   EXPECT_GT(as_it_is.fraction(), 0.7);
 }
 
+// A frame wider than max_working_width is worked on halved: a 1280x960 image whose 2x2 blocks are the pixels of a
+// 640x480 frame gives that frame's features exactly, their keypoints at the blocks' centres.
+TEST(FeatureExtractor, AWideFrameIsWorkedOnHalvedAndItsKeypointsGivenInItsPixels) {
+  WEIGHTED_ICP_REQUIRE_FILE(fr1Dir() / "rgb.txt");
+  const cv::Mat gray = grayFrame(fr1Dir(), 1, 3);
+  cv::Mat wide;
+  cv::resize(gray, wide, cv::Size(2 * gray.cols, 2 * gray.rows), 0.0, 0.0, cv::INTER_NEAREST);
+  FeatureExtractorOptions options;
+  options.max_working_width = 960;
+  const ExtractedFeatures small = FeatureExtractor(options).extract(gray);  // 640 wide: as without the option
+  EXPECT_TRUE(sameFeatures(small, FeatureExtractor().extract(gray)));
+  const ExtractedFeatures halved = FeatureExtractor(options).extract(wide);
+  ASSERT_GT(small.keypoints.size(), 300u);
+  ASSERT_EQ(halved.keypoints.size(), small.keypoints.size());
+  for (std::size_t i = 0; i < small.keypoints.size(); ++i) {
+    const cv::Point2f expected = 2.0f * small.keypoints[i].pt + cv::Point2f(0.5f, 0.5f);
+    ASSERT_LT(cv::norm(halved.keypoints[i].pt - expected), 1e-4) << i;
+    EXPECT_EQ(halved.keypoints[i].angle, small.keypoints[i].angle);
+  }
+  EXPECT_EQ(cv::norm(halved.descriptors, small.descriptors, cv::NORM_HAMMING), 0.0);
+  EXPECT_TRUE(sameFeatures(FeatureExtractor().extract(wide), halved));  // the default: 960
+  // At its own size the wide frame gives other corners (twice as many pixels per corner spacing).
+  options.max_working_width = 0;
+  EXPECT_FALSE(sameFeatures(FeatureExtractor(options).extract(wide), halved));
+  options.max_working_width = 10;
+  EXPECT_THROW(FeatureExtractor{options}, std::invalid_argument);
+}
+
 TEST(FeatureExtractor, ReturnsNothingForAnImageTooSmallToDescribe) {
   const cv::Mat tiny(60, 60, CV_8U, cv::Scalar(128));
   const ExtractedFeatures features = FeatureExtractor().extract(tiny);

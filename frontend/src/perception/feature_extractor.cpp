@@ -34,6 +34,8 @@ void validate(const FeatureExtractorOptions& o) {
   requireOption(o.min_features_before_clahe >= 0, "min_features_before_clahe must be >= 0");
   requireOption(o.clahe.clip_limit > 0.0 && o.clahe.tile_grid >= 1, "clahe needs clip_limit > 0 and tile_grid >= 1");
   requireOption(o.min_corner_response >= 0.0, "min_corner_response must be >= 0");
+  requireOption(o.max_working_width == 0 || o.max_working_width >= 64,
+                "max_working_width must be 0 (the input's size) or >= 64 pixels");
 }
 
 /// ORB's orientation (Rublee et al. 2011): the direction from the keypoint to
@@ -207,6 +209,23 @@ ExtractedFeatures FeatureExtractor::extract(const cv::Mat& gray) const {
   if (gray.type() != CV_8UC1)
     throw std::invalid_argument("FeatureExtractor::extract: needs an 8-bit single-channel image, got type " +
                                 cv::typeToString(gray.type()));
+  if (options_.max_working_width <= 0 || gray.cols <= options_.max_working_width) return extractAtWorkingSize(gray);
+  cv::Mat working = gray;
+  while (working.cols > options_.max_working_width && working.cols >= 2 && working.rows >= 2)
+    cv::resize(working, working, cv::Size(working.cols / 2, working.rows / 2), 0.0, 0.0, cv::INTER_AREA);
+  ExtractedFeatures features = extractAtWorkingSize(working);
+  // Working pixel u spans input pixels [u s, (u + 1) s): its centre is (u + 0.5) s - 0.5.
+  const float sx = static_cast<float>(gray.cols) / static_cast<float>(working.cols);
+  const float sy = static_cast<float>(gray.rows) / static_cast<float>(working.rows);
+  for (cv::KeyPoint& keypoint : features.keypoints) {
+    keypoint.pt.x = (keypoint.pt.x + 0.5f) * sx - 0.5f;
+    keypoint.pt.y = (keypoint.pt.y + 0.5f) * sy - 0.5f;
+    keypoint.size *= sx;
+  }
+  return features;
+}
+
+ExtractedFeatures FeatureExtractor::extractAtWorkingSize(const cv::Mat& gray) const {
   ExtractedFeatures features;
   cv::Mat image = gray;
   features.keypoints = detectBucketed(image);

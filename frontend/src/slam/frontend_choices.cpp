@@ -1,6 +1,7 @@
 // The front end's named choices by wicp_rgbd_slam's option names: one table of keys for every caller.
 #include "weighted_icp/frontend/slam/frontend_choices.h"
 
+#include <exception>
 #include <functional>
 #include <stdexcept>
 #include <utility>
@@ -16,6 +17,21 @@ bool secondOfTwo(const std::string& value, const std::string& first, const std::
   if (value != first && value != second)
     throw std::invalid_argument("'" + value + "' (expected " + first + " or " + second + ")");
   return value == second;
+}
+
+/// "full" (0: the input's size) or the widest image features are sought in, in pixels (>= 64).
+int parseFeatureWidth(const std::string& value) {
+  if (value == "full") return 0;
+  std::size_t used = 0;
+  int width = 0;
+  try {
+    width = std::stoi(value, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != value.size() || width < 64 || width > 100000)
+    throw std::invalid_argument("'" + value + "' (expected full or a width in pixels, 64-100000)");
+  return width;
 }
 
 const std::vector<std::pair<std::string, Setter>>& setters() {
@@ -40,6 +56,8 @@ const std::vector<std::pair<std::string, Setter>>& setters() {
        [](FrontendOptions& o, const std::string& v) { o.motion_per_period = secondOfTwo(v, "frame", "period"); }},
       {"keyframe-before-loss",
        [](FrontendOptions& o, const std::string& v) { o.keyframe_before_loss = secondOfTwo(v, "off", "on"); }},
+      {"feature-width",
+       [](FrontendOptions& o, const std::string& v) { o.features.max_working_width = parseFeatureWidth(v); }},
       {"dense-odometry",
        [](FrontendOptions& o, const std::string& v) { o.dense_odometry.use = parseDenseOdometryUse(v); }},
       {"dense-odometry-kind",

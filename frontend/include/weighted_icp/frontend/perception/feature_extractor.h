@@ -44,6 +44,14 @@ struct FeatureExtractorOptions {
   /// Over sequences where equalisation triggers (fr3 blurred, with bursts, made dark; fr1 made dark), describing the
   /// frame as it is cut the worst ATE from 3.87 to 0.92 cm (docs/frontend_generalisation.md).
   bool describe_equalized = false;
+  /// Images wider than this are halved (pixel areas averaged) until they are not, the features found and described
+  /// there and their keypoints given in the input image's pixels: a 1280x960 sensor's frame is worked on at 640x480,
+  /// the scale every other option was chosen at (the corner spacing, ORB's 31-pixel patch, the response floor);
+  /// any width then works within a factor 1.5 of 640. 0: always the input image's size (before 2026-11-27). On
+  /// 1280x960 variants of fr1, fr3 and the synthetic room (plain, JPEG, blurred, dark, unregistered half-resolution
+  /// depth) it cut fr3 dark from 3.8 to 1.2 cm and fr3 blurred from 2.0 to 1.0 cm, fr1's rows by 0.05-0.13 cm, and
+  /// the median time by a third; the synthetic rows lost 0.01-0.03 cm (docs/frontend_generalisation.md).
+  int max_working_width = 960;
 };
 
 struct ExtractedFeatures {
@@ -69,6 +77,7 @@ class FeatureExtractor {
   /// is the intensity centroid angle, as ORB's own detector computes it, so
   /// the descriptors are rotated BRIEF. Keypoints ORB cannot describe are
   /// dropped with their rows. Deterministic; keypoints come strongest first.
+  /// Images wider than max_working_width are worked on halved (see there); the keypoints are in `gray`'s pixels.
   /// Throws std::invalid_argument for an empty image or one that is not CV_8UC1.
   ExtractedFeatures extract(const cv::Mat& gray) const;
 
@@ -76,6 +85,8 @@ class FeatureExtractor {
 
  private:
   std::vector<cv::KeyPoint> detectBucketed(const cv::Mat& gray) const;
+  /// extract() on an image of the working size.
+  ExtractedFeatures extractAtWorkingSize(const cv::Mat& gray) const;
 
   FeatureExtractorOptions options_;
   cv::Ptr<cv::ORB> orb_;
