@@ -280,7 +280,7 @@ TEST(TumSequence, DepthImagesOfTheDepthCamerasOwnSizeLoad) {
   const std::string error = errorOf([&] { sequence.loadFrame(1, camera); });  // 64x48 depth
   EXPECT_NE(error.find(sequence.frame(1).depth_path), std::string::npos) << error;
   EXPECT_NE(error.find("64x48"), std::string::npos) << error;
-  EXPECT_NE(error.find("depth camera's is 32x24"), std::string::npos) << error;
+  EXPECT_NE(error.find("depth camera's images are 32x24"), std::string::npos) << error;
 }
 
 TEST(TumSequence, ListsThatNeverMatchAreRefused) {

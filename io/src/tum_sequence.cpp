@@ -122,7 +122,7 @@ RgbdFrame TumSequence::loadFrame(std::size_t index, const PinholeCamera& camera)
   // A depth camera of its own resolution (depth_width, depth_height in the camera file).
   if (raw_depth.size() != depth_size)
     throw std::runtime_error(paths.depth_path + ": depth image is " + sizeText(raw_depth) +
-                             " but the camera's depth camera's is " + std::to_string(depth_size.width) + "x" +
+                             " but the depth camera's images are " + std::to_string(depth_size.width) + "x" +
                              std::to_string(depth_size.height));
   images.depth = depthFromRaw(raw_depth, camera.depth_factor);
   return images;
