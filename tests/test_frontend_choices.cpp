@@ -57,12 +57,16 @@ TEST(FrontendChoices, EachKeySetsItsOption) {
   EXPECT_EQ(options.quality.mode, QualityGateMode::Absolute);
   EXPECT_EQ(options.matcher.kind, MatcherKind::KdTree);
   EXPECT_EQ(frontendChoiceKeys().size(), 15u);
-  // The width features are sought in: full or pixels.
+  // The widths features are found at: full, or MIN-MAX pixels.
+  EXPECT_EQ(FrontendOptions{}.features.min_working_width, 427);
+  EXPECT_EQ(FrontendOptions{}.features.max_working_width, 960);
   setFrontendChoice(options, "feature-width", "full");
+  EXPECT_EQ(options.features.min_working_width, 0);
   EXPECT_EQ(options.features.max_working_width, 0);
-  setFrontendChoice(options, "feature-width", "800");
+  setFrontendChoice(options, "feature-width", "400-800");
+  EXPECT_EQ(options.features.min_working_width, 400);
   EXPECT_EQ(options.features.max_working_width, 800);
-  for (const char* wrong : {"10", "800px", "", "half", "-960"})
+  for (const char* wrong : {"800", "500-800", "10-800", "400-800px", "", "half", "-960", "400--800", "+400-800"})
     EXPECT_THROW(setFrontendChoice(options, "feature-width", wrong), std::invalid_argument) << wrong;
   EXPECT_EQ(options.features.max_working_width, 800);
 }

@@ -258,6 +258,31 @@ TEST(FeatureExtractor, AWideFrameIsWorkedOnHalvedAndItsKeypointsGivenInItsPixels
   EXPECT_THROW(FeatureExtractor{options}, std::invalid_argument);
 }
 
+// A frame narrower than min_working_width is worked on doubled (bilinear): a 320x240 frame gives the features of its
+// 640x480 enlargement, their keypoints in its own pixels.
+TEST(FeatureExtractor, ANarrowFrameIsWorkedOnDoubledAndItsKeypointsGivenInItsPixels) {
+  WEIGHTED_ICP_REQUIRE_FILE(fr3Dir() / "rgb.txt");
+  cv::Mat narrow, enlarged;
+  cv::resize(grayFrame(fr3Dir(), 3, 10), narrow, cv::Size(320, 240), 0.0, 0.0, cv::INTER_AREA);
+  cv::resize(narrow, enlarged, cv::Size(640, 480), 0.0, 0.0, cv::INTER_LINEAR);
+  FeatureExtractorOptions full;
+  full.min_working_width = full.max_working_width = 0;
+  const ExtractedFeatures doubled = FeatureExtractor().extract(narrow),
+                          expected = FeatureExtractor(full).extract(enlarged);
+  ASSERT_GT(expected.keypoints.size(), 300u);
+  ASSERT_EQ(doubled.keypoints.size(), expected.keypoints.size());
+  for (std::size_t i = 0; i < expected.keypoints.size(); ++i)
+    ASSERT_LT(cv::norm(doubled.keypoints[i].pt - (0.5f * expected.keypoints[i].pt - cv::Point2f(0.25f, 0.25f))), 1e-4)
+        << i;
+  EXPECT_EQ(cv::norm(doubled.descriptors, expected.descriptors, cv::NORM_HAMMING), 0.0);
+  // At its own size: fewer corners, none within ORB's 31 pixels of the border.
+  const ExtractedFeatures own = FeatureExtractor(full).extract(narrow);
+  EXPECT_LT(own.keypoints.size(), doubled.keypoints.size());
+  FeatureExtractorOptions crossed;
+  crossed.min_working_width = 600;  // more than half of 960: no width between them is sure to be reached
+  EXPECT_THROW(FeatureExtractor{crossed}, std::invalid_argument);
+}
+
 TEST(FeatureExtractor, ReturnsNothingForAnImageTooSmallToDescribe) {
   const cv::Mat tiny(60, 60, CV_8U, cv::Scalar(128));
   const ExtractedFeatures features = FeatureExtractor().extract(tiny);

@@ -36,6 +36,11 @@ void validate(const FeatureExtractorOptions& o) {
   requireOption(o.min_corner_response >= 0.0, "min_corner_response must be >= 0");
   requireOption(o.max_working_width == 0 || o.max_working_width >= 64,
                 "max_working_width must be 0 (the input's size) or >= 64 pixels");
+  requireOption(o.min_working_width >= 0 && o.min_working_width <= 100000,
+                "min_working_width must be 0 (the input's size) to 100000 pixels");
+  requireOption(o.min_working_width == 0 || o.max_working_width == 0 || 2 * o.min_working_width <= o.max_working_width,
+                "min_working_width must be at most half max_working_width (a width between them is reached by "
+                "halving or doubling)");
 }
 
 /// ORB's orientation (Rublee et al. 2011): the direction from the keypoint to
@@ -209,9 +214,13 @@ ExtractedFeatures FeatureExtractor::extract(const cv::Mat& gray) const {
   if (gray.type() != CV_8UC1)
     throw std::invalid_argument("FeatureExtractor::extract: needs an 8-bit single-channel image, got type " +
                                 cv::typeToString(gray.type()));
-  if (options_.max_working_width <= 0 || gray.cols <= options_.max_working_width) return extractAtWorkingSize(gray);
+  const int min_width = options_.min_working_width, max_width = options_.max_working_width;
+  const bool narrow = min_width > 0 && gray.cols < min_width, wide = max_width > 0 && gray.cols > max_width;
+  if (!narrow && !wide) return extractAtWorkingSize(gray);
   cv::Mat working = gray;
-  while (working.cols > options_.max_working_width && working.cols >= 2 && working.rows >= 2)
+  while (min_width > 0 && working.cols < min_width)  // enlarged bilinearly: no detail is made up, none lost
+    cv::resize(working, working, cv::Size(working.cols * 2, working.rows * 2), 0.0, 0.0, cv::INTER_LINEAR);
+  while (max_width > 0 && working.cols > max_width && working.cols >= 2 && working.rows >= 2)
     cv::resize(working, working, cv::Size(working.cols / 2, working.rows / 2), 0.0, 0.0, cv::INTER_AREA);
   ExtractedFeatures features = extractAtWorkingSize(working);
   // Working pixel u spans input pixels [u s, (u + 1) s): its centre is (u + 0.5) s - 0.5.

@@ -4,6 +4,7 @@
 #include <exception>
 #include <functional>
 #include <stdexcept>
+#include <tuple>
 #include <utility>
 
 namespace weighted_icp::frontend {
@@ -19,19 +20,28 @@ bool secondOfTwo(const std::string& value, const std::string& first, const std::
   return value == second;
 }
 
-/// "full" (0: the input's size) or the widest image features are sought in, in pixels (>= 64).
-int parseFeatureWidth(const std::string& value) {
-  if (value == "full") return 0;
-  std::size_t used = 0;
-  int width = 0;
-  try {
-    width = std::stoi(value, &used);
-  } catch (const std::exception&) {
-    used = 0;
+/// "full" (every frame at its own size) or "MIN-MAX", the widths in pixels features are found at (64-100000).
+std::pair<int, int> parseFeatureWidths(const std::string& value) {
+  if (value == "full") return {0, 0};
+  const auto fail = [&] {
+    return std::invalid_argument("'" + value + "' (expected full or MIN-MAX, the widths in pixels, 16 <= MIN <= MAX / 2, " +
+                                 "e.g. 427-960)");
+  };
+  const std::size_t dash = value.find('-');
+  if (dash == std::string::npos) throw fail();
+  int widths[2] = {0, 0};
+  const std::string parts[2] = {value.substr(0, dash), value.substr(dash + 1)};
+  for (int i = 0; i < 2; ++i) {
+    std::size_t used = 0;
+    try {
+      widths[i] = std::stoi(parts[i], &used);
+    } catch (const std::exception&) {
+      throw fail();
+    }
+    if (used == 0 || used != parts[i].size() || parts[i][0] == '-' || parts[i][0] == '+') throw fail();
   }
-  if (used == 0 || used != value.size() || width < 64 || width > 100000)
-    throw std::invalid_argument("'" + value + "' (expected full or a width in pixels, 64-100000)");
-  return width;
+  if (widths[0] < 16 || widths[1] > 100000 || 2 * widths[0] > widths[1]) throw fail();
+  return {widths[0], widths[1]};
 }
 
 const std::vector<std::pair<std::string, Setter>>& setters() {
@@ -57,7 +67,9 @@ const std::vector<std::pair<std::string, Setter>>& setters() {
       {"keyframe-before-loss",
        [](FrontendOptions& o, const std::string& v) { o.keyframe_before_loss = secondOfTwo(v, "off", "on"); }},
       {"feature-width",
-       [](FrontendOptions& o, const std::string& v) { o.features.max_working_width = parseFeatureWidth(v); }},
+       [](FrontendOptions& o, const std::string& v) {
+         std::tie(o.features.min_working_width, o.features.max_working_width) = parseFeatureWidths(v);
+       }},
       {"dense-odometry",
        [](FrontendOptions& o, const std::string& v) { o.dense_odometry.use = parseDenseOdometryUse(v); }},
       {"dense-odometry-kind",

@@ -52,6 +52,12 @@ struct FeatureExtractorOptions {
   /// depth) it cut fr3 dark from 3.8 to 1.2 cm and fr3 blurred from 2.0 to 1.0 cm, fr1's rows by 0.05-0.13 cm, and
   /// the median time by a third; the synthetic rows lost 0.01-0.03 cm (docs/frontend_generalisation.md).
   int max_working_width = 960;
+  /// Images narrower than this are doubled (bilinear) until they are not, alike: a 320x240 sensor's frame is worked
+  /// on at 640x480, its 31-pixel ORB border taking 21 % of the image instead of 40 %. 0: never enlarged (before
+  /// 2026-11-27, evening). On 320x240 variants of fr1, fr3 and the synthetic room (plain, Kinect-like, dark) it cut
+  /// 8 of the 9 rows (synthetic 0.36 -> 0.14 cm, fr3 Kinect-like 1.91 -> 0.90, fr1 Kinect-like 0.73 -> 0.61), fr3
+  /// plain 1.08 -> 1.21 within its scatter (docs/frontend_generalisation.md). At most max_working_width / 2.
+  int min_working_width = 427;
 };
 
 struct ExtractedFeatures {
@@ -77,7 +83,8 @@ class FeatureExtractor {
   /// is the intensity centroid angle, as ORB's own detector computes it, so
   /// the descriptors are rotated BRIEF. Keypoints ORB cannot describe are
   /// dropped with their rows. Deterministic; keypoints come strongest first.
-  /// Images wider than max_working_width are worked on halved (see there); the keypoints are in `gray`'s pixels.
+  /// Images wider than max_working_width are worked on halved, narrower than min_working_width doubled (see there);
+  /// the keypoints are in `gray`'s pixels.
   /// Throws std::invalid_argument for an empty image or one that is not CV_8UC1.
   ExtractedFeatures extract(const cv::Mat& gray) const;
 
