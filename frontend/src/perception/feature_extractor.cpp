@@ -215,7 +215,7 @@ ExtractedFeatures FeatureExtractor::extract(const cv::Mat& gray) const {
     throw std::invalid_argument("FeatureExtractor::extract: needs an 8-bit single-channel image, got type " +
                                 cv::typeToString(gray.type()));
   const int min_width = options_.min_working_width, max_width = options_.max_working_width;
-  const bool narrow = min_width > 0 && gray.cols < min_width, wide = max_width > 0 && gray.cols > max_width;
+  const bool narrow = min_width > 0 && gray.cols<min_width, wide = max_width> 0 && gray.cols > max_width;
   if (!narrow && !wide) return extractAtWorkingSize(gray);
   cv::Mat working = gray;
   while (min_width > 0 && working.cols < min_width)  // enlarged bilinearly: no detail is made up, none lost

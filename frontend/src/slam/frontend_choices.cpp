@@ -24,8 +24,8 @@ bool secondOfTwo(const std::string& value, const std::string& first, const std::
 std::pair<int, int> parseFeatureWidths(const std::string& value) {
   if (value == "full") return {0, 0};
   const auto fail = [&] {
-    return std::invalid_argument("'" + value + "' (expected full or MIN-MAX, the widths in pixels, 16 <= MIN <= MAX / 2, " +
-                                 "e.g. 427-960)");
+    return std::invalid_argument(
+        "'" + value + "' (expected full or MIN-MAX, the widths in pixels, 16 <= MIN <= MAX / 2, " + "e.g. 427-960)");
   };
   const std::size_t dash = value.find('-');
   if (dash == std::string::npos) throw fail();
