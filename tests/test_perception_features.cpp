@@ -259,7 +259,8 @@ TEST(FeatureExtractor, AWideFrameIsWorkedOnHalvedAndItsKeypointsGivenInItsPixels
 }
 
 // A frame narrower than min_working_width is worked on doubled (bilinear): a 320x240 frame gives the features of its
-// 640x480 enlargement, their keypoints in its own pixels.
+// 640x480 enlargement, with the corner-response floor quartered as its gradients are halved, their keypoints in its
+// own pixels.
 TEST(FeatureExtractor, ANarrowFrameIsWorkedOnDoubledAndItsKeypointsGivenInItsPixels) {
   WEIGHTED_ICP_REQUIRE_FILE(fr3Dir() / "rgb.txt");
   cv::Mat narrow, enlarged;
@@ -267,8 +268,11 @@ TEST(FeatureExtractor, ANarrowFrameIsWorkedOnDoubledAndItsKeypointsGivenInItsPix
   cv::resize(narrow, enlarged, cv::Size(640, 480), 0.0, 0.0, cv::INTER_LINEAR);
   FeatureExtractorOptions full;
   full.min_working_width = full.max_working_width = 0;
-  const ExtractedFeatures doubled = FeatureExtractor().extract(narrow),
-                          expected = FeatureExtractor(full).extract(enlarged);
+  FeatureExtractorOptions enlarged_floor = full;
+  enlarged_floor.min_corner_response = full.min_corner_response / 4.0;
+  const ExtractedFeatures doubled = FeatureExtractor().extract(narrow);
+  const ExtractedFeatures expected = FeatureExtractor(enlarged_floor).extract(enlarged);
+  EXPECT_FALSE(sameFeatures(FeatureExtractor(full).extract(enlarged), expected)) << "the floor decides nothing here";
   ASSERT_GT(expected.keypoints.size(), 300u);
   ASSERT_EQ(doubled.keypoints.size(), expected.keypoints.size());
   for (std::size_t i = 0; i < expected.keypoints.size(); ++i)

@@ -194,10 +194,12 @@ FeatureExtractor::FeatureExtractor(FeatureExtractorOptions options) : options_(o
   orb_ = cv::ORB::create(options_.max_features, 1.2f, 1, kOrbBorder, 0, 2, cv::ORB::HARRIS_SCORE, kOrbPatchSize);
 }
 
-std::vector<cv::KeyPoint> FeatureExtractor::detectBucketed(const cv::Mat& gray) const {
+std::vector<cv::KeyPoint> FeatureExtractor::detectBucketed(const cv::Mat& gray, double response_scale) const {
   const cv::Rect interior(kOrbBorder, kOrbBorder, gray.cols - 2 * kOrbBorder, gray.rows - 2 * kOrbBorder);
   if (interior.width <= 0 || interior.height <= 0) return {};
-  const std::vector<Corner> spread = spreadCorners(cornersPerCell(gray, interior, options_), gray.size(), options_);
+  FeatureExtractorOptions options = options_;
+  options.min_corner_response *= response_scale;
+  const std::vector<Corner> spread = spreadCorners(cornersPerCell(gray, interior, options), gray.size(), options);
   std::vector<cv::Point2f> points;
   points.reserve(spread.size());
   for (const Corner& corner : spread) points.push_back(corner.pt);
@@ -218,11 +220,17 @@ ExtractedFeatures FeatureExtractor::extract(const cv::Mat& gray) const {
   const bool narrow = min_width > 0 && gray.cols<min_width, wide = max_width> 0 && gray.cols > max_width;
   if (!narrow && !wide) return extractAtWorkingSize(gray);
   cv::Mat working = gray;
-  while (min_width > 0 && working.cols < min_width)  // enlarged bilinearly: no detail is made up, none lost
+  // Enlarged bilinearly: no detail made up, none lost, but every gradient halved, so each corner's response (the
+  // gradient matrix's smaller eigenvalue) quartered: the response floor follows, or the corners of a 640x480 frame
+  // would not be found in a 320x240 one's enlargement (and the frames would hover at the equalisation threshold).
+  double response_scale = 1.0;
+  while (min_width > 0 && working.cols < min_width) {
     cv::resize(working, working, cv::Size(working.cols * 2, working.rows * 2), 0.0, 0.0, cv::INTER_LINEAR);
+    response_scale *= 0.25;
+  }
   while (max_width > 0 && working.cols > max_width && working.cols >= 2 && working.rows >= 2)
     cv::resize(working, working, cv::Size(working.cols / 2, working.rows / 2), 0.0, 0.0, cv::INTER_AREA);
-  ExtractedFeatures features = extractAtWorkingSize(working);
+  ExtractedFeatures features = extractAtWorkingSize(working, response_scale);
   // Working pixel u spans input pixels [u s, (u + 1) s): its centre is (u + 0.5) s - 0.5.
   const float sx = static_cast<float>(gray.cols) / static_cast<float>(working.cols);
   const float sy = static_cast<float>(gray.rows) / static_cast<float>(working.rows);
@@ -234,14 +242,14 @@ ExtractedFeatures FeatureExtractor::extract(const cv::Mat& gray) const {
   return features;
 }
 
-ExtractedFeatures FeatureExtractor::extractAtWorkingSize(const cv::Mat& gray) const {
+ExtractedFeatures FeatureExtractor::extractAtWorkingSize(const cv::Mat& gray, double response_scale) const {
   ExtractedFeatures features;
   cv::Mat image = gray;
-  features.keypoints = detectBucketed(image);
+  features.keypoints = detectBucketed(image, response_scale);
   if (options_.equalization != EqualizationMethod::None &&
       static_cast<int>(features.keypoints.size()) < options_.min_features_before_clahe) {
     image = equalizeHistogram(gray, options_.equalization, options_.clahe);
-    features.keypoints = detectBucketed(image);
+    features.keypoints = detectBucketed(image, response_scale);
     features.used_clahe = true;
   }
   // Equalisation finds corners; descriptors compare with the map's, so by default they see the frame as it is.

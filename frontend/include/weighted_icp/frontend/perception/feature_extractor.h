@@ -91,9 +91,11 @@ class FeatureExtractor {
   const FeatureExtractorOptions& options() const { return options_; }
 
  private:
-  std::vector<cv::KeyPoint> detectBucketed(const cv::Mat& gray) const;
+  /// @param response_scale min_corner_response is multiplied by it (1 / 4 per doubling of the frame)
+  std::vector<cv::KeyPoint> detectBucketed(const cv::Mat& gray, double response_scale = 1.0) const;
   /// extract() on an image of the working size.
-  ExtractedFeatures extractAtWorkingSize(const cv::Mat& gray) const;
+  /// @param response_scale as for detectBucketed
+  ExtractedFeatures extractAtWorkingSize(const cv::Mat& gray, double response_scale = 1.0) const;
 
   FeatureExtractorOptions options_;
   cv::Ptr<cv::ORB> orb_;
