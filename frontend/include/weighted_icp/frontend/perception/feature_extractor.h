@@ -53,10 +53,11 @@ struct FeatureExtractorOptions {
   /// the median time by a third; the synthetic rows lost 0.01-0.03 cm (docs/frontend_generalisation.md).
   int max_working_width = 960;
   /// Images narrower than this are doubled (bilinear) until they are not, alike: a 320x240 sensor's frame is worked
-  /// on at 640x480, its 31-pixel ORB border taking 21 % of the image instead of 40 %. 0: never enlarged (before
-  /// 2026-11-27, evening). On 320x240 variants of fr1, fr3 and the synthetic room (plain, Kinect-like, dark) it cut
-  /// 8 of the 9 rows (synthetic 0.36 -> 0.14 cm, fr3 Kinect-like 1.91 -> 0.90, fr1 Kinect-like 0.73 -> 0.61), fr3
-  /// plain 1.08 -> 1.21 within its scatter (docs/frontend_generalisation.md). At most max_working_width / 2.
+  /// on at 640x480, its 31-pixel ORB border taking 21 % of the image instead of 40 %, and min_corner_response is
+  /// quartered per doubling (enlarging halves every gradient). 0: never enlarged (before 2026-11-27, evening). On
+  /// 320x240 variants of fr1, fr3 and the synthetic room (plain, Kinect-like, dark; three draws) it cut 8 of the 9
+  /// rows (synthetic 0.36 -> 0.14 cm, fr3 Kinect-like 1.91 -> 0.94, fr1 Kinect-like 0.73 -> 0.59) and left fr3 plain
+  /// at 1.08 (docs/frontend_generalisation.md). At most max_working_width / 2.
   int min_working_width = 427;
 };
 
