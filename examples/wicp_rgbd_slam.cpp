@@ -472,9 +472,10 @@ int main(int argc, char** argv) {
     std::string motion_timing = options.frontend.motion_per_period ? "period" : "frame";
     std::string keyframe_before_loss = options.frontend.keyframe_before_loss ? "on" : "off";
     const auto& features = options.frontend.features;
-    std::string feature_width = features.max_working_width > 0 ? std::to_string(features.min_working_width) + "-" +
-                                                                     std::to_string(features.max_working_width)
-                                                               : "full";
+    const bool own_size = features.min_working_width == 0 && features.max_working_width == 0;
+    std::string feature_width =
+        own_size ? "full"
+                 : std::to_string(features.min_working_width) + "-" + std::to_string(features.max_working_width);
     simulation::SyntheticRgbdOptions synthetic;
     po::options_description description(
         "wicp_rgbd_slam [--dataset DIR] [--camera fr1|fr2|fr3|FILE.yaml] [--first-frame N] [--max-frames N]\n"
@@ -603,7 +604,8 @@ int main(int argc, char** argv) {
          "segment's bridge to find; off: as before 2026-11-27 (afternoon)")
         ("feature-width", po::value(&feature_width)->default_value(feature_width),
          "MIN-MAX: frames narrower than MIN pixels are doubled, wider than MAX halved (until they are not) for "
-         "finding and describing features, the keypoints kept in the frame's pixels; full: every frame at its own size")
+         "finding and describing features, the keypoints kept in the frame's pixels (0: never); full: every frame at "
+         "its own size")
         ("pnp-ransac-iterations", tools::rangedValue(&options.frontend.pnp.ransac_iterations, 1, 100000)
                                       ->default_value(options.frontend.pnp.ransac_iterations),
          "most RANSAC draws a frame's PnP makes; fewer when the inliers found already give 99 % confidence (1-100000)");

@@ -66,7 +66,15 @@ TEST(FrontendChoices, EachKeySetsItsOption) {
   setFrontendChoice(options, "feature-width", "400-800");
   EXPECT_EQ(options.features.min_working_width, 400);
   EXPECT_EQ(options.features.max_working_width, 800);
-  for (const char* wrong : {"800", "500-800", "10-800", "400-800px", "", "half", "-960", "400--800", "+400-800"})
+  setFrontendChoice(options, "feature-width", "0-960");  // halved, never doubled
+  EXPECT_EQ(options.features.min_working_width, 0);
+  EXPECT_EQ(options.features.max_working_width, 960);
+  setFrontendChoice(options, "feature-width", "427-0");  // doubled, never halved
+  EXPECT_EQ(options.features.min_working_width, 427);
+  EXPECT_EQ(options.features.max_working_width, 0);
+  setFrontendChoice(options, "feature-width", "400-800");
+  for (const char* wrong :
+       {"800", "500-800", "10-800", "0-40", "400-800px", "", "half", "-960", "400--800", "+400-800"})
     EXPECT_THROW(setFrontendChoice(options, "feature-width", wrong), std::invalid_argument) << wrong;
   EXPECT_EQ(options.features.max_working_width, 800);
 }

@@ -20,12 +20,15 @@ bool secondOfTwo(const std::string& value, const std::string& first, const std::
   return value == second;
 }
 
-/// "full" (every frame at its own size) or "MIN-MAX", the widths in pixels features are found at (64-100000).
+/// "full" (every frame at its own size) or "MIN-MAX", the widths in pixels features are found between: MIN 0 (never
+/// doubled) or 16 or more, MAX 0 (never halved) or 64-100000, MIN at most MAX / 2 (FeatureExtractorOptions).
 std::pair<int, int> parseFeatureWidths(const std::string& value) {
   if (value == "full") return {0, 0};
   const auto fail = [&] {
     return std::invalid_argument(
-        "'" + value + "' (expected full or MIN-MAX, the widths in pixels, 16 <= MIN <= MAX / 2, " + "e.g. 427-960)");
+        "'" + value +
+        "' (expected full or MIN-MAX in pixels: MIN 0 (never doubled) or >= 16, MAX 0 (never halved) or 64-100000, "
+        "MIN at most MAX / 2; e.g. 427-960)");
   };
   const std::size_t dash = value.find('-');
   if (dash == std::string::npos) throw fail();
@@ -40,7 +43,8 @@ std::pair<int, int> parseFeatureWidths(const std::string& value) {
     }
     if (used == 0 || used != parts[i].size() || parts[i][0] == '-' || parts[i][0] == '+') throw fail();
   }
-  if (widths[0] < 16 || widths[1] > 100000 || 2 * widths[0] > widths[1]) throw fail();
+  const int min = widths[0], max = widths[1];
+  if ((min != 0 && min < 16) || (max != 0 && (max < 64 || max > 100000)) || (max != 0 && 2 * min > max)) throw fail();
   return {widths[0], widths[1]};
 }
 
