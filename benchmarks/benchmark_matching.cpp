@@ -182,15 +182,9 @@ void registerBenchmarks() {
         ->MeasureProcessCPUTime();
     // A depth camera of half the colour camera's resolution (each depth pixel drawn over 3 x 3 colour pixels).
     PinholeCamera half = camera;
-    DepthCamera& sensor = *half.unregistered_depth;
-    sensor = {camera.fx / 2,
-              camera.fy / 2,
-              (camera.cx + 0.5) / 2 - 0.5,
-              (camera.cy + 0.5) / 2 - 0.5,
-              sensor.translation_m,
-              sensor.rotation_rad,
-              camera.width / 2,
-              camera.height / 2};
+    half.unregistered_depth = half.unregistered_depth->resampled(0.5, 0.5);
+    half.unregistered_depth->width = camera.width / 2;
+    half.unregistered_depth->height = camera.height / 2;
     cv::Mat half_depth;
     cv::resize(depth, half_depth, half.depthImageSize(), 0.0, 0.0, cv::INTER_NEAREST);
     for (const auto& [name, function] :

@@ -110,6 +110,26 @@ TEST(Camera, ProjectionJacobianMatchesFiniteDifferences) {
   }
 }
 
+// A depth camera's image resampled: a pixel centre keeps its ray (the centre of old pixel u is new pixel
+// (u + 0.5) s - 0.5), the pose and the image size are untouched.
+TEST(Camera, AResampledDepthCameraKeepsEachPixelCentresRay) {
+  const DepthCamera depth{580.0, 581.0, 314.0, 236.0, {0.025, 0.0, 0.0}, {0.0, 0.01, 0.0}, 640, 480};
+  const DepthCamera half = depth.resampled(0.5, 0.5);
+  for (const double u : {0.0, 100.0, 639.0}) {
+    const double new_u = (u + 0.5) * 0.5 - 0.5;
+    EXPECT_NEAR((new_u - half.cx) / half.fx, (u - depth.cx) / depth.fx, 1e-12);
+    EXPECT_NEAR((new_u - half.cy) / half.fy, (u - depth.cy) / depth.fy, 1e-12);
+  }
+  EXPECT_EQ(half.translation_m, depth.translation_m);
+  EXPECT_EQ(half.rotation_rad, depth.rotation_rad);
+  EXPECT_EQ(half.width, 640);
+  const DepthCamera wider = depth.resampled(2.0, 1.0);
+  EXPECT_EQ(wider.fx, 1160.0);
+  EXPECT_EQ(wider.fy, 581.0);
+  EXPECT_EQ(wider.cx, 628.5);
+  EXPECT_EQ(wider.cy, 236.0);
+}
+
 TEST(Skew, IsTheCrossProductMatrix) {
   const Eigen::Vector3d v(0.5, -2.0, 3.0), w(-1.0, 0.25, 4.0);
   EXPECT_NEAR((skew(v) * w - v.cross(w)).norm(), 0.0, 1e-12);

@@ -16,6 +16,15 @@ Eigen::Isometry3d DepthCamera::depthInColor() const {
   return pose;
 }
 
+DepthCamera DepthCamera::resampled(double sx, double sy) const {
+  DepthCamera result = *this;
+  result.fx *= sx;
+  result.fy *= sy;
+  result.cx = (cx + 0.5) * sx - 0.5;
+  result.cy = (cy + 0.5) * sy - 0.5;
+  return result;
+}
+
 cv::Size PinholeCamera::depthImageSize() const {
   if (unregistered_depth && unregistered_depth->width > 0 && unregistered_depth->height > 0)
     return {unregistered_depth->width, unregistered_depth->height};

@@ -129,17 +129,6 @@ cv::Mat zoomImage(const cv::Mat& image, const PinholeCamera& camera, double scal
   return zoomed;
 }
 
-namespace {
-/// The depth camera's intrinsics for its image resized by sx (columns) and sy (rows): pixel u spans [u - 0.5,
-/// u + 0.5], which the new grid covers as [(u - 0.5) s, (u + 0.5) s].
-void scaleIntrinsics(DepthCamera& depth, double sx, double sy) {
-  depth.fx *= sx;
-  depth.fy *= sy;
-  depth.cx = (depth.cx + 0.5) * sx - 0.5;
-  depth.cy = (depth.cy + 0.5) * sy - 0.5;
-}
-}  // namespace
-
 PinholeCamera resizedCamera(const PinholeCamera& camera, double scale) {
   if (!(scale > 0.0) || !std::isfinite(scale))
     throw std::invalid_argument("resizedCamera: scale must be > 0, got " + std::to_string(scale));
@@ -164,10 +153,10 @@ PinholeCamera resizedCamera(const PinholeCamera& camera, double scale) {
       const cv::Size old_size = camera.depthImageSize();
       depth.width = std::max(1, static_cast<int>(std::lround(old_size.width * scale)));
       depth.height = std::max(1, static_cast<int>(std::lround(old_size.height * scale)));
-      scaleIntrinsics(depth, static_cast<double>(depth.width) / old_size.width,
-                      static_cast<double>(depth.height) / old_size.height);
+      depth = depth.resampled(static_cast<double>(depth.width) / old_size.width,
+                              static_cast<double>(depth.height) / old_size.height);
     } else {
-      scaleIntrinsics(depth, sx, sy);
+      depth = depth.resampled(sx, sy);
     }
   }
   return resized;
@@ -187,8 +176,8 @@ PinholeCamera depthResizedCamera(const PinholeCamera& camera, double scale) {
     throw std::invalid_argument("depthResizedCamera: " + std::to_string(old_size.width) + "x" +
                                 std::to_string(old_size.height) + " times " + std::to_string(scale) +
                                 " is smaller than 16x16 pixels");
-  scaleIntrinsics(depth, static_cast<double>(depth.width) / old_size.width,
-                  static_cast<double>(depth.height) / old_size.height);
+  depth = depth.resampled(static_cast<double>(depth.width) / old_size.width,
+                          static_cast<double>(depth.height) / old_size.height);
   return resized;
 }
 

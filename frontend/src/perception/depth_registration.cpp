@@ -132,22 +132,20 @@ void checkInputs(const char* function, const cv::Mat& depth, const PinholeCamera
 
 cv::Mat registerDepthWithOpenCv(const cv::Mat& depth, const PinholeCamera& camera) {
   checkInputs("registerDepthWithOpenCv", depth, camera);
-  DepthCamera sensor = *camera.unregistered_depth;
   // registerDepth reads the depth image over the output's size (OpenCV 4.6: a smaller one is read out of bounds, a
   // larger one only in part): a depth image of another size is first resized to the colour image's (nearest), its
   // intrinsics with it.
+  const cv::Size colour_size(camera.width, camera.height);
+  const bool resample = depth.size() != colour_size;
+  const DepthCamera sensor = resample
+                                 ? camera.unregistered_depth->resampled(static_cast<double>(camera.width) / depth.cols,
+                                                                        static_cast<double>(camera.height) / depth.rows)
+                                 : *camera.unregistered_depth;
   cv::Mat measured;
-  if (depth.cols != camera.width || depth.rows != camera.height) {
-    cv::resize(depth, measured, cv::Size(camera.width, camera.height), 0.0, 0.0, cv::INTER_NEAREST);
-    const double sx = static_cast<double>(camera.width) / depth.cols,
-                 sy = static_cast<double>(camera.height) / depth.rows;
-    sensor.fx *= sx;
-    sensor.fy *= sy;
-    sensor.cx = (sensor.cx + 0.5) * sx - 0.5;
-    sensor.cy = (sensor.cy + 0.5) * sy - 0.5;
-  } else {
+  if (resample)
+    cv::resize(depth, measured, colour_size, 0.0, 0.0, cv::INTER_NEAREST);
+  else
     measured = depth.clone();
-  }
   const cv::Matx33f depth_matrix(static_cast<float>(sensor.fx), 0.0f, static_cast<float>(sensor.cx), 0.0f,
                                  static_cast<float>(sensor.fy), static_cast<float>(sensor.cy), 0.0f, 0.0f, 1.0f);
   cv::Matx33f color_matrix;
@@ -159,8 +157,8 @@ cv::Mat registerDepthWithOpenCv(const cv::Mat& depth, const PinholeCamera& camer
   cv::Mat coefficients, registered;
   camera.distortionCoefficients().convertTo(coefficients, CV_32F);
   measured.setTo(std::numeric_limits<float>::quiet_NaN(), ~(measured > 0.0f));  // a float image's "no depth"
-  cv::rgbd::registerDepth(depth_matrix, color_matrix, coefficients, depth_to_color, measured,
-                          cv::Size(camera.width, camera.height), registered, true);
+  cv::rgbd::registerDepth(depth_matrix, color_matrix, coefficients, depth_to_color, measured, colour_size, registered,
+                          true);
   registered.setTo(0.0f, registered != registered);
   return registered;
 }

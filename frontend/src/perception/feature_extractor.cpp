@@ -217,7 +217,8 @@ ExtractedFeatures FeatureExtractor::extract(const cv::Mat& gray) const {
     throw std::invalid_argument("FeatureExtractor::extract: needs an 8-bit single-channel image, got type " +
                                 cv::typeToString(gray.type()));
   const int min_width = options_.min_working_width, max_width = options_.max_working_width;
-  const bool narrow = min_width > 0 && gray.cols<min_width, wide = max_width> 0 && gray.cols > max_width;
+  const bool narrow = min_width > 0 && gray.cols < min_width;
+  const bool wide = max_width > 0 && gray.cols > max_width;
   if (!narrow && !wide) return extractAtWorkingSize(gray);
   cv::Mat working = gray;
   // Enlarged bilinearly: no detail made up, none lost, but every gradient halved, so each corner's response (the

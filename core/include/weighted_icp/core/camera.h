@@ -27,6 +27,12 @@ struct DepthCamera {
   /// @brief The depth camera's pose in the colour camera's frame (maps depth-camera coordinates to colour-camera
   /// coordinates).
   Eigen::Isometry3d depthInColor() const;
+  /// @brief Its intrinsics for its image resampled by sx (columns) and sy (rows): old pixel u spans [u - 0.5, u + 0.5],
+  /// which the new grid covers as [(u - 0.5) s, (u + 0.5) s], so f s and (c + 0.5) s - 0.5 (cv::resize's mapping).
+  /// The pose and the image size (width, height) are left to the caller.
+  /// @param sx new width / old
+  /// @param sy new height / old
+  DepthCamera resampled(double sx, double sy) const;
 };
 
 /// @brief A pinhole RGB-D camera: intrinsics, distortion and depth scale.
