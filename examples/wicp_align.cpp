@@ -15,6 +15,7 @@
 
 #include "plotting.h"
 #include "tool_support.h"
+#include "up_axis_option.h"
 #include "weighted_icp/io/map_format.h"
 #include "weighted_icp/registration/global_landmark_alignment.h"
 #include "weighted_icp/registration/landmark_alignment.h"
@@ -28,6 +29,8 @@ namespace {
 /// @brief What the command line asks for.
 struct AlignCommand {
   std::string source_path, target_path, strategy_name = "covariance", displacement_text, plot_path;
+  std::string up_axis_text = "auto";
+  tools::UpAxisOption up_axis;  // --up-axis, parsed with the command line
   AlignmentSettings settings;
   std::size_t min_observations = 2;
   bool global = false;
@@ -76,6 +79,10 @@ bool parseCommand(int argc, char** argv, AlignCommand& c) {
        "the previous iteration's: same pose to float rounding, fewer iterations; docs/performance.md)")
       ("global", po::bool_switch(&c.global), "find the start from geometry alone, any yaw and translation, partial "
                                               "overlap allowed (docs/global_alignment.md); implies --refine")
+      ("up-axis", po::value(&c.up_axis_text)->default_value(c.up_axis_text),
+       "with --global, the axis the search rotates about: auto (both maps' cameras level about z within 15 deg: z; "
+       "otherwise each map levelled by its own cameras, as maps written in a first camera's frame need), z, or "
+       "\"X Y Z\" for both maps")
       ("threads", tools::rangedValue(&c.settings.threads, 0u, 1024u)->default_value(c.settings.threads),
        "search threads, 0 = all (at most 1024)")
       ("json", po::bool_switch(&c.json), "print the result as one JSON object on the last line of stdout")
@@ -99,6 +106,12 @@ bool parseCommand(int argc, char** argv, AlignCommand& c) {
   }
   c.settings.k = neighboursFor(c.strategy, c.settings.k);
   if (c.global) c.settings.refine = true;
+  if (!vm["up-axis"].defaulted() && !c.global) throw po::error("--up-axis applies only with --global");
+  try {
+    c.up_axis = tools::parseUpAxisOption(c.up_axis_text);
+  } catch (const std::invalid_argument& e) {
+    throw po::error(std::string("--up-axis: ") + e.what());
+  }
   return true;
 }
 
@@ -118,16 +131,24 @@ AlignInputs readInputs(const AlignCommand& c) {
   return in;
 }
 
-/// @brief Runs the weighted ICP, after the global search when --global asks for it.
-AlignmentResult runAlignment(const AlignCommand& c, const AlignInputs& in, const WeightFunction& weight) {
+/// @brief Runs the weighted ICP, after the global search when --global asks for it (about the up axes
+/// --up-axis resolves to, returned in `up_axes`).
+AlignmentResult runAlignment(const AlignCommand& c, const AlignInputs& in, const WeightFunction& weight,
+                             SharedUpAxes& up_axes) {
   if (!c.global) {
     LandmarkAligner aligner(c.settings);
     aligner.setTarget(toLandmarkCloud(in.target, weight));
     return aligner.align(toLandmarkCloud(in.source, weight));
   }
-  GlobalLandmarkAligner aligner({}, c.settings);
+  const tools::ResolvedUpAxes resolved = tools::resolveUpAxes(c.up_axis, in.source, in.target);
+  up_axes = resolved.axes;
+  std::cout << "global search: " << resolved.description << '\n';
+  GlobalAlignmentSettings global;
+  global.up_axis = up_axes.target;
+  global.tilt_range_deg = up_axes.tilt_range_deg;
+  GlobalLandmarkAligner aligner(global, c.settings);
   aligner.setTarget(toLandmarkCloud(in.target, weight));
-  const GlobalLandmarkAlignmentResult both = aligner.align(toLandmarkCloud(in.source, weight));
+  const GlobalLandmarkAlignmentResult both = aligner.align(toLandmarkCloud(in.source, weight), up_axes.source);
   std::cout << "global search: " << both.global.hypotheses_refined << " hypotheses refined, inlier fraction "
             << both.global.inlier_fraction << ", distance limit " << both.global.distance_limit << " m\n";
   return both.alignment;
@@ -151,7 +172,8 @@ void printSummary(const AlignCommand& c, const AlignInputs& in, const AlignmentR
 }
 
 /// @brief The JSON contract (see the top of this file): one object on the last line of stdout.
-void printJson(const AlignCommand& c, const AlignInputs& in, const AlignmentResult& result) {
+void printJson(const AlignCommand& c, const AlignInputs& in, const AlignmentResult& result,
+               const SharedUpAxes& up_axes) {
   tools::JsonObject json;
   json.add("transformation", Eigen::MatrixXd(result.transformation))
       .add("fitness_score", result.fitness_score)
@@ -167,6 +189,7 @@ void printJson(const AlignCommand& c, const AlignInputs& in, const AlignmentResu
       .add("k", static_cast<std::size_t>(c.settings.k))
       .add("source_landmarks", in.source.landmarks.size())
       .add("target_landmarks", in.target.landmarks.size());
+  if (c.global) json.add("up_axis_source", up_axes.source).add("up_axis_target", up_axes.target);
   std::cout << json.str() << std::endl;
 }
 
@@ -178,9 +201,10 @@ int main(int argc, char** argv) {
     if (!parseCommand(argc, argv, command)) return 0;
     const AlignInputs inputs = readInputs(command);
     const WeightFunction weight = weightFunction(command.strategy);
-    const AlignmentResult result = runAlignment(command, inputs, weight);
+    SharedUpAxes up_axes;
+    const AlignmentResult result = runAlignment(command, inputs, weight, up_axes);
     printSummary(command, inputs, result);
-    if (command.json) printJson(command, inputs, result);
+    if (command.json) printJson(command, inputs, result, up_axes);
     if (!command.plot_path.empty())
       tools::plotAlignment("wicp_align", inputs.source, inputs.target, weight, result.transformation, command.plot_path,
                            command.source_path + " onto " + command.target_path + " (" + toString(command.strategy) +

@@ -7,6 +7,12 @@
 // of each one's frames is shared; with --disjoint the landmarks both saw are
 // dealt out by id parity, so no landmark is in both. --halves adds the
 // alternate-landmark halves of the whole map. B is displaced and aligned onto A.
+//
+// Displacements are rotations about the world's z axis and translations in its
+// xy plane. The world is the map's own frame unless --camera-frame (the map
+// re-expressed in its first camera's frame, as a SLAM without gravity writes
+// it) or --map-pose (the map's frame placed in a z-up world, e.g. by ground
+// truth) says otherwise: then the search's --up-axis matters.
 
 #include <chrono>
 #include <cmath>
@@ -26,6 +32,7 @@
 #include <pcl/registration/sample_consensus_prerejective.h>
 
 #include "tool_support.h"
+#include "up_axis_option.h"
 #include "weighted_icp/core/statistics.h"
 #include "weighted_icp/io/map_format.h"
 #include "weighted_icp/registration/global_landmark_alignment.h"
@@ -116,9 +123,30 @@ std::vector<Pair> makePairs(const LandmarkMap& map, const std::vector<double>& o
   return pairs;
 }
 
+/// @brief "tx ty tz qx qy qz qw" as a pose; a command-line error naming --map-pose otherwise.
+Eigen::Isometry3d parseTumPose(const std::string& text) {
+  std::istringstream in(text);
+  double v[7];
+  std::string rest;
+  for (double& x : v)
+    if (!(in >> x) || !std::isfinite(x))
+      throw po::error("--map-pose: expected \"tx ty tz qx qy qz qw\", got '" + text + "'");
+  if (in >> rest) throw po::error("--map-pose: expected 7 numbers, got more in '" + text + "'");
+  const Eigen::Quaterniond q(v[6], v[3], v[4], v[5]);
+  if (std::abs(q.norm() - 1.0) > 1e-3) throw po::error("--map-pose: the quaternion is not a unit one");
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.linear() = q.normalized().toRotationMatrix();
+  pose.translation() = Eigen::Vector3d(v[0], v[1], v[2]);
+  return pose;
+}
+
 /// @brief What the command line asks for.
 struct GlobalSweepCommand {
-  std::string map_path, method = "global", perturb_text;
+  std::string map_path, method = "global", perturb_text, map_pose_text, up_axis_text = "auto";
+  bool camera_frame = false;
+  tools::UpAxisOption up_axis;
+  /// The map's frame in the z-up world displacements are made in (--camera-frame, --map-pose).
+  Eigen::Isometry3d world_from_map = Eigen::Isometry3d::Identity();
   double fpfh_radius_scale = 1.0;
   bool synthetic = false, disjoint = false, halves = false, verbose = false;
   std::uint64_t seed = 1;
@@ -165,6 +193,13 @@ bool parseCommand(int argc, char** argv, GlobalSweepCommand& c) {
       ("perturb", po::value(&c.perturb_text), "method truth: start this far from the truth")
       ("fpfh-radius-scale", tools::rangedValue(&c.fpfh_radius_scale, 0.1, 100.0)->default_value(c.fpfh_radius_scale),
        "methods fpfh*: multiply the normal (2 cells) and feature (5 cells) radii by this (0.1-100)")
+      ("up-axis", po::value(&c.up_axis_text)->default_value(c.up_axis_text), "as wicp_align --global: auto, z or \"X Y Z\"")
+      ("camera-frame", po::bool_switch(&c.camera_frame),
+       "re-express the map in its first camera's frame (as a SLAM without gravity writes it); displacements stay "
+       "rotations about the original z axis")
+      ("map-pose", po::value(&c.map_pose_text),
+       "the map's frame in a z-up world, \"tx ty tz qx qy qz qw\" (a TUM trajectory line's order, e.g. the ground "
+       "truth of the map's first frame): displacements are rotations about that world's z axis")
       ("verbose,v", po::bool_switch(&c.verbose), "one line per case");
   // clang-format on
   po::variables_map vm;
@@ -179,20 +214,34 @@ bool parseCommand(int argc, char** argv, GlobalSweepCommand& c) {
   c.yaws = parseList(yaws_text, "yaws");
   c.xys = parseXyList(xy_text);
   if (!c.perturb_text.empty()) Displacement::parse(c.perturb_text);  // refused now, not after the first pair
+  try {
+    c.up_axis = tools::parseUpAxisOption(c.up_axis_text);
+  } catch (const std::invalid_argument& e) {
+    throw po::error(std::string("--up-axis: ") + e.what());
+  }
+  if (c.camera_frame && !c.map_pose_text.empty()) throw po::error("give at most one of --camera-frame and --map-pose");
+  if (!c.map_pose_text.empty()) c.world_from_map = parseTumPose(c.map_pose_text);
   return true;
 }
 
-/// @brief The map pairs are cut from: the file, or a synthetic session's estimated map.
-LandmarkMap loadMap(const GlobalSweepCommand& c) {
+/// @brief The map pairs are cut from: the file, or a synthetic session's estimated map; with --camera-frame
+/// re-expressed in its first camera's frame (and `c.world_from_map` set to that camera's pose).
+LandmarkMap loadMap(GlobalSweepCommand& c) {
+  LandmarkMap map;
   if (!c.synthetic) {
-    LandmarkMap map = io::readLandmarkMap(c.map_path);
+    map = io::readLandmarkMap(c.map_path);
     if (map.frames.empty()) throw std::runtime_error(c.map_path + ": no frames to cut mini-maps from");
-    return map;
+  } else {
+    simulation::SyntheticSessionOptions session;
+    session.seed = c.seed;
+    session.num_landmarks = c.landmarks;
+    map = simulation::generateSyntheticSession(session).estimated;
   }
-  simulation::SyntheticSessionOptions session;
-  session.seed = c.seed;
-  session.num_landmarks = c.landmarks;
-  return simulation::generateSyntheticSession(session).estimated;
+  if (c.camera_frame) {
+    c.world_from_map = map.frames.begin()->second;
+    map.transform(c.world_from_map.inverse());
+  }
+  return map;
 }
 
 /// @brief PCL's FPFH features matched by SampleConsensusPrerejective: the coarse stage issue #6 names as the
@@ -270,18 +319,20 @@ class FpfhCoarseAligner {
   Described target_;
 };
 
-/// @brief The aligners of one pair, each given the pair's target once.
+/// @brief The aligners of one pair, each given the pair's target once (the global one again when the target's
+/// up axis changes).
 struct PairAligners {
-  GlobalLandmarkAligner global;
+  GlobalAlignmentSettings settings;
+  LandmarkCloud::Ptr target;
+  std::unique_ptr<GlobalLandmarkAligner> global;
   LandmarkAligner icp;
   GlobalAlignment trimmed;
 
   std::unique_ptr<FpfhCoarseAligner> fpfh;  // only for --method fpfh and fpfh-trimmed
 
-  PairAligners(const GlobalAlignmentSettings& settings, const LandmarkCloud::Ptr& target, bool with_fpfh,
+  PairAligners(const GlobalAlignmentSettings& global_settings, const LandmarkCloud::Ptr& target_cloud, bool with_fpfh,
                double fpfh_radius_scale)
-      : global(settings), icp(refinedIcp()), trimmed(settings) {
-    global.setTarget(target);
+      : settings(global_settings), target(target_cloud), icp(refinedIcp()), trimmed(settings) {
     icp.setTarget(target);
     GlobalAlignment::Cloud target_xyz;
     pcl::copyPointCloud(*target, target_xyz);
@@ -292,6 +343,17 @@ struct PairAligners {
   /// GlobalAlignment's sample cell (its default: a third of the vote cell).
   static double sampleCell(const GlobalAlignmentSettings& settings) {
     return settings.sample_cell > 0.0 ? settings.sample_cell : settings.vote_cell / 3.0;
+  }
+
+  /// The global aligner searching about `target_up`, with tilts within ±tilt_range_deg.
+  GlobalLandmarkAligner& globalAbout(const Eigen::Vector3d& target_up, double tilt_range_deg) {
+    if (!global || settings.up_axis != target_up || settings.tilt_range_deg != tilt_range_deg) {
+      settings.up_axis = target_up;
+      settings.tilt_range_deg = tilt_range_deg;
+      global = std::make_unique<GlobalLandmarkAligner>(settings);
+      global->setTarget(target);
+    }
+    return *global;
   }
 
   static AlignmentSettings refinedIcp() {
@@ -312,13 +374,16 @@ struct CaseOutcome {
 
 /// @brief Displaces the pair's source by d and aligns it back by the chosen method.
 CaseOutcome alignCase(const GlobalSweepCommand& c, PairAligners& aligners, const Pair& pair, const Displacement& d) {
+  // d is made in the z-up world; in the map's frame it is conjugated by the map's pose there.
+  const Eigen::Isometry3d displacement = c.world_from_map.inverse() * d.toIsometry() * c.world_from_map;
   LandmarkMap source = pair.source;
-  source.transform(d.toIsometry());
+  source.transform(displacement);
   const LandmarkCloud::Ptr cloud = toLandmarkCloud(source, CovarianceWeight{});
   AlignmentResult result;
   CaseOutcome outcome;
   if (c.method == "global" || c.method == "coarse") {
-    const auto r = aligners.global.align(cloud);
+    const SharedUpAxes up = tools::resolveUpAxes(c.up_axis, source, pair.target).axes;
+    const auto r = aligners.globalAbout(up.target, up.tilt_range_deg).align(cloud, up.source);
     result = r.alignment;
     outcome.inlier_fraction = r.global.inlier_fraction;
     if (c.method == "coarse") result.transformation = r.global.transformation, result.time_ms = r.global.time_ms;
@@ -338,7 +403,7 @@ CaseOutcome alignCase(const GlobalSweepCommand& c, PairAligners& aligners, const
     pcl::copyPointCloud(*cloud, xyz);
     const Eigen::Isometry3d off =
         c.perturb_text.empty() ? Eigen::Isometry3d::Identity() : Displacement::parse(c.perturb_text).toIsometry();
-    const auto r = aligners.trimmed.refine(xyz, (off * d.toIsometry().inverse()).matrix());
+    const auto r = aligners.trimmed.refine(xyz, (off * displacement.inverse()).matrix());
     result.transformation = r.transformation, result.time_ms = r.time_ms;
     outcome.inlier_fraction = r.inlier_fraction;
     std::cout << "spacing " << r.target_spacing << " limit " << r.distance_limit << " median " << r.median_residual
@@ -346,7 +411,7 @@ CaseOutcome alignCase(const GlobalSweepCommand& c, PairAligners& aligners, const
   } else {
     result = aligners.icp.align(cloud);
   }
-  const Eigen::Isometry3d truth = d.toIsometry().inverse();
+  const Eigen::Isometry3d truth = displacement.inverse();
   const Eigen::Isometry3d estimate(result.transformation);
   outcome.rotation_error_deg = rotationErrorDeg(estimate, truth);
   outcome.translation_error_m = translationError(estimate, truth);
@@ -396,6 +461,10 @@ int main(int argc, char** argv) {
     GlobalSweepCommand command;
     if (!parseCommand(argc, argv, command)) return 0;
     const LandmarkMap map = loadMap(command);
+    if (command.method == "global" || command.method == "coarse") {
+      const auto [even, odd] = map.alternateHalves();  // every frame: the whole map's cameras
+      std::cout << tools::resolveUpAxes(command.up_axis, odd, even).description << '\n';
+    }
     const auto pairs = makePairs(map, command.overlaps, command.disjoint, command.halves, command.min_observations);
     std::size_t total = 0, passed = 0, in_window = 0;
     std::vector<double> all_times;

@@ -1,5 +1,6 @@
 // wicp_align --global: the JSON contract of wicp_align, with the start found
-// from geometry alone (a yaw of 180° no local ICP recovers).
+// from geometry alone (a yaw of 180° no local ICP recovers); maps written in
+// their first camera's frame, levelled by their cameras (--up-axis auto).
 
 #include <filesystem>
 #include <string>
@@ -8,6 +9,7 @@
 
 #include "test_support.h"
 #include "tool_runner.h"
+#include "weighted_icp/io/map_format.h"
 #include "weighted_icp/registration/rigid_motion.h"
 
 namespace {
@@ -30,6 +32,42 @@ TEST(WicpAlignGlobal, RecoversYaw180AndKeepsTheJsonContract) {
   const Eigen::Isometry3d truth = weighted_icp::Displacement{1, -1.5, 0, 0, 0, 180}.toIsometry().inverse();
   EXPECT_LT(weighted_icp::rotationErrorDeg(Eigen::Isometry3d(t), truth), 2.0);
   EXPECT_LT(weighted_icp::translationError(Eigen::Isometry3d(t), truth), 0.05);
+}
+
+TEST(WicpAlignGlobal, LevelsMapsWrittenInTheirFirstCamerasFrameByTheirCameras) {
+  WEIGHTED_ICP_REQUIRE_FILE(weighted_icp::testing::realMapPath());
+  const fs::path scratch = weighted_icp::testing::scratchDir("wicp_align_global_camera_frame");
+  // The real map as a SLAM without gravity writes it: in its first camera's frame, where up is near -y.
+  weighted_icp::LandmarkMap map = weighted_icp::io::readLandmarkMap(weighted_icp::testing::realMapPath().string());
+  const Eigen::Isometry3d first = map.frames.begin()->second;
+  map.transform(first.inverse());
+  const std::string path = (scratch / "camera_frame.txt").string();
+  weighted_icp::io::writeLandmarkMap(map, path);
+  // A turn of 120° about the true up (the world's z, in the camera's frame) and 1.5 m along it.
+  const Eigen::Vector3d up = first.linear().transpose() * Eigen::Vector3d::UnitZ();
+  Eigen::Isometry3d moved = Eigen::Isometry3d::Identity();
+  moved.linear() = Eigen::AngleAxisd(120.0 * M_PI / 180.0, up).toRotationMatrix();
+  moved.translation() = 1.5 * up.unitOrthogonal();
+  weighted_icp::LandmarkMap source = map;
+  source.transform(moved);
+  const std::string source_path = (scratch / "moved.txt").string();
+  weighted_icp::io::writeLandmarkMap(source, source_path);
+
+  const auto r = weighted_icp::testing::runBuiltTool(
+      "wicp_align", "--source " + source_path + " --target " + path + " --global --json", scratch);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("each map levelled by its cameras"), std::string::npos) << r.out;
+  const std::string json = weighted_icp::testing::lastLine(r.out);
+  EXPECT_NE(json.find("\"up_axis_target\":["), std::string::npos) << json;
+  const Eigen::Matrix4d t = weighted_icp::testing::alignTransformation(json);
+  EXPECT_LT(weighted_icp::rotationErrorDeg(Eigen::Isometry3d(t), moved.inverse()), 2.0);
+  EXPECT_LT(weighted_icp::translationError(Eigen::Isometry3d(t), moved.inverse()), 0.05);
+
+  // Searched about z, as before the up axis was estimated, the same pair is not recovered.
+  const auto z = weighted_icp::testing::runBuiltTool(
+      "wicp_align", "--source " + source_path + " --target " + path + " --global --up-axis z --json", scratch);
+  const Eigen::Matrix4d tz = weighted_icp::testing::alignTransformation(weighted_icp::testing::lastLine(z.out));
+  EXPECT_GT(weighted_icp::rotationErrorDeg(Eigen::Isometry3d(tz), moved.inverse()), 2.0);
 }
 
 }  // namespace

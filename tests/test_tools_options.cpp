@@ -92,6 +92,13 @@ TEST(ToolOptions, OutOfRangeNumbersAreCommandLineErrorsNamingTheOption) {
       {"wicp_global_sweep", "--synthetic --method foo",
        "--method must be global, coarse, icp, truth, fpfh or fpfh-trimmed (got foo)"},
       {"wicp_global_sweep", "", "give exactly one of --map FILE and --synthetic"},
+      {"wicp_align", "--source a --target b --up-axis z", "--up-axis applies only with --global"},
+      {"wicp_align", "--source a --target b --global --up-axis \"0 0 0\"",
+       "--up-axis: expected auto, z or \"X Y Z\" (three finite numbers, not all zero), got '0 0 0'"},
+      {"wicp_global_sweep", "--synthetic --up-axis y", "--up-axis: expected auto, z or \"X Y Z\""},
+      {"wicp_global_sweep", "--synthetic --camera-frame --map-pose \"0 0 0 0 0 0 1\"",
+       "give at most one of --camera-frame and --map-pose"},
+      {"wicp_global_sweep", "--synthetic --map-pose \"0 0 0 0 0 0 2\"", "--map-pose: the quaternion is not a unit one"},
   };
   for (const auto& c : cases) {
     SCOPED_TRACE(std::string(c.tool) + " " + c.args);

@@ -194,6 +194,11 @@ JsonObject& JsonObject::add(const std::string& key, const Eigen::MatrixXd& value
   return *this;
 }
 
+JsonObject& JsonObject::add(const std::string& key, const Eigen::Vector3d& value) {
+  members_.emplace_back(key, "[" + number(value.x()) + "," + number(value.y()) + "," + number(value.z()) + "]");
+  return *this;
+}
+
 JsonObject& JsonObject::add(const std::string& key, const JsonObject& value) {
   members_.emplace_back(key, value.str());
   return *this;

@@ -186,6 +186,8 @@ class JsonObject {
   JsonObject& add(const std::string& key, const std::string& value);
   JsonObject& add(const std::string& key, const char* value) { return add(key, std::string(value)); }
   JsonObject& add(const std::string& key, const Eigen::MatrixXd& value);
+  /// A vector as one flat array.
+  JsonObject& add(const std::string& key, const Eigen::Vector3d& value);
   JsonObject& add(const std::string& key, const JsonObject& value);
   /// Single line, no trailing newline.
   std::string str() const;

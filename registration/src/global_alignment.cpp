@@ -273,6 +273,104 @@ std::size_t countInliers(const Points& source, const GlobalAlignment::Target& ta
   return inliers;
 }
 
+/// A hypothesis after the fine search and the trimmed ICP: where its yaw and centroid went, and its inliers.
+struct Refined {
+  Eigen::Matrix4d transformation;
+  double yaw;
+  Eigen::Vector3d translation;
+  std::size_t inliers;
+};
+
+/// The trimmed ICP's start distance, floor, shrink factor and iterations.
+struct TrimmedIcpLimits {
+  double start_distance, min_distance, shrink_factor;
+  int iterations;
+};
+
+/// A rotation about `centroid` as a 4x4 transformation.
+Eigen::Matrix4d aboutCentroid(const Eigen::Matrix3d& rotation, const Eigen::Vector3d& centroid) {
+  Eigen::Matrix4d pose = Eigen::Matrix4d::Identity();
+  pose.topLeftCorner<3, 3>() = rotation;
+  pose.topRightCorner<3, 1>() = centroid - rotation * centroid;
+  return pose;
+}
+
+/// What refining a hypothesis needs: the source (its vote sample and every point, levelled), the target, the
+/// medium and fine vote boxes, the up axis, the sample's centroid, the trimmed ICP's limits and the inlier radius.
+struct Search {
+  const Points& sample;
+  const Points& source;
+  const GlobalAlignment::Target& target;
+  VoteBox medium, fine;
+  Eigen::Vector3d axis, centroid;
+  TrimmedIcpLimits icp;
+  double inlier_distance;
+};
+
+/// One hypothesis (yaw, centroid translation) of the source first moved by `tilt`: the medium then the fine vote
+/// around it, the trimmed ICP from there on every source point, and the inliers of the result.
+Refined refineHypothesis(const Search& search, const Eigen::Matrix4d& tilt, double yaw, Eigen::Vector3d t) {
+  Points tilted;
+  tilted.reserve(search.sample.size());
+  for (const auto& p : search.sample) tilted.push_back(apply(tilt, p));
+  fineVote(tilted, search.target, search.medium, search.axis, yaw, search.centroid, t, &yaw, &t);
+  const Eigen::Matrix4d pose =
+      fineVote(tilted, search.target, search.fine, search.axis, yaw, search.centroid, t, &yaw, &t).first;
+  const TrimmedIcpLimits& icp = search.icp;
+  const TrimmedFit fit = trimmedIcp(search.source, search.target, pose * tilt, icp.start_distance, icp.min_distance,
+                                    icp.shrink_factor, icp.iterations);
+  return {fit.transformation, yaw, t,
+          countInliers(search.source, search.target, fit.transformation, search.inlier_distance)};
+}
+
+/// The tilt (a rotation about the sample's centroid within ±range about the two axes perpendicular to the up
+/// axis, in `step` steps) under which the sample, at the refined hypothesis's yaw and translation, fills one fine
+/// vote cell (yaw not searched) most.
+Eigen::Matrix4d bestTilt(const Search& search, const Refined& around, double range_deg, double step_deg) {
+  const VoteBox box{0.0,
+                    search.fine.yaw_step_deg,
+                    search.fine.window,
+                    search.fine.cell,
+                    search.fine.buckets,
+                    search.fine.bucket_size};
+  const Eigen::Vector3d e1 = search.axis.unitOrthogonal(), e2 = search.axis.cross(e1);
+  const int steps = static_cast<int>(std::floor(range_deg / step_deg + 1e-9));
+  Eigen::Matrix4d best = Eigen::Matrix4d::Identity();
+  std::size_t best_votes = 0;
+  Points tilted(search.sample.size());
+  for (int i = -steps; i <= steps; ++i)
+    for (int j = -steps; j <= steps; ++j) {
+      const Eigen::Matrix3d rotation =
+          (Eigen::AngleAxisd(i * step_deg * M_PI / 180.0, e1) * Eigen::AngleAxisd(j * step_deg * M_PI / 180.0, e2))
+              .toRotationMatrix();
+      const Eigen::Matrix4d tilt = aboutCentroid(rotation, search.centroid);
+      for (std::size_t k = 0; k < search.sample.size(); ++k) tilted[k] = apply(tilt, search.sample[k]);
+      const std::size_t votes =
+          fineVote(tilted, search.target, box, search.axis, around.yaw, search.centroid, around.translation).second;
+      if (votes > best_votes) best = tilt, best_votes = votes;
+    }
+  return best;
+}
+
+/// Rotations about the up axis (about the sample's centroid), each with its voted translations, best voted first
+/// (stable: ties keep rotation order).
+std::vector<Hypothesis> voteRotations(const Points& sample, const Eigen::Vector3f& centroid,
+                                      const GlobalAlignment::Target& target, const Eigen::Vector3d& axis,
+                                      const GlobalAlignmentSettings& s) {
+  std::vector<Hypothesis> hypotheses;
+  for (unsigned int r = 0; r < s.yaw_hypotheses; ++r) {
+    const Eigen::Matrix3d rotation = Eigen::AngleAxisd(2.0 * M_PI * r / s.yaw_hypotheses, axis).toRotationMatrix();
+    Points rotated;
+    rotated.reserve(sample.size());
+    for (const auto& p : sample) rotated.push_back((rotation * (p - centroid).cast<double>()).cast<float>());
+    for (const auto& [translation, votes] : voteTranslations(rotated, target.sample, s.vote_cell, s.peaks_per_rotation))
+      hypotheses.push_back({2.0 * M_PI * r / s.yaw_hypotheses, translation, votes});
+  }
+  std::stable_sort(hypotheses.begin(), hypotheses.end(),
+                   [](const Hypothesis& a, const Hypothesis& b) { return a.votes > b.votes; });
+  return hypotheses;
+}
+
 }  // namespace
 
 GlobalAlignment::GlobalAlignment(GlobalAlignmentSettings settings)
@@ -300,6 +398,10 @@ GlobalAlignment::GlobalAlignment(GlobalAlignmentSettings settings)
           "fine vote grids may have at most 200 cells a side");
   require(s.max_source_samples >= 3 && s.max_target_samples >= 3, "sample caps must be >= 3");
   require(s.peaks_per_rotation >= 1 && s.refined_hypotheses >= 1, "peaks and refined hypotheses must be >= 1");
+  require(std::isfinite(s.tilt_range_deg) && s.tilt_range_deg >= 0.0 && s.tilt_range_deg <= 30.0,
+          "tilt_range_deg must be in [0, 30]");
+  require(std::isfinite(s.tilt_step_deg) && s.tilt_step_deg > 0.0 && s.tilt_range_deg / s.tilt_step_deg <= 20.0,
+          "tilt_step_deg must be > 0 and at least tilt_range_deg / 20");
   require(s.hypothesis_iterations >= 1 && s.final_iterations >= 1, "iteration counts must be >= 1");
   require(std::isfinite(s.shrink_factor) && s.shrink_factor > 0.0, "shrink_factor must be > 0");
 }
@@ -333,58 +435,68 @@ void GlobalAlignment::setTarget(const Cloud& target) {
   target_ = std::move(fresh);
 }
 
-GlobalAlignmentResult GlobalAlignment::align(const Cloud& source_cloud) const {
+GlobalAlignmentResult GlobalAlignment::align(const Cloud& source_cloud, const Eigen::Vector3d& source_up_axis) const {
   if (target_->points.empty()) throw std::invalid_argument("GlobalAlignment::align: no target set");
-  const Points source = finitePoints(source_cloud, "source");
+  if (!source_up_axis.allFinite())
+    throw std::invalid_argument("GlobalAlignment::align: the source's up axis must be finite (zero: the target's)");
   const auto start = std::chrono::steady_clock::now();
   const GlobalAlignmentSettings& s = settings_;
+  // The source levelled: its own up axis turned onto the target's, so one axis serves both.
+  const Eigen::Vector3d axis = s.up_axis.normalized();
+  const Eigen::Matrix3d level =
+      source_up_axis.norm() > 0.0
+          ? Eigen::Quaterniond::FromTwoVectors(source_up_axis.normalized(), axis).toRotationMatrix()
+          : Eigen::Matrix3d::Identity();
+  Points source = finitePoints(source_cloud, "source");
+  for (auto& p : source) p = (level * p.cast<double>()).cast<float>();
   const double spacing = target_->spacing;
   const double min_distance = s.min_distance > 0.0 ? s.min_distance : 2.0 * spacing;
   const double inlier_distance = s.inlier_distance > 0.0 ? s.inlier_distance : 2.0 * spacing;
   const Points sample =
       voxelSample(source, s.sample_cell > 0.0 ? s.sample_cell : s.vote_cell / 3.0, s.max_source_samples);
 
-  // 1. Rotations about the up axis (about the sample's centroid), each with its voted translations.
+  // 1. Rotations about the up axis, each with its voted translations.
   Eigen::Vector3f centroid = Eigen::Vector3f::Zero();
   for (const auto& p : sample) centroid += p;
   centroid /= static_cast<float>(sample.size());
-  const Eigen::Vector3d axis = s.up_axis.normalized();
-  std::vector<Hypothesis> hypotheses;
-  for (unsigned int r = 0; r < s.yaw_hypotheses; ++r) {
-    const Eigen::Matrix3d rotation = Eigen::AngleAxisd(2.0 * M_PI * r / s.yaw_hypotheses, axis).toRotationMatrix();
-    Points rotated;
-    rotated.reserve(sample.size());
-    for (const auto& p : sample) rotated.push_back((rotation * (p - centroid).cast<double>()).cast<float>());
-    for (const auto& [translation, votes] :
-         voteTranslations(rotated, target_->sample, s.vote_cell, s.peaks_per_rotation)) {
-      hypotheses.push_back({2.0 * M_PI * r / s.yaw_hypotheses, translation, votes});
-    }
-  }
+  const std::vector<Hypothesis> hypotheses = voteRotations(sample, centroid, *target_, axis, s);
 
   // 2. The best-voted hypotheses, each searched finely around, refined with the tight pass on every source
-  // point and ranked by inliers (stable: ties keep vote order).
-  std::stable_sort(hypotheses.begin(), hypotheses.end(),
-                   [](const Hypothesis& a, const Hypothesis& b) { return a.votes > b.votes; });
+  // point and ranked by inliers.
+  const Search search{sample,
+                      source,
+                      *target_,
+                      {s.fine_yaw_range_deg, s.medium_yaw_step_deg, s.fine_window, s.medium_cell, &target_->buckets,
+                       target_->bucket_size},
+                      {s.medium_yaw_step_deg, s.fine_yaw_step_deg, 2.0 * s.medium_cell, s.fine_cell,
+                       &target_->small_buckets, target_->small_bucket_size},
+                      axis,
+                      centroid.cast<double>(),
+                      {2.0 * s.fine_cell, min_distance, s.shrink_factor, s.hypothesis_iterations},
+                      inlier_distance};
   const std::size_t refined = std::min<std::size_t>(hypotheses.size(), s.refined_hypotheses);
-  Eigen::Matrix4d best = Eigen::Matrix4d::Identity();
-  std::size_t best_inliers = 0;
-  const VoteBox medium{s.fine_yaw_range_deg, s.medium_yaw_step_deg, s.fine_window,
-                       s.medium_cell,        &target_->buckets,     target_->bucket_size};
-  const VoteBox fine{s.medium_yaw_step_deg, s.fine_yaw_step_deg,     2.0 * s.medium_cell,
-                     s.fine_cell,           &target_->small_buckets, target_->small_bucket_size};
-  for (std::size_t h = 0; h < refined; ++h) {
-    double yaw = hypotheses[h].yaw;
-    Eigen::Vector3d t = hypotheses[h].translation;
-    fineVote(sample, *target_, medium, axis, yaw, centroid.cast<double>(), t, &yaw, &t);
-    const Eigen::Matrix4d pose = fineVote(sample, *target_, fine, axis, yaw, centroid.cast<double>(), t).first;
-    const TrimmedFit fit =
-        trimmedIcp(source, *target_, pose, 2.0 * s.fine_cell, min_distance, s.shrink_factor, s.hypothesis_iterations);
-    const std::size_t inliers = countInliers(source, *target_, fit.transformation, inlier_distance);
-    if (h == 0 || inliers > best_inliers) best = fit.transformation, best_inliers = inliers;
-  }
+  std::vector<Refined> results;
+  for (std::size_t h = 0; h < refined; ++h)
+    results.push_back(
+        refineHypothesis(search, Eigen::Matrix4d::Identity(), hypotheses[h].yaw, hypotheses[h].translation));
+  std::stable_sort(results.begin(), results.end(),
+                   [](const Refined& a, const Refined& b) { return a.inliers > b.inliers; });
+  Refined best =
+      results.empty() ? Refined{Eigen::Matrix4d::Identity(), 0.0, Eigen::Vector3d::Zero(), 0} : results.front();
+  // 2b. Tilts, when the up axes may disagree by a few degrees (each estimated from its map's cameras): around
+  // the best few, the tilt whose fine vote is fullest, refined as above.
+  if (s.tilt_range_deg > 0.0)
+    for (std::size_t h = 0; h < std::min<std::size_t>(results.size(), s.tilted_hypotheses); ++h) {
+      const Eigen::Matrix4d tilt = bestTilt(search, results[h], s.tilt_range_deg, s.tilt_step_deg);
+      const Refined tilted = refineHypothesis(search, tilt, results[h].yaw, results[h].translation);
+      if (tilted.inliers > best.inliers) best = tilted;
+    }
 
   // 3. The winner refined on every source point.
-  GlobalAlignmentResult result = finish(source, best, 2.0 * s.fine_cell);
+  GlobalAlignmentResult result = finish(source, best.transformation, 2.0 * s.fine_cell);
+  Eigen::Matrix4d levelling = Eigen::Matrix4d::Identity();
+  levelling.topLeftCorner<3, 3>() = level;
+  result.transformation = result.transformation * levelling;  // maps the source as given
   result.hypotheses_voted = hypotheses.size();
   result.hypotheses_refined = refined;
   result.time_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();

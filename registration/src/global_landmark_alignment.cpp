@@ -24,14 +24,15 @@ void GlobalLandmarkAligner::setTarget(LandmarkCloud::ConstPtr target) {
   target_ = std::move(target);
 }
 
-GlobalLandmarkAlignmentResult GlobalLandmarkAligner::align(const LandmarkCloud::ConstPtr& source) {
+GlobalLandmarkAlignmentResult GlobalLandmarkAligner::align(const LandmarkCloud::ConstPtr& source,
+                                                           const Eigen::Vector3d& source_up_axis) {
   if (!target_) throw std::invalid_argument("GlobalLandmarkAligner::align: no target set");
   if (!source || source->empty()) throw std::invalid_argument("GlobalLandmarkAligner: source cloud is empty");
   const auto start = std::chrono::steady_clock::now();
   GlobalAlignment::Cloud xyz;
   pcl::copyPointCloud(*source, xyz);
   GlobalLandmarkAlignmentResult result;
-  result.global = global_.align(xyz);
+  result.global = global_.align(xyz, source_up_axis);
 
   AlignmentSettings icp = icp_settings_;
   icp.max_correspondence_distance = std::min(icp.max_correspondence_distance, result.global.distance_limit);

@@ -26,8 +26,10 @@ struct GlobalAlignmentSettings {
   /// Rotations tried about `up_axis`, evenly spaced over 360°: 36 is a 10° step,
   /// so the best one is at most 5° off.
   unsigned int yaw_hypotheses = 36;
-  /// The axis the maps share (gravity for maps built upright, as the paper's
-  /// and TUM's); the search does not try tilts about other axes.
+  /// The target's up axis, and the source's unless align() is given its own
+  /// (gravity for maps built upright, as the paper's and TUM's; up_axis.h
+  /// estimates it from a map's cameras); the search does not try tilts about
+  /// other axes.
   Eigen::Vector3d up_axis = Eigen::Vector3d::UnitZ();
   /// Translation vote cell. 0: 15 cm; large enough to gather the votes of a
   /// rotation up to 5° off at a metre from the centre.
@@ -54,6 +56,13 @@ struct GlobalAlignmentSettings {
   double fine_window = 0.3;
   double medium_cell = 0.05;
   double fine_cell = 0.02;
+  /// Tilts tried when the two maps' up axes may disagree (each estimated from its own cameras, up_axis.h):
+  /// around the `tilted_hypotheses` best refined hypotheses, rotations within ±tilt_range_deg about the two
+  /// axes perpendicular to the up axis in tilt_step_deg steps, the one whose fine vote is fullest refined
+  /// again. 0: none (maps sharing their up axis exactly, as two maps of one gravity-aligned SLAM).
+  double tilt_range_deg = 0.0;
+  double tilt_step_deg = 2.0;
+  unsigned int tilted_hypotheses = 3;
   /// Trimmed ICP: iterations per hypothesis and for the final, full-cloud pass.
   int hypothesis_iterations = 20;
   int final_iterations = 50;
@@ -118,7 +127,11 @@ class GlobalAlignment {
   /// @brief Finds the transformation taking `source` onto the target, from any rotation about the up axis
   /// and any translation.
   /// @param source  at least 3 finite points (else std::invalid_argument); throws when no target is set
-  GlobalAlignmentResult align(const Cloud& source) const;
+  /// @param source_up_axis  the source's own up axis when it differs from the settings' `up_axis` (a map
+  ///        written in its first camera's frame): the source is first turned so that it becomes `up_axis`.
+  ///        Zero (the default): the settings' `up_axis`
+  GlobalAlignmentResult align(const Cloud& source,
+                              const Eigen::Vector3d& source_up_axis = Eigen::Vector3d::Zero()) const;
 
   /// @brief Only the trimmed ICP (no search), from `guess`: for a start already in the basin.
   /// @param source  as align()

@@ -45,7 +45,9 @@ class GlobalLandmarkAligner {
   void setTarget(LandmarkCloud::ConstPtr target);
   /// @brief Aligns `source` onto the target from any rotation about the up axis and any translation.
   /// @param source  as LandmarkAligner::align() requires; a degenerate problem is reported in the result
-  GlobalLandmarkAlignmentResult align(const LandmarkCloud::ConstPtr& source);
+  /// @param source_up_axis  as GlobalAlignment::align(): the source's own up axis, zero for the target's
+  GlobalLandmarkAlignmentResult align(const LandmarkCloud::ConstPtr& source,
+                                      const Eigen::Vector3d& source_up_axis = Eigen::Vector3d::Zero());
 
  private:
   GlobalAlignment global_;

@@ -1,0 +1,64 @@
+// --up-axis: parsing, and the axes a pair of maps is levelled by.
+#include "up_axis_option.h"
+
+#include <cmath>
+#include <iomanip>
+#include <sstream>
+#include <stdexcept>
+
+namespace weighted_icp::tools {
+
+UpAxisOption parseUpAxisOption(const std::string& text) {
+  UpAxisOption option;
+  if (text == "auto") return option;
+  option.automatic = false;
+  if (text == "z") return option;
+  std::istringstream in(text);
+  Eigen::Vector3d axis;
+  std::string rest;
+  if (!(in >> axis.x() >> axis.y() >> axis.z()) || (in >> rest) || !axis.allFinite() || !(axis.norm() > 0.0))
+    throw std::invalid_argument("expected auto, z or \"X Y Z\" (three finite numbers, not all zero), got '" + text +
+                                "'");
+  option.axis = axis.normalized();
+  return option;
+}
+
+namespace {
+
+std::string vectorText(const Eigen::Vector3d& v) {
+  std::ostringstream out;
+  out << std::fixed << std::setprecision(3) << '(' << v.x() << ' ' << v.y() << ' ' << v.z() << ')';
+  return out.str();
+}
+
+std::string estimateText(const char* which, const UpAxisEstimate& e) {
+  std::ostringstream out;
+  out << which << ' ' << vectorText(e.axis) << " from " << e.cameras << " cameras, rows level within " << std::fixed
+      << std::setprecision(1) << e.row_tilt_deg << " deg rms" << (e.from_rows ? "" : " (one heading)");
+  return out.str();
+}
+
+}  // namespace
+
+ResolvedUpAxes resolveUpAxes(const UpAxisOption& option, const LandmarkMap& source, const LandmarkMap& target) {
+  ResolvedUpAxes resolved;
+  if (!option.automatic) {
+    resolved.axes.source = resolved.axes.target = option.axis;
+    resolved.axes.z_up = option.axis == Eigen::Vector3d::UnitZ();
+    resolved.description = "up axis " + vectorText(option.axis) + " for both maps (--up-axis)";
+    return resolved;
+  }
+  const UpAxisEstimate s = estimateUpAxis(source.frames), t = estimateUpAxis(target.frames);
+  resolved.axes = chooseUpAxes(s, t);
+  if (s.cameras == 0 || t.cameras == 0)
+    resolved.description = "up axis z for both maps (a map without cameras to estimate it from)";
+  else if (resolved.axes.z_up)
+    resolved.description = "up axis z for both maps (their cameras are level about z: " + estimateText("source", s) +
+                           ", " + estimateText("target", t) + ")";
+  else
+    resolved.description =
+        "each map levelled by its cameras: " + estimateText("source", s) + ", " + estimateText("target", t);
+  return resolved;
+}
+
+}  // namespace weighted_icp::tools

@@ -1,0 +1,67 @@
+#pragma once
+// The up direction of a map, from its cameras: a camera held upright (a robot's,
+// a hand-held one) keeps its image rows level whatever its heading and pitch, so
+// the up axis is the direction most nearly perpendicular to every camera's x
+// axis. The global search rotates about the up axis the two maps share; a SLAM
+// that writes its map in the first camera's frame (ORB-SLAM's, our front end's)
+// has its up axis near -y there, not z, and two such maps share none until each
+// is levelled by its own.
+
+#include <cstddef>
+#include <map>
+#include <utility>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "weighted_icp/registration/landmark_map.h"
+
+namespace weighted_icp {
+
+/// @brief The up direction a map's camera poses suggest.
+struct UpAxisEstimate {
+  /// Unit vector in the map's frame; +z when there is no camera.
+  Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();
+  /// Root-mean-square angle between the cameras' image rows and the plane perpendicular to `axis` (degrees):
+  /// how level the rows are about it (the paper's real map: 6.8°, a hand-held TUM camera's roll).
+  double row_tilt_deg = 0.0;
+  /// Camera poses the estimate came from.
+  std::size_t cameras = 0;
+  /// True when the rows' headings varied enough to fix the axis by themselves; false when it is the cameras'
+  /// mean down direction (-y) made perpendicular to their common rows (one heading, or a single camera).
+  bool from_rows = false;
+};
+
+/// @brief Estimates the up axis from camera-to-world poses: the eigenvector of the smallest eigenvalue of the
+/// sum of the cameras' x axes' outer products, signed so that the cameras' mean y axis points down along it.
+/// @param camera_poses  camera-to-world poses (x right along the image rows, y down the image, z forward)
+/// @param min_heading_spread  smallest second eigenvalue (of the outer products' mean, whose eigenvalues sum
+///        to 1) for the rows alone to fix the axis: 0.03 is headings about 10° apart; below it the rows fix
+///        only a plane and the mean down direction chooses within it
+UpAxisEstimate estimateUpAxis(const std::map<FrameId, Eigen::Isometry3d>& camera_poses,
+                              double min_heading_spread = 0.03);
+
+/// @brief The axes the global search levels a source and a target map by.
+struct SharedUpAxes {
+  Eigen::Vector3d source = Eigen::Vector3d::UnitZ();
+  Eigen::Vector3d target = Eigen::Vector3d::UnitZ();
+  /// True when both are +z because both maps' cameras are level about z within the tolerance (or a map has
+  /// no camera); false when each map is levelled by its own estimate.
+  bool z_up = true;
+  /// How far the two estimates may disagree, for GlobalAlignmentSettings::tilt_range_deg: 0 for z-up maps, 8°
+  /// for estimated axes (a hand-held camera's roll drifts: mini-maps of the paper's real map, a third to two
+  /// thirds of its frames, estimate their up axis 0.4-7.2° off the truth).
+  double tilt_range_deg = 0.0;
+};
+
+/// @brief Chooses the up axes for aligning `source` onto `target`: +z for both when both maps' estimated up
+/// axes are within `z_tolerance_deg` of ±z (maps written gravity-aligned, as the paper's and TUM's: levelling
+/// such maps by their estimates would only add the estimates' own errors), or when either map has no camera;
+/// otherwise each map's own estimate.
+/// @param source_estimate  estimateUpAxis() of the source map
+/// @param target_estimate  estimateUpAxis() of the target map
+/// @param z_tolerance_deg  largest angle to ±z for a map to count as z-up (the paper's real map: 3.4°)
+SharedUpAxes chooseUpAxes(const UpAxisEstimate& source_estimate, const UpAxisEstimate& target_estimate,
+                          double z_tolerance_deg = 15.0);
+
+}  // namespace weighted_icp

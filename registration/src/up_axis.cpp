@@ -1,0 +1,69 @@
+// The up axis of a map from its cameras' image rows, and the axes two maps are levelled by.
+#include "weighted_icp/registration/up_axis.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include <Eigen/Eigenvalues>
+
+namespace weighted_icp {
+
+UpAxisEstimate estimateUpAxis(const std::map<FrameId, Eigen::Isometry3d>& camera_poses, double min_heading_spread) {
+  if (!(min_heading_spread >= 0.0 && min_heading_spread <= 0.5))
+    throw std::invalid_argument("estimateUpAxis: min_heading_spread must be in [0, 0.5]");
+  UpAxisEstimate estimate;
+  Eigen::Matrix3d rows = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d down = Eigen::Vector3d::Zero();
+  for (const auto& [id, pose] : camera_poses) {
+    const Eigen::Matrix3d r = pose.linear();
+    if (!r.allFinite()) continue;
+    rows += r.col(0) * r.col(0).transpose();
+    down += r.col(1);
+    ++estimate.cameras;
+  }
+  if (estimate.cameras == 0) return estimate;
+  rows /= static_cast<double>(estimate.cameras);
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(rows);
+  const Eigen::Vector3d spread = solver.eigenvalues();  // ascending
+  Eigen::Vector3d axis;
+  estimate.from_rows = spread(1) >= min_heading_spread;
+  if (estimate.from_rows) {
+    axis = solver.eigenvectors().col(0);
+  } else {
+    // One heading: the rows fix only the plane perpendicular to them; the cameras' mean up direction in it.
+    const Eigen::Vector3d along = solver.eigenvectors().col(2);
+    axis = -down - along * along.dot(-down);
+    if (!(axis.norm() > 1e-9)) axis = solver.eigenvectors().col(0);
+  }
+  axis.normalize();
+  if (axis.dot(-down) < 0.0) axis = -axis;  // cameras upright: their y axes point down
+  estimate.axis = axis;
+  double tilt = 0.0;
+  for (const auto& [id, pose] : camera_poses) {
+    const double sine = pose.linear().col(0).dot(axis);
+    if (std::isfinite(sine)) tilt += sine * sine;
+  }
+  estimate.row_tilt_deg =
+      std::asin(std::min(1.0, std::sqrt(tilt / static_cast<double>(estimate.cameras)))) * 180.0 / M_PI;
+  return estimate;
+}
+
+SharedUpAxes chooseUpAxes(const UpAxisEstimate& source_estimate, const UpAxisEstimate& target_estimate,
+                          double z_tolerance_deg) {
+  if (!(z_tolerance_deg >= 0.0 && z_tolerance_deg <= 90.0))
+    throw std::invalid_argument("chooseUpAxes: z_tolerance_deg must be in [0, 90]");
+  const auto z_up = [&](const UpAxisEstimate& e) {
+    return std::abs(e.axis.normalized().z()) >= std::cos(z_tolerance_deg * M_PI / 180.0);
+  };
+  SharedUpAxes axes;
+  if (source_estimate.cameras == 0 || target_estimate.cameras == 0 || (z_up(source_estimate) && z_up(target_estimate)))
+    return axes;
+  axes.source = source_estimate.axis.normalized();
+  axes.target = target_estimate.axis.normalized();
+  axes.z_up = false;
+  axes.tilt_range_deg = 8.0;
+  return axes;
+}
+
+}  // namespace weighted_icp

@@ -1,0 +1,143 @@
+// The up axis of a map from its cameras (up_axis.h), the axes two maps are
+// levelled by, and the global search given a source whose up axis is its own.
+
+#include <cmath>
+#include <map>
+#include <random>
+#include <stdexcept>
+
+#include <gtest/gtest.h>
+
+#include "test_support.h"
+#include "weighted_icp/io/map_format.h"
+#include "weighted_icp/registration/global_landmark_alignment.h"
+#include "weighted_icp/registration/rigid_motion.h"
+#include "weighted_icp/registration/up_axis.h"
+
+namespace {
+
+using namespace weighted_icp;
+
+double angleDeg(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  return std::acos(std::clamp(a.normalized().dot(b.normalized()), -1.0, 1.0)) * 180.0 / M_PI;
+}
+
+/// Camera-to-world poses of an upright camera (x right, y down, z forward) in a world whose up is `up`, at the
+/// given headings and pitches (degrees), rolled by `roll_deg` at most (uniform).
+std::map<FrameId, Eigen::Isometry3d> uprightCameras(const Eigen::Vector3d& up, const std::vector<double>& headings,
+                                                    const std::vector<double>& pitches, double roll_deg) {
+  // A frame whose z is `up`: the camera is built there as in a z-up world, then carried over.
+  const Eigen::Matrix3d world = Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), up).toRotationMatrix();
+  std::mt19937 random(7);
+  std::uniform_real_distribution<double> roll(-roll_deg, roll_deg);
+  std::map<FrameId, Eigen::Isometry3d> cameras;
+  FrameId id = 0;
+  for (const double heading : headings)
+    for (const double pitch : pitches) {
+      // Looking along +x of the z-up world with the image's y down: columns (right, down, forward).
+      Eigen::Matrix3d level;
+      level.col(0) = -Eigen::Vector3d::UnitY(), level.col(1) = -Eigen::Vector3d::UnitZ();
+      level.col(2) = Eigen::Vector3d::UnitX();
+      const Eigen::Matrix3d r = Eigen::AngleAxisd(heading * M_PI / 180.0, Eigen::Vector3d::UnitZ()) * level *
+                                Eigen::AngleAxisd(pitch * M_PI / 180.0, Eigen::Vector3d::UnitX()) *
+                                Eigen::AngleAxisd(roll(random) * M_PI / 180.0, Eigen::Vector3d::UnitZ());
+      Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+      pose.linear() = world * r;
+      pose.translation() = Eigen::Vector3d(0.1 * static_cast<double>(id), 0.0, 1.5);
+      cameras[id++] = pose;
+    }
+  return cameras;
+}
+
+TEST(UpAxis, UprightCamerasOfManyHeadingsAndPitchesGiveTheirWorldsUp) {
+  const Eigen::Vector3d up = Eigen::Vector3d(0.2, -0.9, -0.4).normalized();
+  const auto cameras = uprightCameras(up, {0, 40, 75, 130}, {-35, -10, 20}, 3.0);
+  const UpAxisEstimate e = estimateUpAxis(cameras);
+  EXPECT_EQ(e.cameras, 12u);
+  EXPECT_TRUE(e.from_rows);
+  EXPECT_LT(angleDeg(e.axis, up), 1.5) << e.axis.transpose();  // signed: not -up
+  EXPECT_GT(e.row_tilt_deg, 0.5);
+  EXPECT_LT(e.row_tilt_deg, 3.0);
+}
+
+TEST(UpAxis, CamerasOfOneHeadingFallBackToTheirMeanUpPerpendicularToTheirRows) {
+  const Eigen::Vector3d up = Eigen::Vector3d::UnitZ();
+  const auto cameras = uprightCameras(up, {30}, {-20, 0, 20}, 0.0);
+  const UpAxisEstimate e = estimateUpAxis(cameras);
+  EXPECT_FALSE(e.from_rows);
+  EXPECT_LT(angleDeg(e.axis, up), 1e-6) << e.axis.transpose();
+  EXPECT_LT(e.row_tilt_deg, 1e-6);
+}
+
+TEST(UpAxis, NoCameraMeansZAndBadSettingsAreRefused) {
+  const UpAxisEstimate none = estimateUpAxis({});
+  EXPECT_EQ(none.cameras, 0u);
+  EXPECT_EQ(none.axis, Eigen::Vector3d::UnitZ());
+  EXPECT_THROW(estimateUpAxis({}, -1.0), std::invalid_argument);
+  EXPECT_THROW(chooseUpAxes(none, none, 91.0), std::invalid_argument);
+}
+
+TEST(UpAxis, MapsLevelAboutZKeepZAndOthersAreLevelledByTheirOwn) {
+  UpAxisEstimate z_up, tilted, camera_frame, none;
+  z_up.cameras = tilted.cameras = camera_frame.cameras = 10;
+  tilted.axis = Eigen::Vector3d(0.0, std::sin(0.1), std::cos(0.1));  // 5.7°: still z-up
+  camera_frame.axis = Eigen::Vector3d(0.05, -0.8, -0.6).normalized();
+  const SharedUpAxes both_z = chooseUpAxes(z_up, tilted);
+  EXPECT_TRUE(both_z.z_up);
+  EXPECT_EQ(both_z.source, Eigen::Vector3d::UnitZ());
+  EXPECT_EQ(both_z.target, Eigen::Vector3d::UnitZ());
+  EXPECT_EQ(both_z.tilt_range_deg, 0.0);
+  const SharedUpAxes own = chooseUpAxes(camera_frame, tilted);
+  EXPECT_FALSE(own.z_up);
+  EXPECT_LT(angleDeg(own.source, camera_frame.axis), 1e-9);
+  EXPECT_LT(angleDeg(own.target, tilted.axis), 1e-9);
+  EXPECT_GT(own.tilt_range_deg, 0.0);
+  EXPECT_TRUE(chooseUpAxes(camera_frame, none).z_up);  // nothing to level the cameraless map by
+}
+
+TEST(UpAxis, TheRealMapsUpIsZWithinAFewDegrees) {
+  WEIGHTED_ICP_REQUIRE_FILE(weighted_icp::testing::realMapPath());
+  const LandmarkMap map = io::readLandmarkMap(weighted_icp::testing::realMapPath().string());
+  const UpAxisEstimate e = estimateUpAxis(map.frames);
+  EXPECT_TRUE(e.from_rows);
+  EXPECT_LT(angleDeg(e.axis, Eigen::Vector3d::UnitZ()), 5.0) << e.axis.transpose();
+}
+
+// Two mini-maps of the real map re-expressed in its first camera's frame, a third of their frames shared and no
+// landmark in both: each one's cameras estimate its up axis (frames 96-239: 5.6° off the truth, the other 0.4°),
+// and the search, levelling the source by its own and trying tilts, recovers a turn of 180° about the true up.
+TEST(UpAxis, GlobalSearchRecoversAMapLevelledByItsOwnCameras) {
+  WEIGHTED_ICP_REQUIRE_FILE(weighted_icp::testing::realMapPath());
+  LandmarkMap map = io::readLandmarkMap(weighted_icp::testing::realMapPath().string());
+  const Eigen::Isometry3d first = map.frames.begin()->second;
+  map.transform(first.inverse());
+  LandmarkMap target = map.miniMap(0, 143), source = map.miniMap(96, 239);
+  std::vector<Landmark> kept;
+  for (const auto& l : source.landmarks)  // landmarks both saw: the odd ones stay in the source only
+    if (l.id % 2 == 1 || l.observations.front().frame_id > 143) kept.push_back(l);
+  source.landmarks = kept;
+  kept.clear();
+  for (const auto& l : target.landmarks)
+    if (l.id % 2 == 0 || l.observations.back().frame_id < 96) kept.push_back(l);
+  target.landmarks = kept;
+  const Eigen::Vector3d up = first.linear().transpose() * Eigen::Vector3d::UnitZ();
+  Eigen::Isometry3d moved = Eigen::Isometry3d::Identity();
+  moved.linear() = Eigen::AngleAxisd(M_PI, up).toRotationMatrix();
+  moved.translation() = Eigen::Vector3d(1.0, 0.5, -1.0);
+  source.transform(moved);
+
+  const SharedUpAxes axes = chooseUpAxes(estimateUpAxis(source.frames), estimateUpAxis(target.frames));
+  ASSERT_FALSE(axes.z_up);
+  GlobalAlignmentSettings settings;
+  settings.up_axis = axes.target;
+  settings.tilt_range_deg = axes.tilt_range_deg;
+  GlobalLandmarkAligner aligner(settings);
+  aligner.setTarget(toLandmarkCloud(target.withMinObservations(2), CovarianceWeight{}));
+  const GlobalLandmarkAlignmentResult result =
+      aligner.align(toLandmarkCloud(source.withMinObservations(2), CovarianceWeight{}), axes.source);
+  const Eigen::Isometry3d estimate(result.alignment.transformation);
+  EXPECT_LT(rotationErrorDeg(estimate, moved.inverse()), 2.0);
+  EXPECT_LT(translationError(estimate, moved.inverse()), 0.05);
+}
+
+}  // namespace
