@@ -132,7 +132,7 @@ AlignInputs readInputs(const AlignCommand& c) {
 }
 
 /// @brief Runs the weighted ICP, after the global search when --global asks for it (about the up axes
-/// --up-axis resolves to, returned in `up_axes`).
+/// --up-axis resolves to; those of the search kept returned in `up_axes`).
 AlignmentResult runAlignment(const AlignCommand& c, const AlignInputs& in, const WeightFunction& weight,
                              SharedUpAxes& up_axes) {
   if (!c.global) {
@@ -141,16 +141,15 @@ AlignmentResult runAlignment(const AlignCommand& c, const AlignInputs& in, const
     return aligner.align(toLandmarkCloud(in.source, weight));
   }
   const tools::ResolvedUpAxes resolved = tools::resolveUpAxes(c.up_axis, in.source, in.target);
-  up_axes = resolved.axes;
   std::cout << "global search: " << resolved.description << '\n';
-  GlobalAlignmentSettings global;
-  global.up_axis = up_axes.target;
-  global.tilt_range_deg = up_axes.tilt_range_deg;
-  GlobalLandmarkAligner aligner(global, c.settings);
+  GlobalLandmarkAligner aligner({}, c.settings);
   aligner.setTarget(toLandmarkCloud(in.target, weight));
-  const GlobalLandmarkAlignmentResult both = aligner.align(toLandmarkCloud(in.source, weight), up_axes.source);
+  const GlobalLandmarkAlignmentResult both = aligner.align(toLandmarkCloud(in.source, weight), resolved.axes);
+  up_axes.source = both.source_up_axis, up_axes.target = both.target_up_axis;
   std::cout << "global search: " << both.global.hypotheses_refined << " hypotheses refined, inlier fraction "
-            << both.global.inlier_fraction << ", distance limit " << both.global.distance_limit << " m\n";
+            << both.global.inlier_fraction << ", distance limit " << both.global.distance_limit
+            << " m, up axes kept: source " << tools::vectorText(up_axes.source) << ", target "
+            << tools::vectorText(up_axes.target) << '\n';
   return both.alignment;
 }
 

@@ -12,7 +12,8 @@
 // xy plane. The world is the map's own frame unless --camera-frame (the map
 // re-expressed in its first camera's frame, as a SLAM without gravity writes
 // it) or --map-pose (the map's frame placed in a z-up world, e.g. by ground
-// truth) says otherwise: then the search's --up-axis matters.
+// truth; after --camera-frame, the camera frame's) says otherwise: then the
+// search's --up-axis matters.
 
 #include <chrono>
 #include <cmath>
@@ -196,7 +197,7 @@ bool parseCommand(int argc, char** argv, GlobalSweepCommand& c) {
       ("up-axis", po::value(&c.up_axis_text)->default_value(c.up_axis_text), "as wicp_align --global: auto, z or \"X Y Z\"")
       ("camera-frame", po::bool_switch(&c.camera_frame),
        "re-express the map in its first camera's frame (as a SLAM without gravity writes it); displacements stay "
-       "rotations about the original z axis")
+       "rotations about the original z axis unless --map-pose places the new frame")
       ("map-pose", po::value(&c.map_pose_text),
        "the map's frame in a z-up world, \"tx ty tz qx qy qz qw\" (a TUM trajectory line's order, e.g. the ground "
        "truth of the map's first frame): displacements are rotations about that world's z axis")
@@ -219,7 +220,6 @@ bool parseCommand(int argc, char** argv, GlobalSweepCommand& c) {
   } catch (const std::invalid_argument& e) {
     throw po::error(std::string("--up-axis: ") + e.what());
   }
-  if (c.camera_frame && !c.map_pose_text.empty()) throw po::error("give at most one of --camera-frame and --map-pose");
   if (!c.map_pose_text.empty()) c.world_from_map = parseTumPose(c.map_pose_text);
   return true;
 }
@@ -238,8 +238,9 @@ LandmarkMap loadMap(GlobalSweepCommand& c) {
     map = simulation::generateSyntheticSession(session).estimated;
   }
   if (c.camera_frame) {
-    c.world_from_map = map.frames.begin()->second;
-    map.transform(c.world_from_map.inverse());
+    const Eigen::Isometry3d first = map.frames.begin()->second;
+    map.transform(first.inverse());
+    if (c.map_pose_text.empty()) c.world_from_map = first;  // turns about the original z axis
   }
   return map;
 }
@@ -319,20 +320,18 @@ class FpfhCoarseAligner {
   Described target_;
 };
 
-/// @brief The aligners of one pair, each given the pair's target once (the global one again when the target's
-/// up axis changes).
+/// @brief The aligners of one pair, each given the pair's target once.
 struct PairAligners {
-  GlobalAlignmentSettings settings;
-  LandmarkCloud::Ptr target;
-  std::unique_ptr<GlobalLandmarkAligner> global;
+  GlobalLandmarkAligner global;
   LandmarkAligner icp;
   GlobalAlignment trimmed;
 
   std::unique_ptr<FpfhCoarseAligner> fpfh;  // only for --method fpfh and fpfh-trimmed
 
-  PairAligners(const GlobalAlignmentSettings& global_settings, const LandmarkCloud::Ptr& target_cloud, bool with_fpfh,
+  PairAligners(const GlobalAlignmentSettings& settings, const LandmarkCloud::Ptr& target, bool with_fpfh,
                double fpfh_radius_scale)
-      : settings(global_settings), target(target_cloud), icp(refinedIcp()), trimmed(settings) {
+      : global(settings), icp(refinedIcp()), trimmed(settings) {
+    global.setTarget(target);
     icp.setTarget(target);
     GlobalAlignment::Cloud target_xyz;
     pcl::copyPointCloud(*target, target_xyz);
@@ -343,17 +342,6 @@ struct PairAligners {
   /// GlobalAlignment's sample cell (its default: a third of the vote cell).
   static double sampleCell(const GlobalAlignmentSettings& settings) {
     return settings.sample_cell > 0.0 ? settings.sample_cell : settings.vote_cell / 3.0;
-  }
-
-  /// The global aligner searching about `target_up`, with tilts within ±tilt_range_deg.
-  GlobalLandmarkAligner& globalAbout(const Eigen::Vector3d& target_up, double tilt_range_deg) {
-    if (!global || settings.up_axis != target_up || settings.tilt_range_deg != tilt_range_deg) {
-      settings.up_axis = target_up;
-      settings.tilt_range_deg = tilt_range_deg;
-      global = std::make_unique<GlobalLandmarkAligner>(settings);
-      global->setTarget(target);
-    }
-    return *global;
   }
 
   static AlignmentSettings refinedIcp() {
@@ -382,8 +370,7 @@ CaseOutcome alignCase(const GlobalSweepCommand& c, PairAligners& aligners, const
   AlignmentResult result;
   CaseOutcome outcome;
   if (c.method == "global" || c.method == "coarse") {
-    const SharedUpAxes up = tools::resolveUpAxes(c.up_axis, source, pair.target).axes;
-    const auto r = aligners.globalAbout(up.target, up.tilt_range_deg).align(cloud, up.source);
+    const auto r = aligners.global.align(cloud, tools::resolveUpAxes(c.up_axis, source, pair.target).axes);
     result = r.alignment;
     outcome.inlier_fraction = r.global.inlier_fraction;
     if (c.method == "coarse") result.transformation = r.global.transformation, result.time_ms = r.global.time_ms;

@@ -23,13 +23,13 @@ UpAxisOption parseUpAxisOption(const std::string& text) {
   return option;
 }
 
-namespace {
-
 std::string vectorText(const Eigen::Vector3d& v) {
   std::ostringstream out;
   out << std::fixed << std::setprecision(3) << '(' << v.x() << ' ' << v.y() << ' ' << v.z() << ')';
   return out.str();
 }
+
+namespace {
 
 std::string estimateText(const char* which, const UpAxisEstimate& e) {
   std::ostringstream out;
@@ -44,7 +44,6 @@ ResolvedUpAxes resolveUpAxes(const UpAxisOption& option, const LandmarkMap& sour
   ResolvedUpAxes resolved;
   if (!option.automatic) {
     resolved.axes.source = resolved.axes.target = option.axis;
-    resolved.axes.z_up = option.axis == Eigen::Vector3d::UnitZ();
     resolved.description = "up axis " + vectorText(option.axis) + " for both maps (--up-axis)";
     return resolved;
   }
@@ -52,12 +51,12 @@ ResolvedUpAxes resolveUpAxes(const UpAxisOption& option, const LandmarkMap& sour
   resolved.axes = chooseUpAxes(s, t);
   if (s.cameras == 0 || t.cameras == 0)
     resolved.description = "up axis z for both maps (a map without cameras to estimate it from)";
-  else if (resolved.axes.z_up)
+  else if (resolved.axes.zUpOnly())
     resolved.description = "up axis z for both maps (their cameras are level about z: " + estimateText("source", s) +
                            ", " + estimateText("target", t) + ")";
   else
-    resolved.description =
-        "each map levelled by its cameras: " + estimateText("source", s) + ", " + estimateText("target", t);
+    resolved.description = "each map levelled by its cameras (" + estimateText("source", s) + ", " +
+                           estimateText("target", t) + "), with tilts, and the search about z tried as well";
   return resolved;
 }
 

@@ -22,6 +22,9 @@ struct UpAxisOption {
 /// @param text  the option's value; std::invalid_argument says what was expected
 UpAxisOption parseUpAxisOption(const std::string& text);
 
+/// @brief "(x y z)" with three decimals, for the tools' messages.
+std::string vectorText(const Eigen::Vector3d& v);
+
 /// @brief The up axes the source and the target are levelled by, with one line saying which and why.
 struct ResolvedUpAxes {
   SharedUpAxes axes;

@@ -61,8 +61,8 @@ SharedUpAxes chooseUpAxes(const UpAxisEstimate& source_estimate, const UpAxisEst
     return axes;
   axes.source = source_estimate.axis.normalized();
   axes.target = target_estimate.axis.normalized();
-  axes.z_up = false;
   axes.tilt_range_deg = 8.0;
+  axes.also_try_z = true;
   return axes;
 }
 

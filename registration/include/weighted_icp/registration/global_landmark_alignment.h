@@ -5,6 +5,7 @@
 // residuals say, so landmarks with no counterpart in the other map (partial
 // overlap) stay out of it.
 
+#include <chrono>
 #include <memory>
 #include <string>
 
@@ -13,6 +14,7 @@
 #include "weighted_icp/registration/global_alignment.h"
 #include "weighted_icp/registration/landmark_alignment.h"
 #include "weighted_icp/registration/landmark_point.h"
+#include "weighted_icp/registration/up_axis.h"
 
 namespace weighted_icp {
 
@@ -23,6 +25,8 @@ struct GlobalLandmarkAlignmentResult {
   AlignmentResult alignment;
   /// The global stage alone.
   GlobalAlignmentResult global;
+  /// The up axes of the search kept (the source's, the target's).
+  Eigen::Vector3d source_up_axis = Eigen::Vector3d::UnitZ(), target_up_axis = Eigen::Vector3d::UnitZ();
 };
 
 /// @brief PCL-style aligner of weighted landmark clouds from any start.
@@ -45,14 +49,22 @@ class GlobalLandmarkAligner {
   void setTarget(LandmarkCloud::ConstPtr target);
   /// @brief Aligns `source` onto the target from any rotation about the up axis and any translation.
   /// @param source  as LandmarkAligner::align() requires; a degenerate problem is reported in the result
-  /// @param source_up_axis  as GlobalAlignment::align(): the source's own up axis, zero for the target's
-  GlobalLandmarkAlignmentResult align(const LandmarkCloud::ConstPtr& source,
-                                      const Eigen::Vector3d& source_up_axis = Eigen::Vector3d::Zero());
+  GlobalLandmarkAlignmentResult align(const LandmarkCloud::ConstPtr& source);
+  /// @brief As align(source), the search about the given up axes (chooseUpAxes(): each map levelled by its own,
+  /// with tilts, and z tried as well when `axes.also_try_z`; the search with more inliers kept).
+  /// @param source  as align(source)
+  /// @param axes    the source's and the target's up axes; the settings' up_axis and tilt_range_deg give way
+  GlobalLandmarkAlignmentResult align(const LandmarkCloud::ConstPtr& source, const SharedUpAxes& axes);
 
  private:
+  /// The weighted ICP from the global stage's result, within its distance limit.
+  GlobalLandmarkAlignmentResult finish(const LandmarkCloud::ConstPtr& source, GlobalAlignmentResult global,
+                                       std::chrono::steady_clock::time_point start) const;
+
   GlobalAlignment global_;
   AlignmentSettings icp_settings_;
   LandmarkCloud::ConstPtr target_;
+  GlobalAlignment::Cloud target_xyz_;
 };
 
 }  // namespace weighted_icp
