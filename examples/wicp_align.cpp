@@ -142,7 +142,9 @@ AlignmentResult runAlignment(const AlignCommand& c, const AlignInputs& in, const
   }
   const tools::ResolvedUpAxes resolved = tools::resolveUpAxes(c.up_axis, in.source, in.target);
   std::cout << "global search: " << resolved.description << '\n';
-  GlobalLandmarkAligner aligner({}, c.settings);
+  GlobalAlignmentSettings global;
+  global.threads = c.settings.threads;
+  GlobalLandmarkAligner aligner(global, c.settings);
   aligner.setTarget(toLandmarkCloud(in.target, weight));
   const GlobalLandmarkAlignmentResult both = aligner.align(toLandmarkCloud(in.source, weight), resolved.axes);
   up_axes.source = both.source_up_axis, up_axes.target = both.target_up_axis;

@@ -159,4 +159,27 @@ TEST(UpAxis, MapsTurnedAboutTheirOwnZAreStillRecoveredByTheSearchAboutZ) {
   EXPECT_EQ(result.target_up_axis, Eigen::Vector3d::UnitZ());
 }
 
+// The rotations' votes, the hypotheses' refinement and the tilts are shared out on threads: one thread or two,
+// the same transformation to the last bit (a levelled search with tilts, so every parallel loop runs).
+TEST(UpAxis, TheSearchDoesNotDependOnTheNumberOfThreads) {
+  WEIGHTED_ICP_REQUIRE_FILE(weighted_icp::testing::realMapPath());
+  LandmarkMap map = io::readLandmarkMap(weighted_icp::testing::realMapPath().string());
+  map.transform(map.frames.begin()->second.inverse());
+  const auto [even, odd] = map.withMinObservations(2).alternateHalves();
+  GlobalAlignment::Cloud target, source;
+  for (const auto& l : even.landmarks) target.push_back(pcl::PointXYZ(l.position.x(), l.position.y(), l.position.z()));
+  for (const auto& l : odd.landmarks) source.push_back(pcl::PointXYZ(l.position.x(), l.position.y(), l.position.z()));
+  Eigen::Matrix4d results[2];
+  for (const unsigned threads : {1u, 2u}) {
+    GlobalAlignmentSettings settings;
+    settings.up_axis = Eigen::Vector3d(0.05, -0.77, -0.64);
+    settings.tilt_range_deg = 4.0;
+    settings.threads = threads;
+    GlobalAlignment search(settings);
+    search.setTarget(target);
+    results[threads - 1] = search.align(source, Eigen::Vector3d(0.0, -0.8, -0.6)).transformation;
+  }
+  EXPECT_EQ(results[0], results[1]);
+}
+
 }  // namespace

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <limits>
 #include <stdexcept>
+#include <thread>
 #include <unordered_set>
 #include <utility>
 
@@ -15,6 +16,7 @@
 
 #include "weighted_icp/core/statistics.h"
 #include "weighted_icp/registration/nearest_neighbor_index.h"
+#include "weighted_icp/registration/worker_pool.h"
 
 namespace weighted_icp {
 
@@ -275,10 +277,10 @@ std::size_t countInliers(const Points& source, const GlobalAlignment::Target& ta
 
 /// A hypothesis after the fine search and the trimmed ICP: where its yaw and centroid went, and its inliers.
 struct Refined {
-  Eigen::Matrix4d transformation;
-  double yaw;
-  Eigen::Vector3d translation;
-  std::size_t inliers;
+  Eigen::Matrix4d transformation = Eigen::Matrix4d::Identity();
+  double yaw = 0.0;
+  Eigen::Vector3d translation = Eigen::Vector3d::Zero();
+  std::size_t inliers = 0;
 };
 
 /// The trimmed ICP's start distance, floor, shrink factor and iterations.
@@ -326,7 +328,8 @@ Refined refineHypothesis(const Search& search, const Eigen::Matrix4d& tilt, doub
 /// The tilt (a rotation about the sample's centroid within ±range about the two axes perpendicular to the up
 /// axis, in `step` steps) under which the sample, at the refined hypothesis's yaw and translation, fills one fine
 /// vote cell (yaw not searched) most.
-Eigen::Matrix4d bestTilt(const Search& search, const Refined& around, double range_deg, double step_deg) {
+Eigen::Matrix4d bestTilt(const Search& search, const Refined& around, double range_deg, double step_deg,
+                         WorkerPool& pool, unsigned threads) {
   const VoteBox box{0.0,
                     search.fine.yaw_step_deg,
                     search.fine.window,
@@ -335,37 +338,47 @@ Eigen::Matrix4d bestTilt(const Search& search, const Refined& around, double ran
                     search.fine.bucket_size};
   const Eigen::Vector3d e1 = search.axis.unitOrthogonal(), e2 = search.axis.cross(e1);
   const int steps = static_cast<int>(std::floor(range_deg / step_deg + 1e-9));
-  Eigen::Matrix4d best = Eigen::Matrix4d::Identity();
-  std::size_t best_votes = 0;
-  Points tilted(search.sample.size());
-  for (int i = -steps; i <= steps; ++i)
-    for (int j = -steps; j <= steps; ++j) {
+  const int side = 2 * steps + 1;
+  std::vector<Eigen::Matrix4d> tilts(static_cast<std::size_t>(side * side));
+  std::vector<std::size_t> votes(tilts.size(), 0);
+  pool.run(tilts.size(), 1, threads, [&](std::size_t begin, std::size_t end, unsigned) {
+    Points tilted(search.sample.size());
+    for (std::size_t t = begin; t < end; ++t) {
+      const int i = static_cast<int>(t) / side - steps, j = static_cast<int>(t) % side - steps;
       const Eigen::Matrix3d rotation =
           (Eigen::AngleAxisd(i * step_deg * M_PI / 180.0, e1) * Eigen::AngleAxisd(j * step_deg * M_PI / 180.0, e2))
               .toRotationMatrix();
-      const Eigen::Matrix4d tilt = aboutCentroid(rotation, search.centroid);
-      for (std::size_t k = 0; k < search.sample.size(); ++k) tilted[k] = apply(tilt, search.sample[k]);
-      const std::size_t votes =
+      tilts[t] = aboutCentroid(rotation, search.centroid);
+      for (std::size_t k = 0; k < search.sample.size(); ++k) tilted[k] = apply(tilts[t], search.sample[k]);
+      votes[t] =
           fineVote(tilted, search.target, box, search.axis, around.yaw, search.centroid, around.translation).second;
-      if (votes > best_votes) best = tilt, best_votes = votes;
     }
-  return best;
+  });
+  // The first fullest in grid order, whichever thread voted it.
+  const std::size_t best = static_cast<std::size_t>(std::max_element(votes.begin(), votes.end()) - votes.begin());
+  return votes[best] > 0 ? tilts[best] : Eigen::Matrix4d::Identity();
 }
 
 /// Rotations about the up axis (about the sample's centroid), each with its voted translations, best voted first
 /// (stable: ties keep rotation order).
 std::vector<Hypothesis> voteRotations(const Points& sample, const Eigen::Vector3f& centroid,
                                       const GlobalAlignment::Target& target, const Eigen::Vector3d& axis,
-                                      const GlobalAlignmentSettings& s) {
+                                      const GlobalAlignmentSettings& s, WorkerPool& pool, unsigned threads) {
+  std::vector<std::vector<Hypothesis>> per_rotation(s.yaw_hypotheses);
+  pool.run(s.yaw_hypotheses, 1, threads, [&](std::size_t begin, std::size_t end, unsigned) {
+    for (std::size_t r = begin; r < end; ++r) {
+      const double yaw = 2.0 * M_PI * static_cast<double>(r) / s.yaw_hypotheses;
+      const Eigen::Matrix3d rotation = Eigen::AngleAxisd(yaw, axis).toRotationMatrix();
+      Points rotated;
+      rotated.reserve(sample.size());
+      for (const auto& p : sample) rotated.push_back((rotation * (p - centroid).cast<double>()).cast<float>());
+      for (const auto& [translation, votes] :
+           voteTranslations(rotated, target.sample, s.vote_cell, s.peaks_per_rotation))
+        per_rotation[r].push_back({yaw, translation, votes});
+    }
+  });
   std::vector<Hypothesis> hypotheses;
-  for (unsigned int r = 0; r < s.yaw_hypotheses; ++r) {
-    const Eigen::Matrix3d rotation = Eigen::AngleAxisd(2.0 * M_PI * r / s.yaw_hypotheses, axis).toRotationMatrix();
-    Points rotated;
-    rotated.reserve(sample.size());
-    for (const auto& p : sample) rotated.push_back((rotation * (p - centroid).cast<double>()).cast<float>());
-    for (const auto& [translation, votes] : voteTranslations(rotated, target.sample, s.vote_cell, s.peaks_per_rotation))
-      hypotheses.push_back({2.0 * M_PI * r / s.yaw_hypotheses, translation, votes});
-  }
+  for (const auto& found : per_rotation) hypotheses.insert(hypotheses.end(), found.begin(), found.end());
   std::stable_sort(hypotheses.begin(), hypotheses.end(),
                    [](const Hypothesis& a, const Hypothesis& b) { return a.votes > b.votes; });
   return hypotheses;
@@ -374,7 +387,7 @@ std::vector<Hypothesis> voteRotations(const Points& sample, const Eigen::Vector3
 }  // namespace
 
 GlobalAlignment::GlobalAlignment(GlobalAlignmentSettings settings)
-    : settings_(std::move(settings)), target_(std::make_unique<Target>()) {
+    : settings_(std::move(settings)), target_(std::make_unique<Target>()), pool_(std::make_unique<WorkerPool>()) {
   const auto& s = settings_;
   const auto require = [](bool ok, const char* what) {
     if (!ok) throw std::invalid_argument(std::string("GlobalAlignmentSettings::") + what);
@@ -402,6 +415,7 @@ GlobalAlignment::GlobalAlignment(GlobalAlignmentSettings settings)
           "tilt_range_deg must be in [0, 30]");
   require(std::isfinite(s.tilt_step_deg) && s.tilt_step_deg > 0.0 && s.tilt_range_deg / s.tilt_step_deg <= 20.0,
           "tilt_step_deg must be > 0 and at least tilt_range_deg / 20");
+  require(s.threads <= 1024, "threads must be at most 1024 (0: every hardware thread)");
   require(s.hypothesis_iterations >= 1 && s.final_iterations >= 1, "iteration counts must be >= 1");
   require(std::isfinite(s.shrink_factor) && s.shrink_factor > 0.0, "shrink_factor must be > 0");
 }
@@ -459,7 +473,8 @@ GlobalAlignmentResult GlobalAlignment::align(const Cloud& source_cloud, const Ei
   Eigen::Vector3f centroid = Eigen::Vector3f::Zero();
   for (const auto& p : sample) centroid += p;
   centroid /= static_cast<float>(sample.size());
-  const std::vector<Hypothesis> hypotheses = voteRotations(sample, centroid, *target_, axis, s);
+  const std::vector<Hypothesis> hypotheses =
+      voteRotations(sample, centroid, *target_, axis, s, *pool_, threadsFor(s.yaw_hypotheses));
 
   // 2. The best-voted hypotheses, each searched finely around, refined with the tight pass on every source
   // point and ranked by inliers.
@@ -475,22 +490,29 @@ GlobalAlignmentResult GlobalAlignment::align(const Cloud& source_cloud, const Ei
                       {2.0 * s.fine_cell, min_distance, s.shrink_factor, s.hypothesis_iterations},
                       inlier_distance};
   const std::size_t refined = std::min<std::size_t>(hypotheses.size(), s.refined_hypotheses);
-  std::vector<Refined> results;
-  for (std::size_t h = 0; h < refined; ++h)
-    results.push_back(
-        refineHypothesis(search, Eigen::Matrix4d::Identity(), hypotheses[h].yaw, hypotheses[h].translation));
+  std::vector<Refined> results(refined);
+  pool_->run(refined, 1, threadsFor(refined), [&](std::size_t begin, std::size_t end, unsigned) {
+    for (std::size_t h = begin; h < end; ++h)
+      results[h] = refineHypothesis(search, Eigen::Matrix4d::Identity(), hypotheses[h].yaw, hypotheses[h].translation);
+  });
   std::stable_sort(results.begin(), results.end(),
                    [](const Refined& a, const Refined& b) { return a.inliers > b.inliers; });
-  Refined best =
-      results.empty() ? Refined{Eigen::Matrix4d::Identity(), 0.0, Eigen::Vector3d::Zero(), 0} : results.front();
+  Refined best = results.empty() ? Refined{} : results.front();
   // 2b. Tilts, when the up axes may disagree by a few degrees (each estimated from its map's cameras): around
   // the best few, the tilt whose fine vote is fullest, refined as above.
-  if (s.tilt_range_deg > 0.0)
-    for (std::size_t h = 0; h < std::min<std::size_t>(results.size(), s.tilted_hypotheses); ++h) {
-      const Eigen::Matrix4d tilt = bestTilt(search, results[h], s.tilt_range_deg, s.tilt_step_deg);
-      const Refined tilted = refineHypothesis(search, tilt, results[h].yaw, results[h].translation);
-      if (tilted.inliers > best.inliers) best = tilted;
-    }
+  if (s.tilt_range_deg > 0.0) {
+    const std::size_t tilted_count = std::min<std::size_t>(results.size(), s.tilted_hypotheses);
+    std::vector<Eigen::Matrix4d> tilts;
+    for (std::size_t h = 0; h < tilted_count; ++h)
+      tilts.push_back(bestTilt(search, results[h], s.tilt_range_deg, s.tilt_step_deg, *pool_, threadsFor(100)));
+    std::vector<Refined> tilted(tilted_count);
+    pool_->run(tilted_count, 1, threadsFor(tilted_count), [&](std::size_t begin, std::size_t end, unsigned) {
+      for (std::size_t h = begin; h < end; ++h)
+        tilted[h] = refineHypothesis(search, tilts[h], results[h].yaw, results[h].translation);
+    });
+    for (const Refined& t : tilted)
+      if (t.inliers > best.inliers) best = t;
+  }
 
   // 3. The winner refined on every source point.
   GlobalAlignmentResult result = finish(source, best.transformation, 2.0 * s.fine_cell);
@@ -501,6 +523,12 @@ GlobalAlignmentResult GlobalAlignment::align(const Cloud& source_cloud, const Ei
   result.hypotheses_refined = refined;
   result.time_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   return result;
+}
+
+unsigned GlobalAlignment::threadsFor(std::size_t n) const {
+  unsigned threads = settings_.threads;
+  if (threads == 0) threads = std::max(1u, std::thread::hardware_concurrency());
+  return static_cast<unsigned>(std::max<std::size_t>(1, std::min<std::size_t>(threads, n)));
 }
 
 GlobalAlignmentResult GlobalAlignment::refine(const Cloud& source_cloud, const Eigen::Matrix4d& guess) const {

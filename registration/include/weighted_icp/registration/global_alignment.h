@@ -18,6 +18,8 @@
 
 namespace weighted_icp {
 
+class WorkerPool;
+
 /// @brief Parameters of the global search. Lengths in metres; those left at 0
 /// are derived from the target's point spacing (the median distance from a
 /// target point to its nearest other target point), so one set of defaults
@@ -63,6 +65,9 @@ struct GlobalAlignmentSettings {
   double tilt_range_deg = 0.0;
   double tilt_step_deg = 2.0;
   unsigned int tilted_hypotheses = 3;
+  /// Threads the rotations' votes, the hypotheses' refinement and the tilts are shared out on (0: every
+  /// hardware thread, at most 1024); each writes only its own result, so the result does not depend on it.
+  unsigned int threads = 0;
   /// Trimmed ICP: iterations per hypothesis and for the final, full-cloud pass.
   int hypothesis_iterations = 20;
   int final_iterations = 50;
@@ -145,8 +150,12 @@ class GlobalAlignment {
   /// The trimmed ICP on every source point from `start`, and the result's fields.
   GlobalAlignmentResult finish(const std::vector<Eigen::Vector3f>& source, const Eigen::Matrix4d& start,
                                double start_distance) const;
+  /// Threads for `n` independent jobs: the settings' count (0: every hardware thread), at most n.
+  unsigned threadsFor(std::size_t n) const;
+
   GlobalAlignmentSettings settings_;
   std::unique_ptr<Target> target_;
+  std::unique_ptr<WorkerPool> pool_;
 };
 
 }  // namespace weighted_icp
