@@ -471,6 +471,7 @@ int main(int argc, char** argv) {
     std::string gate_free_retry = options.frontend.gate_free_retry ? "on" : "off";
     std::string motion_timing = options.frontend.motion_per_period ? "period" : "frame";
     std::string keyframe_before_loss = options.frontend.keyframe_before_loss ? "on" : "off";
+    std::string pnp_thresholds = options.frontend.pnp_thresholds_in_working_pixels ? "working" : "frame";
     const auto& features = options.frontend.features;
     const bool own_size = features.min_working_width == 0 && features.max_working_width == 0;
     std::string feature_width =
@@ -606,6 +607,9 @@ int main(int argc, char** argv) {
          "MIN-MAX: frames narrower than MIN pixels are doubled, wider than MAX halved (until they are not) for "
          "finding and describing features, the keypoints kept in the frame's pixels (0: never); full: every frame at "
          "its own size")
+        ("pnp-thresholds", po::value(&pnp_thresholds)->default_value(pnp_thresholds),
+         "working: PnP's RANSAC threshold and Huber scale in pixels of the image features are found at (a frame "
+         "halved for them: twice its own pixels); frame: in the frame's own pixels (as before 2026-11-27)")
         ("pnp-ransac-iterations", tools::rangedValue(&options.frontend.pnp.ransac_iterations, 1, 100000)
                                       ->default_value(options.frontend.pnp.ransac_iterations),
          "most RANSAC draws a frame's PnP makes; fewer when the inliers found already give 99 % confidence (1-100000)");
@@ -619,6 +623,7 @@ int main(int argc, char** argv) {
       frontend::setFrontendChoice(options.frontend, "motion-timing", motion_timing);
       frontend::setFrontendChoice(options.frontend, "keyframe-before-loss", keyframe_before_loss);
       frontend::setFrontendChoice(options.frontend, "feature-width", feature_width);
+      frontend::setFrontendChoice(options.frontend, "pnp-thresholds", pnp_thresholds);
     } catch (const std::invalid_argument& e) {
       throw po::error(std::string("--") + e.what());
     }

@@ -36,7 +36,8 @@ TEST(FrontendChoices, EachKeySetsItsOption) {
   for (const TwoWords& choice :
        {TwoWords{"gate-free-retry", "off", "on", &FrontendOptions::gate_free_retry},
         TwoWords{"motion-timing", "frame", "period", &FrontendOptions::motion_per_period},
-        TwoWords{"keyframe-before-loss", "off", "on", &FrontendOptions::keyframe_before_loss}}) {
+        TwoWords{"keyframe-before-loss", "off", "on", &FrontendOptions::keyframe_before_loss},
+        TwoWords{"pnp-thresholds", "frame", "working", &FrontendOptions::pnp_thresholds_in_working_pixels}}) {
     setFrontendChoice(options, choice.key, choice.on);
     EXPECT_TRUE(options.*choice.flag) << choice.key;
     setFrontendChoice(options, choice.key, choice.off);
@@ -46,6 +47,7 @@ TEST(FrontendChoices, EachKeySetsItsOption) {
   EXPECT_TRUE(FrontendOptions{}.gate_free_retry);  // the defaults
   EXPECT_FALSE(FrontendOptions{}.motion_per_period);
   EXPECT_TRUE(FrontendOptions{}.keyframe_before_loss);
+  EXPECT_TRUE(FrontendOptions{}.pnp_thresholds_in_working_pixels);
   EXPECT_EQ(options.pnp.method, PnpMethod::Iterative);
   EXPECT_EQ(options.quality.measure, QualityMeasure::Brisque);
   EXPECT_EQ(options.features.descriptor, DescriptorKind::ModifiedBrief);
@@ -56,7 +58,7 @@ TEST(FrontendChoices, EachKeySetsItsOption) {
   EXPECT_EQ(options.dense_odometry.kind, DenseOdometryKind::Icp);
   EXPECT_EQ(options.quality.mode, QualityGateMode::Absolute);
   EXPECT_EQ(options.matcher.kind, MatcherKind::KdTree);
-  EXPECT_EQ(frontendChoiceKeys().size(), 15u);
+  EXPECT_EQ(frontendChoiceKeys().size(), 16u);
   // The widths features are found at: full, or MIN-MAX pixels.
   EXPECT_EQ(FrontendOptions{}.features.min_working_width, 427);
   EXPECT_EQ(FrontendOptions{}.features.max_working_width, 960);
@@ -96,6 +98,30 @@ TEST(FrontendChoices, AWrongKeyOrValueIsNamed) {
         << e.what();
   }
   EXPECT_EQ(options.pnp.method, PnpMethod::Ap3p);  // a refused value changes nothing
+}
+
+// PnP's pixel thresholds follow the grid keypoints are found on: twice the frame's pixels for a frame halved for
+// its features, the frame's own for one found at its size or doubled (enlarging adds no detail).
+TEST(FrontendChoices, PnpThresholdsAreInPixelsOfTheImageFeaturesAreFoundAt) {
+  FrontendOptions options;
+  const FeatureExtractor extractor(options.features);
+  EXPECT_EQ(extractor.workingWidth(640), 640);
+  EXPECT_EQ(extractor.workingWidth(1280), 640);
+  EXPECT_EQ(extractor.workingWidth(1920), 960);
+  EXPECT_EQ(extractor.workingWidth(2560), 640);
+  EXPECT_EQ(extractor.workingWidth(320), 640);
+  EXPECT_EQ(extractor.workingWidth(100), 800);
+  EXPECT_THROW(extractor.workingWidth(0), std::invalid_argument);
+  const double ransac = options.pnp.ransac_reprojection_px, huber = options.pnp.huber_px;
+  for (const int width : {320, 640, 960}) {
+    EXPECT_EQ(pnpOptionsFor(options, width).ransac_reprojection_px, ransac) << width;
+    EXPECT_EQ(pnpOptionsFor(options, width).huber_px, huber) << width;
+  }
+  EXPECT_EQ(pnpOptionsFor(options, 1280).ransac_reprojection_px, 2.0 * ransac);
+  EXPECT_EQ(pnpOptionsFor(options, 1280).huber_px, 2.0 * huber);
+  EXPECT_DOUBLE_EQ(pnpOptionsFor(options, 2000).ransac_reprojection_px, 4.0 * ransac);  // 2000 -> 1000 -> 500
+  options.pnp_thresholds_in_working_pixels = false;
+  EXPECT_EQ(pnpOptionsFor(options, 1280).ransac_reprojection_px, ransac);
 }
 
 }  // namespace

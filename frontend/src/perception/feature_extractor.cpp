@@ -211,6 +211,14 @@ std::vector<cv::KeyPoint> FeatureExtractor::detectBucketed(const cv::Mat& gray, 
   return keypoints;
 }
 
+int FeatureExtractor::workingWidth(int width) const {
+  if (width < 1) throw std::invalid_argument("FeatureExtractor::workingWidth: width must be >= 1");
+  const int min_width = options_.min_working_width, max_width = options_.max_working_width;
+  while (min_width > 0 && width < min_width) width *= 2;
+  while (max_width > 0 && width > max_width && width >= 2) width /= 2;
+  return width;
+}
+
 ExtractedFeatures FeatureExtractor::extract(const cv::Mat& gray) const {
   if (gray.empty()) throw std::invalid_argument("FeatureExtractor::extract: empty image");
   if (gray.type() != CV_8UC1)

@@ -49,6 +49,16 @@ FusedPoint measuredPoint(const PinholeCamera& camera, const DepthNoiseModel& noi
 
 }  // namespace
 
+PnpOptions pnpOptionsFor(const FrontendOptions& options, int width) {
+  PnpOptions pnp = options.pnp;
+  if (!options.pnp_thresholds_in_working_pixels) return pnp;
+  const double scale =
+      std::max(1.0, static_cast<double>(width) / FeatureExtractor(options.features).workingWidth(width));
+  pnp.ransac_reprojection_px *= scale;
+  pnp.huber_px *= scale;
+  return pnp;
+}
+
 Frontend::Frontend(Map& map, Backend& backend, PinholeCamera camera, FrontendOptions options)
     : map_(map),
       backend_(backend),
@@ -57,6 +67,7 @@ Frontend::Frontend(Map& map, Backend& backend, PinholeCamera camera, FrontendOpt
       extractor_(options.features),
       matcher_(options.matcher),
       dynamic_history_(options.dynamic_history) {
+  options_.pnp = pnpOptionsFor(options_, camera_.width);
   if (options_.quality_gate) quality_gate_.emplace(options_.quality);
   if (options_.dense_odometry.use != DenseOdometryUse::Off) dense_.emplace(camera_, options_.dense_odometry.kind);
 }

@@ -64,6 +64,10 @@ const std::vector<std::pair<std::string, Setter>>& setters() {
          o.features.describe_equalized = secondOfTwo(v, "original", "equalized");
        }},
       {"pnp", [](FrontendOptions& o, const std::string& v) { o.pnp.method = parsePnpMethod(v); }},
+      {"pnp-thresholds",
+       [](FrontendOptions& o, const std::string& v) {
+         o.pnp_thresholds_in_working_pixels = secondOfTwo(v, "frame", "working");
+       }},
       {"gate-free-retry",
        [](FrontendOptions& o, const std::string& v) { o.gate_free_retry = secondOfTwo(v, "off", "on"); }},
       {"motion-timing",

@@ -91,6 +91,11 @@ class FeatureExtractor {
 
   const FeatureExtractorOptions& options() const { return options_; }
 
+  /// @brief The width extract() finds features at for a frame `width` pixels wide: doubled while narrower than
+  /// min_working_width, halved while wider than max_working_width (either 0: never).
+  /// @param width  the frame's width in pixels (>= 1; std::invalid_argument otherwise)
+  int workingWidth(int width) const;
+
  private:
   /// @param response_scale min_corner_response is multiplied by it (1 / 4 per doubling of the frame)
   std::vector<cv::KeyPoint> detectBucketed(const cv::Mat& gray, double response_scale = 1.0) const;

@@ -41,6 +41,13 @@ struct FrontendOptions {
     return options;
   }();
   PnpOptions pnp;
+  /// pnp's RANSAC threshold and Huber scale are in the working image's pixels (FeatureExtractor::workingWidth()):
+  /// a frame wider than its working width has its keypoints found on a grid that much coarser, so in the frame's
+  /// own pixels their errors are that much larger (a 1280x960 frame's, worked on at 640x480: twice). A frame
+  /// doubled for its features keeps its own pixels' thresholds: enlarging adds no detail, its keypoints are no
+  /// better located than its pixels allow. 640x480 frames are unchanged. false: in the frame's pixels, as before
+  /// 2026-11-27 (pnpOptionsFor()).
+  bool pnp_thresholds_in_working_pixels = true;
   DynamicPointFilterOptions dynamic_filter;
   /// Used by the backend too. sigma_z = c z^2 with c = 0.005, not the sensor's
   /// 0.0015: at a keypoint, depth also suffers from the colour/depth time
@@ -148,6 +155,13 @@ struct TrackingResult {
            status == TrackingStatus::TrackedRelative || status == TrackingStatus::TrackedDense;
   }
 };
+
+/// @brief The PnP options a frame `width` pixels wide is tracked with: options.pnp, its pixel thresholds
+/// multiplied by how many of the frame's pixels one working pixel spans when options.pnp_thresholds_in_working_pixels
+/// (width / FeatureExtractor::workingWidth(width), at least 1).
+/// @param options  the front end's options
+/// @param width    the frame's width in pixels (>= 1)
+PnpOptions pnpOptionsFor(const FrontendOptions& options, int width);
 
 /// Where the tracker stands between frames (the per-frame outcome is TrackingStatus).
 /// Initializing -> Tracking: a frame with enough depth starts the first segment.
