@@ -7,7 +7,9 @@
 
 #include "arrays.h"
 #include "bindings.h"
+#include "weighted_icp/registration/global_landmark_alignment.h"
 #include "weighted_icp/registration/landmark_alignment.h"
+#include "weighted_icp/registration/up_axis.h"
 #include "weighted_icp/registration/weighted_correspondence_estimation.h"
 
 namespace weighted_icp::python {
@@ -72,6 +74,57 @@ AlignmentResult align(const py::object& source, const py::object& target, const 
   LandmarkAligner aligner(settings);
   aligner.setTarget(toCloud(target_xyz, weights));
   return aligner.align(toCloud(source_xyz, {}), guess);
+}
+
+/// The axes align_global() levels the maps by: "auto" (both LandmarkMaps: their cameras, chooseUpAxes(); else z),
+/// "z", or three numbers for both.
+SharedUpAxes upAxesFor(const py::object& up_axis, const py::object& source, const py::object& target) {
+  SharedUpAxes axes;
+  if (py::isinstance<py::str>(up_axis)) {
+    const std::string name = up_axis.cast<std::string>();
+    if (name == "z") return axes;
+    if (name != "auto") throw py::value_error("up_axis must be 'auto', 'z' or three numbers (got '" + name + "')");
+    if (!py::isinstance<LandmarkMap>(source) || !py::isinstance<LandmarkMap>(target)) return axes;
+    return chooseUpAxes(estimateUpAxis(source.cast<const LandmarkMap&>().frames),
+                        estimateUpAxis(target.cast<const LandmarkMap&>().frames));
+  }
+  std::vector<double> v;
+  try {
+    v = up_axis.cast<std::vector<double>>();
+  } catch (const py::cast_error&) {
+    throw py::value_error("up_axis must be 'auto', 'z' or three numbers");
+  }
+  const Eigen::Vector3d axis = v.size() == 3 ? Eigen::Vector3d(v[0], v[1], v[2]) : Eigen::Vector3d::Zero();
+  if (!axis.allFinite() || !(axis.norm() > 0.0))
+    throw py::value_error("up_axis must be three finite numbers, not all zero");
+  axes.source = axes.target = axis.normalized();
+  return axes;
+}
+
+AlignmentResult alignGlobal(const py::object& source, const py::object& target, const py::object& target_weights, int k,
+                            const std::optional<std::string>& strategy_name, int max_iterations,
+                            const py::object& up_axis, int threads) {
+  std::optional<WeightStrategy> strategy;
+  if (strategy_name) strategy = parseWeightStrategy(*strategy_name);
+  AlignmentSettings settings;
+  settings.k = strategy ? neighboursFor(*strategy, checkedK(k)) : checkedK(k);
+  if (max_iterations < 1)
+    throw py::value_error("max_iterations must be >= 1 (got " + std::to_string(max_iterations) + ")");
+  settings.max_iterations = max_iterations;
+  settings.threads = checkedThreads(threads);
+  const SharedUpAxes axes = upAxesFor(up_axis, source, target);
+  const std::vector<Eigen::Vector3d> source_xyz = positionsOf(source, "source");
+  const std::vector<Eigen::Vector3d> target_xyz = positionsOf(target, "target");
+  const std::vector<double> weights = targetWeights(target, target_weights, strategy, target_xyz.size());
+  if (source_xyz.empty()) throw py::value_error("source has no points");
+  if (target_xyz.empty()) throw py::value_error("target has no points");
+
+  py::gil_scoped_release unlocked;
+  GlobalAlignmentSettings global;
+  global.threads = settings.threads;
+  GlobalLandmarkAligner aligner(global, settings);
+  aligner.setTarget(toCloud(target_xyz, weights));
+  return aligner.align(toCloud(source_xyz, {}), axes).alignment;
 }
 
 py::tuple weightedCorrespondences(const py::object& source, const py::object& target, const py::object& weights, int k,
@@ -141,6 +194,16 @@ void bindRegistration(py::module_& m) {
         "else 1 each.\n"
         "strategy: 'base' (plain ICP, k = 1), 'covariance', 'observations', 'mean-distance', or None.\n"
         "The GIL is released while ICP runs.");
+  m.def("align_global", &alignGlobal, py::arg("source"), py::arg("target"), py::arg("target_weights") = py::none(),
+        py::arg("k") = 5, py::arg("strategy") = py::none(), py::arg("max_iterations") = 150,
+        py::arg("up_axis") = "auto", py::arg("threads") = 0,
+        "Aligns source onto target from any start, as wicp_align --global: a search over rotations about the up "
+        "axis and every translation, partial overlap allowed, then the weighted ICP with its refinement stage.\n\n"
+        "source, target, target_weights, k, strategy: as align().\n"
+        "up_axis: 'auto' (two LandmarkMaps: z when both maps' cameras are level about it within 15 degrees, else "
+        "each map levelled by its own cameras, with tilts, and z tried as well; arrays: z), 'z', or three numbers "
+        "for both maps.\n"
+        "The GIL is released while it runs.");
   m.def("weighted_correspondences", &weightedCorrespondences, py::arg("source"), py::arg("target"),
         py::arg("weights") = py::none(), py::arg("k") = 5, py::arg("max_distance") = py::none(), py::arg("threads") = 0,
         "The weighted correspondence rule: for each source point, among its k nearest target points within "

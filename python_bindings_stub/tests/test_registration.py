@@ -160,3 +160,36 @@ def test_weighted_correspondences_match_the_aligners_choice(real_map_path: Path)
         assert w[t[i]] == w[order[:5]].max()
         checked += 1
     assert checked > 150
+
+
+def test_align_global_recovers_a_half_turn_and_levels_camera_frame_maps(real_map_path: Path) -> None:
+    even, odd = wi.LandmarkMap.load(real_map_path, min_observations=2).alternate_halves()
+    moved = displacement(1.5, -1.0, 180.0)
+    odd.transform(moved)
+    r = wi.align_global(odd, even, strategy="covariance")
+    assert np.allclose(r.transformation, np.linalg.inv(moved), atol=2e-3)
+    # The same maps in their first camera's frame, where up is near -y, turned about the true up: 'auto' levels
+    # each map by its cameras; a search about z alone cannot find the turn.
+    even, odd = wi.LandmarkMap.load(real_map_path, min_observations=2).alternate_halves()
+    first = even.frames[0]
+    for m in (even, odd):
+        m.transform(np.linalg.inv(first))
+    up = first[:3, :3].T @ np.array([0.0, 0.0, 1.0])
+    c, s = np.cos(np.radians(120.0)), np.sin(np.radians(120.0))
+    cross = np.array([[0, -up[2], up[1]], [up[2], 0, -up[0]], [-up[1], up[0], 0]])
+    turn = np.eye(4)
+    turn[:3, :3] = c * np.eye(3) + s * cross + (1 - c) * np.outer(up, up)
+    turn[:3, 3] = [0.4, -0.3, 0.2]
+    odd.transform(turn)
+    r = wi.align_global(odd, even, strategy="covariance")
+    assert np.allclose(r.transformation, np.linalg.inv(turn), atol=5e-3)
+    about_z = wi.align_global(odd, even, strategy="covariance", up_axis="z")
+    assert not np.allclose(about_z.transformation, np.linalg.inv(turn), atol=5e-2)
+
+
+def test_align_global_refuses_a_bad_up_axis() -> None:
+    points = np.random.default_rng(1).uniform(-1, 1, (50, 3))
+    with pytest.raises(ValueError, match="up_axis"):
+        wi.align_global(points, points, up_axis="y")
+    with pytest.raises(ValueError, match="up_axis"):
+        wi.align_global(points, points, up_axis=[0, 0, 0])

@@ -1,7 +1,7 @@
 """Type stubs of weighted_icp (the compiled module weighted_icp._weighted_icp, re-exported)."""
 
 import os
-from typing import Callable, Dict, List, Optional, Tuple, Union
+from typing import Callable, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -104,6 +104,18 @@ def align(
     threads: int = 0,
 ) -> AlignmentResult:
     """Aligns source onto target with the confidence-weighted ICP (wicp_align's numbers)."""
+
+def align_global(
+    source: _Points,
+    target: _Points,
+    target_weights: Optional[npt.ArrayLike] = None,
+    k: int = 5,
+    strategy: Optional[str] = None,
+    max_iterations: int = 150,
+    up_axis: Union[str, Sequence[float]] = "auto",
+    threads: int = 0,
+) -> AlignmentResult:
+    """Aligns source onto target from any start (wicp_align --global)."""
 
 def weighted_correspondences(
     source: _Points,
