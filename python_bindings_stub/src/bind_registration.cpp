@@ -42,38 +42,50 @@ std::vector<double> targetWeights(const py::handle& target, const py::handle& ta
   return computeWeights(target.cast<const LandmarkMap&>(), weightFunction(*strategy));
 }
 
+/// What align() and align_global() share: the ICP's settings and both clouds, checked.
+struct AlignProblem {
+  AlignmentSettings settings;
+  std::vector<Eigen::Vector3d> source, target;
+  std::vector<double> weights;
+};
+
+AlignProblem alignProblem(const py::object& source, const py::object& target, const py::object& target_weights, int k,
+                          const std::optional<std::string>& strategy_name, int max_iterations, int threads) {
+  std::optional<WeightStrategy> strategy;
+  if (strategy_name) strategy = parseWeightStrategy(*strategy_name);
+  AlignProblem problem;
+  problem.settings.k = strategy ? neighboursFor(*strategy, checkedK(k)) : checkedK(k);
+  if (max_iterations < 1)
+    throw py::value_error("max_iterations must be >= 1 (got " + std::to_string(max_iterations) + ")");
+  problem.settings.max_iterations = max_iterations;
+  problem.settings.threads = checkedThreads(threads);
+  problem.source = positionsOf(source, "source");
+  problem.target = positionsOf(target, "target");
+  problem.weights = targetWeights(target, target_weights, strategy, problem.target.size());
+  if (problem.source.empty()) throw py::value_error("source has no points");
+  if (problem.target.empty()) throw py::value_error("target has no points");
+  return problem;
+}
+
 AlignmentResult align(const py::object& source, const py::object& target, const py::object& target_weights, int k,
                       const std::optional<std::string>& strategy_name, int max_iterations,
                       const std::optional<double>& max_correspondence_distance, bool refine,
                       const py::object& initial_guess, int threads) {
-  std::optional<WeightStrategy> strategy;
-  if (strategy_name) strategy = parseWeightStrategy(*strategy_name);
-  AlignmentSettings settings;
-  settings.k = strategy ? neighboursFor(*strategy, checkedK(k)) : checkedK(k);
-  if (max_iterations < 1)
-    throw py::value_error("max_iterations must be >= 1 (got " + std::to_string(max_iterations) + ")");
-  settings.max_iterations = max_iterations;
+  AlignProblem problem = alignProblem(source, target, target_weights, k, strategy_name, max_iterations, threads);
   if (max_correspondence_distance) {
     if (!(*max_correspondence_distance > 0.0) || !std::isfinite(*max_correspondence_distance))
       throw py::value_error("max_correspondence_distance must be finite and > 0 (got " +
                             std::to_string(*max_correspondence_distance) + ")");
-    settings.max_correspondence_distance = *max_correspondence_distance;
+    problem.settings.max_correspondence_distance = *max_correspondence_distance;
   }
-  settings.refine = refine;
-  settings.threads = checkedThreads(threads);
+  problem.settings.refine = refine;
   const Eigen::Matrix4d guess =
       initial_guess.is_none() ? Eigen::Matrix4d::Identity() : toMatrix4(initial_guess, "initial_guess");
 
-  const std::vector<Eigen::Vector3d> source_xyz = positionsOf(source, "source");
-  const std::vector<Eigen::Vector3d> target_xyz = positionsOf(target, "target");
-  const std::vector<double> weights = targetWeights(target, target_weights, strategy, target_xyz.size());
-  if (source_xyz.empty()) throw py::value_error("source has no points");
-  if (target_xyz.empty()) throw py::value_error("target has no points");
-
   py::gil_scoped_release unlocked;
-  LandmarkAligner aligner(settings);
-  aligner.setTarget(toCloud(target_xyz, weights));
-  return aligner.align(toCloud(source_xyz, {}), guess);
+  LandmarkAligner aligner(problem.settings);
+  aligner.setTarget(toCloud(problem.target, problem.weights));
+  return aligner.align(toCloud(problem.source, {}), guess);
 }
 
 /// The axes align_global() levels the maps by: "auto" (both LandmarkMaps: their cameras, chooseUpAxes(); else z),
@@ -104,27 +116,15 @@ SharedUpAxes upAxesFor(const py::object& up_axis, const py::object& source, cons
 AlignmentResult alignGlobal(const py::object& source, const py::object& target, const py::object& target_weights, int k,
                             const std::optional<std::string>& strategy_name, int max_iterations,
                             const py::object& up_axis, int threads) {
-  std::optional<WeightStrategy> strategy;
-  if (strategy_name) strategy = parseWeightStrategy(*strategy_name);
-  AlignmentSettings settings;
-  settings.k = strategy ? neighboursFor(*strategy, checkedK(k)) : checkedK(k);
-  if (max_iterations < 1)
-    throw py::value_error("max_iterations must be >= 1 (got " + std::to_string(max_iterations) + ")");
-  settings.max_iterations = max_iterations;
-  settings.threads = checkedThreads(threads);
   const SharedUpAxes axes = upAxesFor(up_axis, source, target);
-  const std::vector<Eigen::Vector3d> source_xyz = positionsOf(source, "source");
-  const std::vector<Eigen::Vector3d> target_xyz = positionsOf(target, "target");
-  const std::vector<double> weights = targetWeights(target, target_weights, strategy, target_xyz.size());
-  if (source_xyz.empty()) throw py::value_error("source has no points");
-  if (target_xyz.empty()) throw py::value_error("target has no points");
+  const AlignProblem problem = alignProblem(source, target, target_weights, k, strategy_name, max_iterations, threads);
 
   py::gil_scoped_release unlocked;
   GlobalAlignmentSettings global;
-  global.threads = settings.threads;
-  GlobalLandmarkAligner aligner(global, settings);
-  aligner.setTarget(toCloud(target_xyz, weights));
-  return aligner.align(toCloud(source_xyz, {}), axes).alignment;
+  global.threads = problem.settings.threads;
+  GlobalLandmarkAligner aligner(global, problem.settings);
+  aligner.setTarget(toCloud(problem.target, problem.weights));
+  return aligner.align(toCloud(problem.source, {}), axes).alignment;
 }
 
 py::tuple weightedCorrespondences(const py::object& source, const py::object& target, const py::object& weights, int k,
