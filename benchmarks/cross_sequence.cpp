@@ -10,7 +10,8 @@
 //
 //   wicp_benchmark_cross_sequence --scratch DIR [--data DIR] [--max-frames N]
 //                                 [--synthetic-frames N] [--sequences LIST] [--variants LIST] [--runs LIST]
-//                                 [--resolution-scale S] [--depth-resolution-scale S] [--trajectories DIR]
+//                                 [--resolution-scale S] [--depth-resolution-scale S] [--crop-aspect A]
+//                                 [--trajectories DIR]
 
 #include <cmath>
 #include <filesystem>
@@ -177,6 +178,7 @@ int main(int argc, char** argv) {
         ("runs", po::value(&runs)->default_value(runs), "comma-separated: default, relative-brisque, absolute, paper, no-gate, opencv")
         ("resolution-scale", po::value(&parameters.resolution_scale)->default_value(parameters.resolution_scale), "variant resolution: new width / old (0.25-4)")
         ("depth-resolution-scale", po::value(&parameters.depth_resolution_scale)->default_value(parameters.depth_resolution_scale), "variant depth-resolution: depth width / colour width (0.25-4)")
+        ("crop-aspect", po::value(&parameters.crop_aspect)->default_value(parameters.crop_aspect), "variant crop: width / height kept (1-4; 1.7778: 16:9)")
         ("frontend-option", po::value(&choices)->composing(),
          "KEY=VALUE, repeatable: a front-end choice by wicp_rgbd_slam's option name (pnp=iterative, "
          "descriptor=modified-brief, dense-odometry=prior, ...), applied to every run but opencv")

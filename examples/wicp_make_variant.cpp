@@ -27,7 +27,8 @@ int main(int argc, char** argv) {
         "Writes DIR in the TUM layout (rgb/, depth/, rgb.txt, depth.txt, groundtruth.txt) with camera.yaml,\n"
         "variant.txt and, for bursts, bursts.txt. Kinds, applied in the order given: jpeg, mm-depth, focal,\n"
         "unregistered, blur, low-light, burst, resolution, depth-noise, depth-resolution (a depth camera of\n"
-        "its own size, after focal, resolution and unregistered); there-and-back re-orders the frames before\n"
+        "its own size, after focal, resolution and unregistered), crop (the middle rows: another aspect ratio,\n"
+        "before unregistered and depth-resolution); there-and-back re-orders the frames before\n"
         "any other (even ones forward, then odd ones back: a real revisit). Without --dataset the synthetic\n"
         "sequence is used.\n"
         "Exit 1 on an error (nothing written), 2 on a bad command line. Options");
@@ -37,7 +38,7 @@ int main(int argc, char** argv) {
         ("help,h", "print this help")
         ("dataset", po::value(&dataset), "TUM RGB-D folder; default: the synthetic sequence")
         ("camera", po::value(&camera_spec), "fr1, fr2, fr3 or a camera YAML; default: DIR/camera.yaml, else from the folder name")
-        ("variant", po::value(&kinds)->required(), "comma-separated kinds (jpeg,mm-depth,focal,unregistered,blur,low-light,burst,there-and-back,resolution,depth-noise,depth-resolution)")
+        ("variant", po::value(&kinds)->required(), "comma-separated kinds (jpeg,mm-depth,focal,unregistered,blur,low-light,burst,there-and-back,resolution,depth-noise,depth-resolution,crop)")
         ("out", po::value(&out_dir)->required(), "output folder (written complete or not at all)")
         ("overwrite", "replace --out if it exists and is not empty")
         ("jpeg-quality", tools::rangedValue(&options.jpeg_quality, 1, 100)->default_value(options.jpeg_quality), "jpeg: quality (1-100)")
@@ -45,6 +46,7 @@ int main(int argc, char** argv) {
         ("focal", tools::rangedValue(&options.focal_length_px, 50.0, 5000.0)->default_value(options.focal_length_px), "focal: new fx in px (50-5000)")
         ("resolution-scale", tools::rangedValue(&options.resolution_scale, 0.25, 4.0)->default_value(options.resolution_scale), "resolution: new width / old, same field of view (0.25-4; 0.5: 640x480 becomes 320x240)")
         ("depth-resolution-scale", tools::rangedValue(&options.depth_resolution_scale, 0.25, 4.0)->default_value(options.depth_resolution_scale), "depth-resolution: depth width / colour width, same field of view (0.25-4; 0.5: 320x240 depth beside 640x480 colour)")
+        ("crop-aspect", tools::rangedValue(&options.crop_aspect, 1.0, 4.0)->default_value(options.crop_aspect), "crop: width / height kept, the middle rows (1-4, at least the source's; 1.7778: 16:9, 640x480 becomes 640x360); before unregistered and depth-resolution")
         ("depth-noise", tools::rangedValue(&options.depth_noise_coefficient, 0.0, 0.1)->default_value(options.depth_noise_coefficient), "depth-noise: sigma = this z^2, metres (0-0.1; a Kinect v1 about 0.0015, a stereo camera 0.01)")
         ("depth-noise-correlation", tools::rangedValue(&options.depth_noise_correlation_px, 0.0, 50.0)->default_value(options.depth_noise_correlation_px), "depth-noise: errors correlated over this many px (0-50)")
         ("depth-offset", tools::rangedValue(&offset_x, -0.5, 0.5)->default_value(offset_x), "unregistered: depth camera x offset, m")

@@ -172,6 +172,47 @@ TEST(SequenceVariants, ResolutionVariantSeesEachPointWhereItsIntrinsicsSay) {
                std::invalid_argument);
 }
 
+// Another aspect ratio (a 16:9 sensor beside a 4:3 one): the middle rows of colour and depth, each point where the
+// cropped camera projects it; a crop after the depth has a camera of its own is refused.
+TEST(SequenceVariants, CropVariantKeepsTheMiddleRowsWhereItsCameraSays) {
+  simulation::VariantSource source = smallSynthetic(2);
+  source.camera.distortion = {0.2, -0.4, 0.001, -0.002, 0.3};
+  simulation::SequenceVariantOptions options = kinds("crop");
+  options.crop_aspect = 16.0 / 9.0;
+  const Written variant = writeAndOpen(source, options, scratchDir("variant_crop") / "crop");
+  EXPECT_EQ(variant.camera.width, source.camera.width);
+  EXPECT_EQ(variant.camera.height, std::lround(source.camera.width * 9.0 / 16.0));
+  const int top = (source.camera.height - variant.camera.height) / 2;
+  EXPECT_DOUBLE_EQ(variant.camera.cy, source.camera.cy - top);
+  EXPECT_EQ(variant.camera.fx, source.camera.fx);
+  EXPECT_EQ(variant.camera.distortion, source.camera.distortion);
+  const RgbdFrame original = source.load(0), cropped = variant.sequence.loadFrame(0, variant.camera);
+  ASSERT_EQ(cropped.color.rows, variant.camera.height);
+  std::size_t checked = 0, agree = 0;
+  for (int v = top; v < top + variant.camera.height; v += 3)
+    for (int u = 0; u < original.depth.cols; u += 3) {
+      const float z = original.depth.at<float>(v, u);
+      if (!(z > 0.0f)) continue;
+      const Eigen::Vector2d pixel = variant.camera.project(source.camera.backProject(u, v, z));
+      const int pu = static_cast<int>(std::lround(pixel.x())), pv = static_cast<int>(std::lround(pixel.y()));
+      ASSERT_TRUE(pu >= 0 && pv >= 0 && pu < cropped.depth.cols && pv < cropped.depth.rows);
+      ++checked;
+      agree += std::abs(cropped.depth.at<float>(pv, pu) - z) < 0.02f * z &&
+               cropped.color.at<cv::Vec3b>(pv, pu) == original.color.at<cv::Vec3b>(v, u);
+    }
+  ASSERT_GT(checked, 300u);
+  EXPECT_GT(static_cast<double>(agree) / checked, 0.99);
+  simulation::SequenceVariantOptions late = kinds("unregistered,crop");
+  EXPECT_THROW(
+      simulation::writeSequenceVariant(smallSynthetic(2), late, (scratchDir("variant_crop") / "late").string()),
+      std::invalid_argument);
+  simulation::SequenceVariantOptions taller = kinds("crop");
+  taller.crop_aspect = 1.0;  // taller than the source: not a crop
+  EXPECT_THROW(
+      simulation::writeSequenceVariant(smallSynthetic(2), taller, (scratchDir("variant_crop") / "tall").string()),
+      std::invalid_argument);
+}
+
 // A depth camera of another resolution than the colour camera's, registered or not, with lens distortion or not:
 // every depth pixel shows, through the depth camera's intrinsics and pose, the depth the source shows at the
 // (distorted) colour pixel its point projects to. The colour images are left as they are.

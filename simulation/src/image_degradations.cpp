@@ -2,9 +2,11 @@
 
 #include "weighted_icp/simulation/image_degradations.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <opencv2/calib3d.hpp>
@@ -160,6 +162,39 @@ PinholeCamera resizedCamera(const PinholeCamera& camera, double scale) {
     }
   }
   return resized;
+}
+
+namespace {
+
+/// The rows croppedCamera keeps: the first one and how many.
+std::pair<int, int> croppedRows(const PinholeCamera& camera, double aspect) {
+  const double widest = static_cast<double>(camera.width) / camera.height;
+  if (!std::isfinite(aspect) || aspect < widest - 1e-9 || aspect > 4.0)
+    throw std::invalid_argument("croppedCamera: aspect must be in [" + std::to_string(widest) + ", 4] (width / " +
+                                "height, at least the camera's own), got " + std::to_string(aspect));
+  const int rows = std::min(camera.height, static_cast<int>(std::lround(camera.width / aspect)));
+  if (rows < 16) throw std::invalid_argument("croppedCamera: fewer than 16 rows would be left");
+  return {(camera.height - rows) / 2, rows};
+}
+
+}  // namespace
+
+PinholeCamera croppedCamera(const PinholeCamera& camera, double aspect) {
+  if (camera.unregistered_depth)
+    throw std::invalid_argument("croppedCamera: the camera has an unregistered depth camera; crop before making it");
+  const auto [top, rows] = croppedRows(camera, aspect);
+  PinholeCamera cropped = camera;
+  cropped.height = rows;
+  cropped.cy -= top;
+  return cropped;
+}
+
+cv::Mat cropImage(const cv::Mat& image, const PinholeCamera& camera, double aspect) {
+  if (image.cols != camera.width || image.rows != camera.height)
+    throw std::invalid_argument("cropImage: image is " + std::to_string(image.cols) + "x" + std::to_string(image.rows) +
+                                ", the camera " + std::to_string(camera.width) + "x" + std::to_string(camera.height));
+  const auto [top, rows] = croppedRows(camera, aspect);
+  return image.rowRange(top, top + rows).clone();
 }
 
 PinholeCamera depthResizedCamera(const PinholeCamera& camera, double scale) {

@@ -39,7 +39,8 @@ const std::vector<std::pair<VariantKind, const char*>>& kindNames() {
       {VariantKind::ThereAndBack, "there-and-back"},
       {VariantKind::Resolution, "resolution"},
       {VariantKind::DepthNoise, "depth-noise"},
-      {VariantKind::DepthResolution, "depth-resolution"}};
+      {VariantKind::DepthResolution, "depth-resolution"},
+      {VariantKind::Crop, "crop"}};
   return names;
 }
 
@@ -69,9 +70,14 @@ void checkOptions(const SequenceVariantOptions& options) {
   require(options.resolution_scale >= 0.25 && options.resolution_scale <= 4.0, "resolution scale must be in [0.25, 4]");
   require(options.depth_resolution_scale >= 0.25 && options.depth_resolution_scale <= 4.0,
           "depth resolution scale must be in [0.25, 4]");
+  const auto at = [&](VariantKind kind) { return std::find(options.kinds.begin(), options.kinds.end(), kind); };
+  require(options.crop_aspect >= 1.0 && options.crop_aspect <= 4.0, "crop aspect must be in [1, 4] (width / height)");
+  // A crop cuts the colour camera's rows out of depth registered to it: before the depth has a camera of its own.
+  for (const VariantKind kind : {VariantKind::Unregistered, VariantKind::DepthResolution})
+    require(!has(options, VariantKind::Crop) || !has(options, kind) || at(VariantKind::Crop) < at(kind),
+            "crop must come before " + toString(kind));
   if (has(options, VariantKind::DepthResolution)) {
     // The kinds that move or resize the depth image as the colour camera's come first: they assume its size.
-    const auto at = [&](VariantKind kind) { return std::find(options.kinds.begin(), options.kinds.end(), kind); };
     for (const VariantKind kind : {VariantKind::Focal, VariantKind::Resolution, VariantKind::Unregistered})
       require(at(kind) < at(VariantKind::DepthResolution) || !has(options, kind),
               "depth-resolution must come after " + toString(kind));
@@ -126,6 +132,7 @@ PinholeCamera variantCamera(const PinholeCamera& original, const SequenceVariant
     if (kind == VariantKind::MillimetreDepth) camera.depth_factor = options.depth_factor;
     if (kind == VariantKind::Unregistered && options.describe_depth_camera) camera = withDepthCamera(camera, options);
     if (kind == VariantKind::DepthResolution) camera = depthResizedCamera(camera, options.depth_resolution_scale);
+    if (kind == VariantKind::Crop) camera = croppedCamera(camera, options.crop_aspect);
   }
   return camera;
 }
@@ -180,6 +187,11 @@ RgbdFrame applyKinds(RgbdFrame frame, std::size_t i, PinholeCamera camera, const
         frame.color = resizeImage(frame.color, camera, options.resolution_scale, cv::INTER_AREA);
         frame.depth = resizeImage(frame.depth, camera, options.resolution_scale, cv::INTER_NEAREST);
         camera = resizedCamera(camera, options.resolution_scale);
+        break;
+      case VariantKind::Crop:
+        frame.color = cropImage(frame.color, camera, options.crop_aspect);
+        frame.depth = cropImage(frame.depth, camera, options.crop_aspect);
+        camera = croppedCamera(camera, options.crop_aspect);
         break;
       case VariantKind::DepthNoise:
         frame.depth = noisyDepth(frame.depth, options.depth_noise_coefficient, options.depth_noise_correlation_px, rng);
@@ -237,6 +249,7 @@ void writeDescription(const fs::path& path, const VariantSource& source, const S
   if (has(options, VariantKind::Resolution)) text << "\nresolution_scale: " << options.resolution_scale;
   if (has(options, VariantKind::DepthResolution))
     text << "\ndepth_resolution_scale: " << options.depth_resolution_scale;
+  if (has(options, VariantKind::Crop)) text << "\ncrop_aspect: " << options.crop_aspect;
   if (has(options, VariantKind::DepthNoise))
     text << "\ndepth_noise_coefficient: " << options.depth_noise_coefficient
          << "\ndepth_noise_correlation_px: " << options.depth_noise_correlation_px;

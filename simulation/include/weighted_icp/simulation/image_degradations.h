@@ -78,6 +78,20 @@ PinholeCamera resizedCamera(const PinholeCamera& camera, double scale);
 ///        enlarging), cv::INTER_NEAREST for depth (never mix a foreground and a background depth)
 cv::Mat resizeImage(const cv::Mat& image, const PinholeCamera& camera, double scale, int interpolation);
 
+/// @brief The camera of cropImage: a sensor of another aspect ratio with the same pixels and lens, its image the
+/// middle rows of the original (a 16:9 sensor's beside a 4:3 one's). Width, focal lengths, cx and distortion kept;
+/// height lround(width / aspect), cy moved up by the rows cut above. A camera with an unregistered depth camera is
+/// refused (its depth image would need a crop of its own): crop before making it.
+/// @param camera the original camera
+/// @param aspect width / new height, in [width / height, 4]; the new height must be at least 16 pixels
+PinholeCamera croppedCamera(const PinholeCamera& camera, double aspect);
+
+/// @brief The image at croppedCamera's size: its middle rows.
+/// @param image colour or depth image of `camera`'s size
+/// @param camera its camera
+/// @param aspect width / new height, as croppedCamera
+cv::Mat cropImage(const cv::Mat& image, const PinholeCamera& camera, double aspect);
+
 /// @brief The camera of a depth sensor of another resolution than the colour camera's (an Azure Kinect's, ScanNet's):
 /// the depth camera's images resized by `scale` (same field of view, its intrinsics as resizedCamera scales them),
 /// the colour camera unchanged. A camera with registered depth first gets a depth camera where the colour camera

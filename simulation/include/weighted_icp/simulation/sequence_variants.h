@@ -35,13 +35,15 @@ enum class VariantKind {
   ThereAndBack,     // the frames re-ordered before any other kind: even ones forward, odd ones back (thereAndBack)
   Resolution,       // another sensor resolution, same field of view: images and camera resized by resolution_scale
   DepthNoise,       // noisier depth: z + depth_noise_coefficient z^2 n, n correlated over depth_noise_correlation_px
-  DepthResolution   // a depth camera of another resolution than the colour camera's (depth_resolution_scale), named
+  DepthResolution,  // a depth camera of another resolution than the colour camera's (depth_resolution_scale), named
                     // in camera.yaml with its own size (depth_width, depth_height); after focal, resolution and
                     // unregistered
+  Crop              // another aspect ratio: the middle rows of colour and depth (crop_aspect, e.g. 16:9), same
+                    // pixels and lens; before unregistered and depth-resolution
 };
 
 /// @brief "jpeg", "mm-depth", "focal", "unregistered", "blur", "low-light", "burst", "there-and-back", "resolution",
-/// "depth-noise", "depth-resolution".
+/// "depth-noise", "depth-resolution", "crop".
 /// @param kind the kind to name
 std::string toString(VariantKind kind);
 /// @brief The kind of a name written by toString; std::invalid_argument naming the
@@ -64,6 +66,8 @@ struct SequenceVariantOptions {
   double resolution_scale = 0.5;
   /// Depth resolution: new depth width / colour width, in [0.25, 4] (0.5: 320x240 depth beside 640x480 colour).
   double depth_resolution_scale = 0.5;
+  /// Crop: width / height of the cropped images, in [the source's, 4] (16 / 9: 640x480 becomes 640x360).
+  double crop_aspect = 16.0 / 9.0;
   /// Depth noise: sigma = coefficient z^2 (m); 0.01 is a consumer stereo depth camera's (2 % at 2 m), several times
   /// a Kinect v1's. Its errors are correlated over about correlation_px pixels.
   double depth_noise_coefficient = 0.01;
