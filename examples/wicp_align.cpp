@@ -45,6 +45,8 @@ struct AlignInputs {
   LandmarkMap source, target;
 };
 
+void interpretCommand(const po::variables_map& vm, AlignCommand& c);
+
 /// @brief Parses the command line; false when only --help was asked for.
 bool parseCommand(int argc, char** argv, AlignCommand& c) {
   po::options_description options(
@@ -91,9 +93,15 @@ bool parseCommand(int argc, char** argv, AlignCommand& c) {
   // clang-format on
   po::variables_map vm;
   if (!tools::parseCommandLine(argc, argv, options, vm)) return false;
+  interpretCommand(vm, c);
+  return true;
+}
+
+/// @brief The parsed words turned into settings; a bad value is a command-line error (exit 2), as a bad number
+/// is, not a failure of the run.
+void interpretCommand(const po::variables_map& vm, AlignCommand& c) {
   tools::requireOutputFolderOf(c.plot_path, "--plot");
   c.settings.stop_on_repeated_correspondences = !c.pcl_stopping_only;
-  // A bad value is a command-line error (exit 2), as a bad number is, not a failure of the run.
   try {
     c.strategy = parseWeightStrategy(c.strategy_name);
   } catch (const std::invalid_argument& e) {
@@ -112,7 +120,6 @@ bool parseCommand(int argc, char** argv, AlignCommand& c) {
   } catch (const std::invalid_argument& e) {
     throw po::error(std::string("--up-axis: ") + e.what());
   }
-  return true;
 }
 
 /// @brief Reads one map, keeping landmarks with enough observations; refuses a map left empty.

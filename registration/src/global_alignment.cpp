@@ -384,6 +384,25 @@ std::vector<Hypothesis> voteRotations(const Points& sample, const Eigen::Vector3
   return hypotheses;
 }
 
+/// Around the `s.tilted_hypotheses` best refined hypotheses (`results`, best first), the tilt whose fine vote is
+/// fullest, each refined again; the result with the most inliers, `best` unless one has more.
+Refined bestTilted(const Search& search, const std::vector<Refined>& results, Refined best,
+                   const GlobalAlignmentSettings& s, WorkerPool& pool, unsigned threads) {
+  const std::size_t count = std::min<std::size_t>(results.size(), s.tilted_hypotheses);
+  std::vector<Eigen::Matrix4d> tilts;
+  for (std::size_t h = 0; h < count; ++h)
+    tilts.push_back(bestTilt(search, results[h], s.tilt_range_deg, s.tilt_step_deg, pool, threads));
+  std::vector<Refined> tilted(count);
+  pool.run(count, 1, std::max<unsigned>(1, std::min<unsigned>(threads, static_cast<unsigned>(count))),
+           [&](std::size_t begin, std::size_t end, unsigned) {
+             for (std::size_t h = begin; h < end; ++h)
+               tilted[h] = refineHypothesis(search, tilts[h], results[h].yaw, results[h].translation);
+           });
+  for (const Refined& t : tilted)
+    if (t.inliers > best.inliers) best = t;
+  return best;
+}
+
 }  // namespace
 
 GlobalAlignment::GlobalAlignment(GlobalAlignmentSettings settings)
@@ -498,21 +517,9 @@ GlobalAlignmentResult GlobalAlignment::align(const Cloud& source_cloud, const Ei
   std::stable_sort(results.begin(), results.end(),
                    [](const Refined& a, const Refined& b) { return a.inliers > b.inliers; });
   Refined best = results.empty() ? Refined{} : results.front();
-  // 2b. Tilts, when the up axes may disagree by a few degrees (each estimated from its map's cameras): around
-  // the best few, the tilt whose fine vote is fullest, refined as above.
-  if (s.tilt_range_deg > 0.0) {
-    const std::size_t tilted_count = std::min<std::size_t>(results.size(), s.tilted_hypotheses);
-    std::vector<Eigen::Matrix4d> tilts;
-    for (std::size_t h = 0; h < tilted_count; ++h)
-      tilts.push_back(bestTilt(search, results[h], s.tilt_range_deg, s.tilt_step_deg, *pool_, threadsFor(100)));
-    std::vector<Refined> tilted(tilted_count);
-    pool_->run(tilted_count, 1, threadsFor(tilted_count), [&](std::size_t begin, std::size_t end, unsigned) {
-      for (std::size_t h = begin; h < end; ++h)
-        tilted[h] = refineHypothesis(search, tilts[h], results[h].yaw, results[h].translation);
-    });
-    for (const Refined& t : tilted)
-      if (t.inliers > best.inliers) best = t;
-  }
+  // 2b. Tilts, when the up axes may disagree by a few degrees (each estimated from its map's cameras).
+  if (s.tilt_range_deg > 0.0)
+    best = bestTilted(search, results, best, s, *pool_, threadsFor(std::numeric_limits<std::size_t>::max()));
 
   // 3. The winner refined on every source point.
   GlobalAlignmentResult result = finish(source, best.transformation, 2.0 * s.fine_cell);
