@@ -23,7 +23,7 @@ struct UpAxisEstimate {
   /// Unit vector in the map's frame; +z when there is no camera.
   Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();
   /// Root-mean-square angle between the cameras' image rows and the plane perpendicular to `axis` (degrees):
-  /// how level the rows are about it (the paper's real map: 6.8°, a hand-held TUM camera's roll).
+  /// how level the rows are about it (the paper's real map: 6.9°, a hand-held TUM camera's roll).
   double row_tilt_deg = 0.0;
   /// Camera poses the estimate came from.
   std::size_t cameras = 0;
@@ -36,7 +36,7 @@ struct UpAxisEstimate {
 /// sum of the cameras' x axes' outer products, signed so that the cameras' mean y axis points down along it.
 /// @param camera_poses  camera-to-world poses (x right along the image rows, y down the image, z forward)
 /// @param min_heading_spread  smallest second eigenvalue (of the outer products' mean, whose eigenvalues sum
-///        to 1) for the rows alone to fix the axis: 0.03 is headings about 10° apart; below it the rows fix
+///        to 1) for the rows alone to fix the axis: 0.03 is two headings 20° apart; below it the rows fix
 ///        only a plane and the mean down direction chooses within it
 UpAxisEstimate estimateUpAxis(const std::map<FrameId, Eigen::Isometry3d>& camera_poses,
                               double min_heading_spread = 0.03);
