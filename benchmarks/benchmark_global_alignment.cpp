@@ -2,8 +2,11 @@
 // alternate-landmark halves (no landmark in both), the source displaced by
 // yaw 180° and (1.5, -1) m. "global_search" is GlobalAlignment alone,
 // "with_weighted_icp" adds the final weighted ICP with refinement, as
-// wicp_align --global runs it (one search thread, so the figure does not
-// depend on the machine's core count).
+// wicp_align --global runs it; "camera_frame" is the same pair written in the
+// map's first camera's frame and turned about the true up by 120°, so that
+// each map is levelled by its cameras, tilts are tried and the search about z
+// runs as well (GlobalLandmarkAligner::align with chooseUpAxes's axes). The
+// argument is the number of search threads (1, 2): the same result on each.
 //
 //   wicp_benchmark_global_alignment [--map FILE] [Google Benchmark flags]
 
@@ -17,6 +20,7 @@
 #include "weighted_icp/io/map_format.h"
 #include "weighted_icp/registration/global_landmark_alignment.h"
 #include "weighted_icp/registration/rigid_motion.h"
+#include "weighted_icp/registration/up_axis.h"
 
 namespace {
 
@@ -37,11 +41,41 @@ const Pair& pair() {
   return p;
 }
 
+/// The pair in the first camera's frame, the source turned by 120° about the true up (the world's z there), and
+/// the axes chooseUpAxes gives it.
+struct CameraFramePair {
+  LandmarkCloud::Ptr source, target;
+  SharedUpAxes axes;
+};
+
+const CameraFramePair& cameraFramePair() {
+  static const CameraFramePair p = [] {
+    LandmarkMap map = io::readLandmarkMap(map_path).withMinObservations(2);
+    const Eigen::Isometry3d first = map.frames.begin()->second;
+    map.transform(first.inverse());
+    auto [even, odd] = map.alternateHalves();
+    Eigen::Isometry3d turn = Eigen::Isometry3d::Identity();
+    turn.linear() =
+        Eigen::AngleAxisd(2.0 * M_PI / 3.0, first.linear().transpose() * Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    turn.translation() = Eigen::Vector3d(0.5, -0.3, 0.2);
+    odd.transform(turn);
+    return CameraFramePair{toLandmarkCloud(odd, CovarianceWeight{}), toLandmarkCloud(even, CovarianceWeight{}),
+                           chooseUpAxes(estimateUpAxis(odd.frames), estimateUpAxis(even.frames))};
+  }();
+  return p;
+}
+
+GlobalAlignmentSettings searchThreads(const benchmark::State& state) {
+  GlobalAlignmentSettings settings;
+  settings.threads = static_cast<unsigned>(state.range(0));
+  return settings;
+}
+
 void BM_GlobalSearch(benchmark::State& state) {
   GlobalAlignment::Cloud source, target;
   pcl::copyPointCloud(*pair().source, source);
   pcl::copyPointCloud(*pair().target, target);
-  GlobalAlignment global;
+  GlobalAlignment global(searchThreads(state));
   global.setTarget(target);
   for (auto _ : state) benchmark::DoNotOptimize(global.align(source).inliers);
   state.counters["points"] = static_cast<double>(source.size());
@@ -49,14 +83,24 @@ void BM_GlobalSearch(benchmark::State& state) {
 
 void BM_GlobalWithWeightedIcp(benchmark::State& state) {
   AlignmentSettings icp;
-  icp.threads = 1;
-  GlobalLandmarkAligner aligner({}, icp);
+  icp.threads = static_cast<unsigned>(state.range(0));
+  GlobalLandmarkAligner aligner(searchThreads(state), icp);
   aligner.setTarget(pair().target);
   for (auto _ : state) benchmark::DoNotOptimize(aligner.align(pair().source).alignment.iterations);
 }
 
-BENCHMARK(BM_GlobalSearch)->Name("global_search")->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_GlobalWithWeightedIcp)->Name("with_weighted_icp")->Unit(benchmark::kMillisecond);
+void BM_CameraFrame(benchmark::State& state) {
+  AlignmentSettings icp;
+  icp.threads = static_cast<unsigned>(state.range(0));
+  GlobalLandmarkAligner aligner(searchThreads(state), icp);
+  aligner.setTarget(cameraFramePair().target);
+  for (auto _ : state)
+    benchmark::DoNotOptimize(aligner.align(cameraFramePair().source, cameraFramePair().axes).alignment.iterations);
+}
+
+BENCHMARK(BM_GlobalSearch)->Name("global_search")->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_GlobalWithWeightedIcp)->Name("with_weighted_icp")->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_CameraFrame)->Name("camera_frame")->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 
