@@ -386,12 +386,12 @@ std::vector<Hypothesis> voteRotations(const Points& sample, const Eigen::Vector3
 
 /// Around the `s.tilted_hypotheses` best refined hypotheses (`results`, best first), the tilt whose fine vote is
 /// fullest, each refined again; the result with the most inliers, `best` unless one has more.
-Refined bestTilted(const Search& search, const std::vector<Refined>& results, Refined best,
+Refined bestTilted(const Search& search, const std::vector<Refined>& results, Refined best, double range_deg,
                    const GlobalAlignmentSettings& s, WorkerPool& pool, unsigned threads) {
   const std::size_t count = std::min<std::size_t>(results.size(), s.tilted_hypotheses);
   std::vector<Eigen::Matrix4d> tilts;
   for (std::size_t h = 0; h < count; ++h)
-    tilts.push_back(bestTilt(search, results[h], s.tilt_range_deg, s.tilt_step_deg, pool, threads));
+    tilts.push_back(bestTilt(search, results[h], range_deg, s.tilt_step_deg, pool, threads));
   std::vector<Refined> tilted(count);
   pool.run(count, 1, std::max<unsigned>(1, std::min<unsigned>(threads, static_cast<unsigned>(count))),
            [&](std::size_t begin, std::size_t end, unsigned) {
@@ -469,13 +469,24 @@ void GlobalAlignment::setTarget(const Cloud& target) {
 }
 
 GlobalAlignmentResult GlobalAlignment::align(const Cloud& source_cloud, const Eigen::Vector3d& source_up_axis) const {
+  return align(source_cloud, source_up_axis, settings_.up_axis, settings_.tilt_range_deg);
+}
+
+GlobalAlignmentResult GlobalAlignment::align(const Cloud& source_cloud, const Eigen::Vector3d& source_up_axis,
+                                             const Eigen::Vector3d& up_axis, double tilt_range_deg) const {
   if (target_->points.empty()) throw std::invalid_argument("GlobalAlignment::align: no target set");
   if (!source_up_axis.allFinite())
     throw std::invalid_argument("GlobalAlignment::align: the source's up axis must be finite (zero: the target's)");
+  if (!up_axis.allFinite() || !(up_axis.norm() > 0.0))
+    throw std::invalid_argument("GlobalAlignment::align: the up axis must be a finite non-zero vector");
+  if (!(tilt_range_deg >= 0.0 && tilt_range_deg <= 30.0 && tilt_range_deg / settings_.tilt_step_deg <= 20.0))
+    throw std::invalid_argument(
+        "GlobalAlignment::align: the tilt range must be in [0, 30] degrees and at most 20 "
+        "tilt steps");
   const auto start = std::chrono::steady_clock::now();
   const GlobalAlignmentSettings& s = settings_;
   // The source levelled: its own up axis turned onto the target's, so one axis serves both.
-  const Eigen::Vector3d axis = s.up_axis.normalized();
+  const Eigen::Vector3d axis = up_axis.normalized();
   const Eigen::Matrix3d level =
       source_up_axis.norm() > 0.0
           ? Eigen::Quaterniond::FromTwoVectors(source_up_axis.normalized(), axis).toRotationMatrix()
@@ -518,8 +529,9 @@ GlobalAlignmentResult GlobalAlignment::align(const Cloud& source_cloud, const Ei
                    [](const Refined& a, const Refined& b) { return a.inliers > b.inliers; });
   Refined best = results.empty() ? Refined{} : results.front();
   // 2b. Tilts, when the up axes may disagree by a few degrees (each estimated from its map's cameras).
-  if (s.tilt_range_deg > 0.0)
-    best = bestTilted(search, results, best, s, *pool_, threadsFor(std::numeric_limits<std::size_t>::max()));
+  if (tilt_range_deg > 0.0)
+    best = bestTilted(search, results, best, tilt_range_deg, s, *pool_,
+                      threadsFor(std::numeric_limits<std::size_t>::max()));
 
   // 3. The winner refined on every source point.
   GlobalAlignmentResult result = finish(source, best.transformation, 2.0 * s.fine_cell);

@@ -22,7 +22,6 @@ void GlobalLandmarkAligner::setTarget(LandmarkCloud::ConstPtr target) {
   pcl::copyPointCloud(*target, xyz);
   global_.setTarget(xyz);
   target_ = std::move(target);
-  target_xyz_ = std::move(xyz);
 }
 
 GlobalLandmarkAlignmentResult GlobalLandmarkAligner::align(const LandmarkCloud::ConstPtr& source) {
@@ -41,21 +40,10 @@ GlobalLandmarkAlignmentResult GlobalLandmarkAligner::align(const LandmarkCloud::
   const auto start = std::chrono::steady_clock::now();
   GlobalAlignment::Cloud xyz;
   pcl::copyPointCloud(*source, xyz);
-  // The search about `up` with tilts within ±tilt: the one set up by setTarget() when it is that one.
-  const auto search = [&](const Eigen::Vector3d& source_up, const Eigen::Vector3d& up, double tilt) {
-    const GlobalAlignmentSettings& own = global_.settings();
-    if (source_up == up && up == own.up_axis && tilt == own.tilt_range_deg) return global_.align(xyz);
-    GlobalAlignmentSettings settings = own;
-    settings.up_axis = up;
-    settings.tilt_range_deg = tilt;
-    GlobalAlignment other(settings);
-    other.setTarget(target_xyz_);
-    return other.align(xyz, source_up);
-  };
-  GlobalAlignmentResult best = search(axes.source, axes.target, axes.tilt_range_deg);
+  GlobalAlignmentResult best = global_.align(xyz, axes.source, axes.target, axes.tilt_range_deg);
   Eigen::Vector3d source_up = axes.source, target_up = axes.target;
   if (axes.also_try_z) {
-    GlobalAlignmentResult z = search(Eigen::Vector3d::UnitZ(), Eigen::Vector3d::UnitZ(), 0.0);
+    GlobalAlignmentResult z = global_.align(xyz, Eigen::Vector3d::UnitZ(), Eigen::Vector3d::UnitZ(), 0.0);
     // A tie keeps the maps' own z, as before the axes were estimated. No margin in its favour: on a sparse map
     // a pose tens of degrees off can leave nearly as many inliers as the truth (fr3's, overlap 0.2).
     if (z.inliers >= best.inliers) {

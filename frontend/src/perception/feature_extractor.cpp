@@ -224,20 +224,18 @@ ExtractedFeatures FeatureExtractor::extract(const cv::Mat& gray) const {
   if (gray.type() != CV_8UC1)
     throw std::invalid_argument("FeatureExtractor::extract: needs an 8-bit single-channel image, got type " +
                                 cv::typeToString(gray.type()));
-  const int min_width = options_.min_working_width, max_width = options_.max_working_width;
-  const bool narrow = min_width > 0 && gray.cols < min_width;
-  const bool wide = max_width > 0 && gray.cols > max_width;
-  if (!narrow && !wide) return extractAtWorkingSize(gray);
+  const int working_width = workingWidth(gray.cols);
+  if (working_width == gray.cols) return extractAtWorkingSize(gray);
   cv::Mat working = gray;
   // Enlarged bilinearly: no detail made up, none lost, but every gradient halved, so each corner's response (the
   // gradient matrix's smaller eigenvalue) quartered: the response floor follows, or the corners of a 640x480 frame
   // would not be found in a 320x240 one's enlargement (and the frames would hover at the equalisation threshold).
   double response_scale = 1.0;
-  while (min_width > 0 && working.cols < min_width) {
+  while (working.cols < working_width) {
     cv::resize(working, working, cv::Size(working.cols * 2, working.rows * 2), 0.0, 0.0, cv::INTER_LINEAR);
     response_scale *= 0.25;
   }
-  while (max_width > 0 && working.cols > max_width && working.cols >= 2 && working.rows >= 2)
+  while (working.cols > working_width && working.rows >= 2)
     cv::resize(working, working, cv::Size(working.cols / 2, working.rows / 2), 0.0, 0.0, cv::INTER_AREA);
   ExtractedFeatures features = extractAtWorkingSize(working, response_scale);
   // Working pixel u spans input pixels [u s, (u + 1) s): its centre is (u + 0.5) s - 0.5.

@@ -137,6 +137,14 @@ class GlobalAlignment {
   ///        Zero (the default): the settings' `up_axis`
   GlobalAlignmentResult align(const Cloud& source,
                               const Eigen::Vector3d& source_up_axis = Eigen::Vector3d::Zero()) const;
+  /// @brief As align(source, source_up_axis), about the given up axis and with the given tilts instead of the
+  /// settings' `up_axis` and `tilt_range_deg`: one target, searched about several axes, is indexed once.
+  /// @param source          as align()
+  /// @param source_up_axis  as align()
+  /// @param up_axis         the target's up axis (finite, non-zero)
+  /// @param tilt_range_deg  as GlobalAlignmentSettings::tilt_range_deg (0-30, at most 20 tilt steps)
+  GlobalAlignmentResult align(const Cloud& source, const Eigen::Vector3d& source_up_axis,
+                              const Eigen::Vector3d& up_axis, double tilt_range_deg) const;
 
   /// @brief Only the trimmed ICP (no search), from `guess`: for a start already in the basin.
   /// @param source  as align()

@@ -64,7 +64,6 @@ class GlobalLandmarkAligner {
   GlobalAlignment global_;
   AlignmentSettings icp_settings_;
   LandmarkCloud::ConstPtr target_;
-  GlobalAlignment::Cloud target_xyz_;
 };
 
 }  // namespace weighted_icp
