@@ -152,125 +152,156 @@ std::string fileStem(const std::string& row) {
   return stem;
 }
 
+/// Everything the command line sets.
+struct CrossSequenceCommand {
+  std::string data = WEIGHTED_ICP_DATA_DIR, scratch, trajectories;
+  std::string variants = "jpeg,mm-depth,focal,unregistered,blur,low-light,burst,kinect";
+  std::string runs = "default,relative-brisque,absolute,paper,no-gate,opencv";
+  std::string sequences = "fr1_head,fr3_head,synthetic";
+  std::size_t max_frames = 0, synthetic_frames = 150;
+  std::vector<std::string> choices;  // --frontend-option KEY=VALUE
+  simulation::SequenceVariantOptions parameters;
+};
+
+/// Parses and checks the command line into `c`; false when only --help was asked for.
+bool parseCommand(int argc, char** argv, CrossSequenceCommand& c) {
+  simulation::SequenceVariantOptions& p = c.parameters;
+  po::options_description description("wicp_benchmark_cross_sequence options");
+  // clang-format off
+  description.add_options()
+      ("help,h", "print this help")
+      ("scratch", po::value(&c.scratch)->required(), "folder for the variants (outside the source tree)")
+      ("data", po::value(&c.data)->default_value(c.data), "folder with tum_fr1_xyz_head and tum_fr3_teddy_head")
+      ("max-frames", po::value(&c.max_frames)->default_value(c.max_frames), "frames per TUM sequence (0 = all)")
+      ("synthetic-frames", po::value(&c.synthetic_frames)->default_value(c.synthetic_frames), "synthetic sequence length (0 = none)")
+      ("sequences", po::value(&c.sequences)->default_value(c.sequences), "comma-separated: fr1_head, fr3_head, synthetic")
+      ("variants", po::value(&c.variants)->default_value(c.variants), "comma-separated variants (kinds of wicp_make_variant, or kinect; a+b combines two, e.g. kinect+blur)")
+      ("runs", po::value(&c.runs)->default_value(c.runs), "comma-separated: default, relative-brisque, absolute, paper, no-gate, opencv")
+      ("resolution-scale", po::value(&p.resolution_scale)->default_value(p.resolution_scale), "variant resolution: new width / old (0.25-4)")
+      ("depth-resolution-scale", po::value(&p.depth_resolution_scale)->default_value(p.depth_resolution_scale), "variant depth-resolution: depth width / colour width (0.25-4)")
+      ("crop-aspect", po::value(&p.crop_aspect)->default_value(p.crop_aspect), "variant crop: width / height kept (1-4; 1.7778: 16:9)")
+      ("frontend-option", po::value(&c.choices)->composing(),
+       "KEY=VALUE, repeatable: a front-end choice by wicp_rgbd_slam's option name (pnp=iterative, "
+       "descriptor=modified-brief, dense-odometry=prior, ...), applied to every run but opencv")
+      ("trajectories", po::value(&c.trajectories),
+       "also write every run's trajectory (TUM format) into this folder as SEQUENCE_RUN.txt, with the "
+       "ground truth as SEQUENCE_groundtruth.txt, to see where one loses (wicp_evaluate --plot)");
+  // clang-format on
+  po::variables_map vm;
+  po::store(po::parse_command_line(argc, argv, description), vm);
+  if (vm.count("help")) {
+    std::cout << description << '\n';
+    return false;
+  }
+  po::notify(vm);
+  requireOutsideSourceTree("scratch", c.scratch);
+  if (!c.trajectories.empty()) requireOutsideSourceTree("trajectories", c.trajectories);
+  return true;
+}
+
+/// The table's columns (--runs), each front-end run with the --frontend-option choices.
+std::vector<Tracker> columnsOf(const CrossSequenceCommand& c) {
+  std::vector<Tracker> columns = trackers(c.runs);
+  for (const std::string& choice : c.choices) {
+    const std::size_t equals = choice.find('=');
+    if (equals == std::string::npos) throw po::error("--frontend-option " + choice + ": expected KEY=VALUE");
+    for (Tracker& column : columns) {
+      try {
+        frontend::setFrontendChoice(column.options.frontend, choice.substr(0, equals), choice.substr(equals + 1));
+      } catch (const std::invalid_argument& e) {
+        throw po::error(std::string("--frontend-option: ") + e.what());
+      }
+    }
+  }
+  return columns;
+}
+
+/// "original" and the --variants, each checked before any run.
+std::vector<std::string> variantNames(const std::string& variants) {
+  std::vector<std::string> names{"original"};
+  std::stringstream list(variants);
+  for (std::string name; std::getline(list, name, ',');) {
+    kindsOf(name);  // an unknown name fails before any run
+    names.push_back(name);
+  }
+  return names;
+}
+
+/// The --sequences found: the TUM heads in --data (a missing one is skipped, saying so) and the synthetic sequence.
+std::vector<Base> basesOf(const CrossSequenceCommand& c) {
+  std::vector<Base> bases;
+  for (const auto& [folder, freiburg] :
+       {std::pair<const char*, int>{"tum_fr1_xyz_head", 1}, {"tum_fr3_teddy_head", 3}}) {
+    const std::string dir = c.data + "/" + folder;
+    if (!fs::exists(dir)) {
+      std::cerr << "skipping " << dir << ": not found\n";
+      continue;
+    }
+    const std::string name = folder == std::string("tum_fr1_xyz_head") ? "fr1_head" : "fr3_head";
+    if (c.sequences.find(name) == std::string::npos) continue;
+    Base base{name, simulation::tumVariantSource(dir, tumCamera(freiburg))};
+    if (c.max_frames) base.source.size = std::min(base.source.size, c.max_frames);
+    bases.push_back(base);
+  }
+  if (c.synthetic_frames > 0 && c.sequences.find("synthetic") != std::string::npos) {
+    simulation::SyntheticRgbdOptions synthetic;
+    synthetic.frames = c.synthetic_frames;
+    bases.push_back({"synthetic", simulation::syntheticVariantSource(synthetic)});
+  }
+  return bases;
+}
+
+/// The Markdown table's header.
+void printHeader(const std::vector<Tracker>& columns) {
+  std::cout << "ATE RMSE in cm (frames without a pose)\n\n| sequence | frames |";
+  for (const Tracker& tracker : columns) std::cout << ' ' << tracker.name << " |";
+  std::cout << " median / p90 ms, default | median / p90 ms, opencv | default lower than opencv |\n|---|---|";
+  for (std::size_t c = 0; c < columns.size() + 3; ++c) std::cout << "---|";
+  std::cout << std::endl;
+}
+
+/// One row: every column run on one sequence, its trajectories written when --trajectories asks.
+void printRow(const Sequence& sequence, const std::vector<Tracker>& columns, const std::string& trajectories) {
+  std::cout << "| " << sequence.name << " | " << sequence.frames.size() << " |";
+  std::string timing[2] = {"–", "–"};
+  std::optional<Trajectory> ours, opencv;
+  if (!trajectories.empty())
+    io::writeTrajectory(sequence.truth, trajectories + "/" + fileStem(sequence.name) + "_groundtruth.txt");
+  for (const Tracker& tracker : columns) {
+    const Run run =
+        tracker.opencv ? benchmarks::runOpenCvOdometry(sequence) : benchmarks::runFrontend(sequence, tracker.options);
+    std::cout << ' ' << cell(run, sequence.frames.size()) << " |" << std::flush;
+    if (!trajectories.empty())
+      io::writeTrajectory(run.estimate, trajectories + "/" + fileStem(sequence.name) + "_" + tracker.name + ".txt");
+    std::ostringstream ms;
+    ms << std::fixed << std::setprecision(1) << run.medianMs() << " / " << run.p90Ms();
+    if (tracker.name == "default") {
+      timing[0] = ms.str();
+      ours = run.estimate;
+    }
+    if (tracker.opencv) {
+      timing[1] = ms.str();
+      opencv = run.estimate;
+    }
+  }
+  std::cout << ' ' << timing[0] << " | " << timing[1] << " | " << versus(sequence.truth, ours, opencv) << " |"
+            << std::endl;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   try {
-    std::string data = WEIGHTED_ICP_DATA_DIR, scratch, trajectories,
-                variants =
-                    "jpeg,mm-depth,focal,unregistered,blur,low-light,"
-                    "burst,kinect",
-                runs = "default,relative-brisque,absolute,paper,no-gate,opencv",
-                sequences = "fr1_head,fr3_head,synthetic";
-    std::size_t max_frames = 0, synthetic_frames = 150;
-    std::vector<std::string> choices;
-    simulation::SequenceVariantOptions parameters;
-    po::options_description description("wicp_benchmark_cross_sequence options");
-    // clang-format off
-    description.add_options()
-        ("help,h", "print this help")
-        ("scratch", po::value(&scratch)->required(), "folder for the variants (outside the source tree)")
-        ("data", po::value(&data)->default_value(data), "folder with tum_fr1_xyz_head and tum_fr3_teddy_head")
-        ("max-frames", po::value(&max_frames)->default_value(max_frames), "frames per TUM sequence (0 = all)")
-        ("synthetic-frames", po::value(&synthetic_frames)->default_value(synthetic_frames), "synthetic sequence length (0 = none)")
-        ("sequences", po::value(&sequences)->default_value(sequences), "comma-separated: fr1_head, fr3_head, synthetic")
-        ("variants", po::value(&variants)->default_value(variants), "comma-separated variants (kinds of wicp_make_variant, or kinect; a+b combines two, e.g. kinect+blur)")
-        ("runs", po::value(&runs)->default_value(runs), "comma-separated: default, relative-brisque, absolute, paper, no-gate, opencv")
-        ("resolution-scale", po::value(&parameters.resolution_scale)->default_value(parameters.resolution_scale), "variant resolution: new width / old (0.25-4)")
-        ("depth-resolution-scale", po::value(&parameters.depth_resolution_scale)->default_value(parameters.depth_resolution_scale), "variant depth-resolution: depth width / colour width (0.25-4)")
-        ("crop-aspect", po::value(&parameters.crop_aspect)->default_value(parameters.crop_aspect), "variant crop: width / height kept (1-4; 1.7778: 16:9)")
-        ("frontend-option", po::value(&choices)->composing(),
-         "KEY=VALUE, repeatable: a front-end choice by wicp_rgbd_slam's option name (pnp=iterative, "
-         "descriptor=modified-brief, dense-odometry=prior, ...), applied to every run but opencv")
-        ("trajectories", po::value(&trajectories),
-         "also write every run's trajectory (TUM format) into this folder as SEQUENCE_RUN.txt, with the "
-         "ground truth as SEQUENCE_groundtruth.txt, to see where one loses (wicp_evaluate --plot)");
-    // clang-format on
-    po::variables_map vm;
-    po::store(po::parse_command_line(argc, argv, description), vm);
-    if (vm.count("help")) {
-      std::cout << description << '\n';
-      return 0;
-    }
-    po::notify(vm);
-    requireOutsideSourceTree("scratch", scratch);
-    if (!trajectories.empty()) {
-      requireOutsideSourceTree("trajectories", trajectories);
-      fs::create_directories(trajectories);
-    }
-    std::vector<Tracker> columns = trackers(runs);
-    for (const std::string& choice : choices) {
-      const std::size_t equals = choice.find('=');
-      if (equals == std::string::npos) throw po::error("--frontend-option " + choice + ": expected KEY=VALUE");
-      for (Tracker& column : columns) {
-        try {
-          frontend::setFrontendChoice(column.options.frontend, choice.substr(0, equals), choice.substr(equals + 1));
-        } catch (const std::invalid_argument& e) {
-          throw po::error(std::string("--frontend-option: ") + e.what());
-        }
-      }
-    }
-    std::vector<std::string> variant_names{"original"};
-    std::stringstream list(variants);
-    for (std::string name; std::getline(list, name, ',');) {
-      kindsOf(name);  // an unknown name fails before any run
-      variant_names.push_back(name);
-    }
-
-    std::vector<Base> bases;
-    for (const auto& [folder, freiburg] :
-         {std::pair<const char*, int>{"tum_fr1_xyz_head", 1}, {"tum_fr3_teddy_head", 3}}) {
-      const std::string dir = data + "/" + folder;
-      if (!fs::exists(dir)) {
-        std::cerr << "skipping " << dir << ": not found\n";
-        continue;
-      }
-      const std::string name = folder == std::string("tum_fr1_xyz_head") ? "fr1_head" : "fr3_head";
-      if (sequences.find(name) == std::string::npos) continue;
-      Base base{name, simulation::tumVariantSource(dir, tumCamera(freiburg))};
-      if (max_frames) base.source.size = std::min(base.source.size, max_frames);
-      bases.push_back(base);
-    }
-    if (synthetic_frames > 0 && sequences.find("synthetic") != std::string::npos) {
-      simulation::SyntheticRgbdOptions synthetic;
-      synthetic.frames = synthetic_frames;
-      bases.push_back({"synthetic", simulation::syntheticVariantSource(synthetic)});
-    }
-
-    std::cout << "ATE RMSE in cm (frames without a pose)\n\n| sequence | frames |";
-    for (const Tracker& tracker : columns) std::cout << ' ' << tracker.name << " |";
-    std::cout << " median / p90 ms, default | median / p90 ms, opencv | default lower than opencv |\n|---|---|";
-    for (std::size_t c = 0; c < columns.size() + 3; ++c) std::cout << "---|";
-    std::cout << std::endl;
+    CrossSequenceCommand c;
+    if (!parseCommand(argc, argv, c)) return 0;
+    const std::vector<Tracker> columns = columnsOf(c);
+    const std::vector<std::string> variants = variantNames(c.variants);
+    if (!c.trajectories.empty()) fs::create_directories(c.trajectories);
+    const std::vector<Base> bases = basesOf(c);
+    printHeader(columns);
     for (const Base& base : bases)
-      for (const std::string& variant : variant_names) {
-        const Sequence sequence = prepare(base, variant, scratch, parameters);
-        std::cout << "| " << sequence.name << " | " << sequence.frames.size() << " |";
-        std::string timing[2] = {"–", "–"};
-        std::optional<Trajectory> ours, opencv;
-        if (!trajectories.empty())
-          io::writeTrajectory(sequence.truth, trajectories + "/" + fileStem(sequence.name) + "_groundtruth.txt");
-        for (const Tracker& tracker : columns) {
-          const Run run = tracker.opencv ? benchmarks::runOpenCvOdometry(sequence)
-                                         : benchmarks::runFrontend(sequence, tracker.options);
-          std::cout << ' ' << cell(run, sequence.frames.size()) << " |" << std::flush;
-          if (!trajectories.empty())
-            io::writeTrajectory(run.estimate,
-                                trajectories + "/" + fileStem(sequence.name) + "_" + tracker.name + ".txt");
-          std::ostringstream ms;
-          ms << std::fixed << std::setprecision(1) << run.medianMs() << " / " << run.p90Ms();
-          if (tracker.name == "default") {
-            timing[0] = ms.str();
-            ours = run.estimate;
-          }
-          if (tracker.opencv) {
-            timing[1] = ms.str();
-            opencv = run.estimate;
-          }
-        }
-        std::cout << ' ' << timing[0] << " | " << timing[1] << " | " << versus(sequence.truth, ours, opencv) << " |"
-                  << std::endl;
-      }
+      for (const std::string& variant : variants)
+        printRow(prepare(base, variant, c.scratch, c.parameters), columns, c.trajectories);
     return 0;
   } catch (const po::error& e) {
     std::cerr << "wicp_benchmark_cross_sequence: error: " << e.what() << '\n';

@@ -115,76 +115,106 @@ void writeOutputs(const fs::path& dir, const std::vector<std::string>& folders,
   tools::writeTextFile((dir / "report.json").string(), report.str() + "\n");
 }
 
+/// Everything the command line sets.
+struct MergeCommand {
+  std::vector<std::string> folders;
+  std::string out_dir, vocabulary_path;
+  bool overwrite = false;
+  mapping::SessionMergeOptions options;
+};
+
+/// Parses and checks the command line into `c`; false when only --help was asked for.
+bool parseCommand(int argc, char** argv, MergeCommand& c) {
+  po::options_description description(
+      "wicp_merge --session A --session B [--session C ...] --out DIR [--vocabulary FILE] [--overwrite]\n"
+      "Merges SLAM sessions (the session/ folders of wicp_rgbd_slam) into the first one's frame: place\n"
+      "recognition between their keyframes, verification with no prior (PnP, weighted ICP), at least\n"
+      "--min-loops verified loops agreeing on the transform, a free-space check, then the other keyframes\n"
+      "verified again with the link as prior, one joint pose graph. DIR gets trajectory.txt\n"
+      "(every frame of every merged session, TUM format), map.ply, graph.txt, loops.txt and report.json, published\n"
+      "in one rename. A session without overlap is left out and the report says \"no overlap\" (exit 0).\n"
+      "Exit 1: an error (a missing or corrupt session file, named with its line), nothing written.\n"
+      "Exit 2: bad command line. Options");
+  // clang-format off
+  description.add_options()
+      ("help,h", "print this help")
+      ("session", po::value(&c.folders)->required(), "a session folder (repeat; at least two)")
+      ("out", po::value(&c.out_dir)->required(), "output folder (created; published complete or not at all)")
+      ("overwrite", "replace --out if it exists and is not empty")
+      ("vocabulary", po::value(&c.vocabulary_path), "place-recognition vocabulary; default: the one built with the tools")
+      ("min-loops", tools::rangedValue(&c.options.min_agreeing_loops, std::size_t{1}, std::size_t{1000})
+                        ->default_value(c.options.min_agreeing_loops),
+       "verified loops that must agree on a session's transform (1-1000)")
+      ("max-free-space-violation", tools::rangedValue(&c.options.max_free_space_violation, 0.0, 1.0)
+                                       ->default_value(c.options.max_free_space_violation),
+       "largest fraction of landmark sightings that may lie in space the other session saw through (0-1; "
+       "1 turns the check off; docs/mapping.md)")
+      ("agreeing-loops-only", "keep only the loops verified without prior that agree on the transform (do not "
+                              "verify the other keyframes again with the link as prior)")
+      ("odometry-information", tools::namedValue(&c.options.tracking_information, tools::parseOdometryInformation,
+                                                 tools::odometryInformationName),
+       "the joint pose graph's odometry edges within a session: information from tracking (reprojection "
+       "Hessians) or the fixed noise model")
+      ("minimap-keyframes", tools::rangedValue(&c.options.keyframes_per_minimap, std::size_t{1}, std::size_t{100000})
+                                ->default_value(c.options.keyframes_per_minimap),
+       "keyframes per mini-map of graph.txt (1-100000)");
+  // clang-format on
+  po::variables_map vm;
+  if (!tools::parseCommandLine(argc, argv, description, vm)) return false;
+  if (c.folders.size() < 2) throw po::error("give at least two --session folders");
+  c.options.loops_with_link_prior = vm.count("agreeing-loops-only") == 0;
+  c.overwrite = vm.count("overwrite") > 0;
+  return true;
+}
+
+/// One progress line per verification pass, on stderr (SessionMergeOptions::progress).
+class PassProgress {
+ public:
+  void operator()(const std::string& pass, std::size_t done, std::size_t total) {
+    if (pass != current_pass_) {
+      if (progress_) progress_->finish();
+      current_pass_ = pass;
+      progress_ = std::make_unique<tools::Progress>("verifying " + pass, total);
+    }
+    if (done > 0) progress_->step();
+  }
+  void finish() {
+    if (progress_) progress_->finish();
+  }
+
+ private:
+  std::unique_ptr<tools::Progress> progress_;
+  std::string current_pass_;
+};
+
+/// One line per session after the first: merged or left out, and the loops that decided it.
+void printSummary(const std::vector<std::string>& folders, const mapping::SessionMerge& merge) {
+  for (std::size_t s = 1; s < folders.size(); ++s)
+    std::cout << folders[s] << ": " << (merge.sessions[s].merged ? "merged" : "no overlap, left out") << " ("
+              << merge.sessions[s].loops_agreeing << " agreeing of " << merge.sessions[s].loops_found
+              << " verified loops, " << merge.sessions[s].loops_with_link_prior
+              << " more verified with the link as prior)\n";
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   return tools::runTool("wicp_merge", [&] {
-    std::vector<std::string> folders;
-    std::string out_dir, vocabulary_path;
-    mapping::SessionMergeOptions options;
-    po::options_description description(
-        "wicp_merge --session A --session B [--session C ...] --out DIR [--vocabulary FILE] [--overwrite]\n"
-        "Merges SLAM sessions (the session/ folders of wicp_rgbd_slam) into the first one's frame: place\n"
-        "recognition between their keyframes, verification with no prior (PnP, weighted ICP), at least\n"
-        "--min-loops verified loops agreeing on the transform, a free-space check, then the other keyframes\n"
-        "verified again with the link as prior, one joint pose graph. DIR gets trajectory.txt\n"
-        "(every frame of every merged session, TUM format), map.ply, graph.txt, loops.txt and report.json, published\n"
-        "in one rename. A session without overlap is left out and the report says \"no overlap\" (exit 0).\n"
-        "Exit 1: an error (a missing or corrupt session file, named with its line), nothing written.\n"
-        "Exit 2: bad command line. Options");
-    // clang-format off
-    description.add_options()
-        ("help,h", "print this help")
-        ("session", po::value(&folders)->required(), "a session folder (repeat; at least two)")
-        ("out", po::value(&out_dir)->required(), "output folder (created; published complete or not at all)")
-        ("overwrite", "replace --out if it exists and is not empty")
-        ("vocabulary", po::value(&vocabulary_path), "place-recognition vocabulary; default: the one built with the tools")
-        ("min-loops", tools::rangedValue(&options.min_agreeing_loops, std::size_t{1}, std::size_t{1000})
-                          ->default_value(options.min_agreeing_loops),
-         "verified loops that must agree on a session's transform (1-1000)")
-        ("max-free-space-violation", tools::rangedValue(&options.max_free_space_violation, 0.0, 1.0)
-                                         ->default_value(options.max_free_space_violation),
-         "largest fraction of landmark sightings that may lie in space the other session saw through (0-1; "
-         "1 turns the check off; docs/mapping.md)")
-        ("agreeing-loops-only", "keep only the loops verified without prior that agree on the transform (do not "
-                                "verify the other keyframes again with the link as prior)")
-        ("odometry-information", tools::namedValue(&options.tracking_information, tools::parseOdometryInformation,
-                                                   tools::odometryInformationName),
-         "the joint pose graph's odometry edges within a session: information from tracking (reprojection "
-         "Hessians) or the fixed noise model")
-        ("minimap-keyframes", tools::rangedValue(&options.keyframes_per_minimap, std::size_t{1}, std::size_t{100000})
-                                  ->default_value(options.keyframes_per_minimap),
-         "keyframes per mini-map of graph.txt (1-100000)");
-    // clang-format on
-    po::variables_map vm;
-    if (!tools::parseCommandLine(argc, argv, description, vm)) return 0;
-    if (folders.size() < 2) throw po::error("give at least two --session folders");
-    options.loops_with_link_prior = vm.count("agreeing-loops-only") == 0;
-    io::AtomicFolder folder = tools::openOutputFolder(out_dir, vm.count("overwrite") > 0);
-    const auto vocabulary = loadVocabulary(vocabulary_path);
+    MergeCommand c;
+    if (!parseCommand(argc, argv, c)) return 0;
+    io::AtomicFolder folder = tools::openOutputFolder(c.out_dir, c.overwrite);
+    const auto vocabulary = loadVocabulary(c.vocabulary_path);
     std::vector<mapping::Session> sessions;
-    for (const std::string& path : folders) sessions.push_back(mapping::loadSession(path));
-
-    // One progress line per verification pass, on stderr.
-    std::unique_ptr<tools::Progress> progress;
-    std::string current_pass;
-    options.progress = [&](const std::string& pass, std::size_t done, std::size_t total) {
-      if (pass != current_pass) {
-        if (progress) progress->finish();
-        current_pass = pass;
-        progress = std::make_unique<tools::Progress>("verifying " + pass, total);
-      }
-      if (done > 0) progress->step();
+    for (const std::string& path : c.folders) sessions.push_back(mapping::loadSession(path));
+    auto progress = std::make_shared<PassProgress>();
+    c.options.progress = [progress](const std::string& pass, std::size_t done, std::size_t total) {
+      (*progress)(pass, done, total);
     };
-    const mapping::SessionMerge merge = mapping::mergeSessions(sessions, vocabulary, options);
-    if (progress) progress->finish();
-    writeOutputs(folder.path(), folders, sessions, merge);
+    const mapping::SessionMerge merge = mapping::mergeSessions(sessions, vocabulary, c.options);
+    progress->finish();
+    writeOutputs(folder.path(), c.folders, sessions, merge);
     folder.publish();
-    for (std::size_t s = 1; s < folders.size(); ++s)
-      std::cout << folders[s] << ": " << (merge.sessions[s].merged ? "merged" : "no overlap, left out") << " ("
-                << merge.sessions[s].loops_agreeing << " agreeing of " << merge.sessions[s].loops_found
-                << " verified loops, " << merge.sessions[s].loops_with_link_prior
-                << " more verified with the link as prior)\n";
+    printSummary(c.folders, merge);
     std::cout << "wrote " << folder.target().string()
               << "/{trajectory.txt, map.ply, graph.txt, loops.txt, report.json}\n";
     return 0;

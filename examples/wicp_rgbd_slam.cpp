@@ -25,6 +25,7 @@
 #include <iostream>
 #include <limits>
 #include <map>
+#include <memory>
 #include <optional>
 #include <set>
 #include <sstream>
@@ -455,6 +456,249 @@ void requireOptionsOfTheMatcher(const po::variables_map& vm, frontend::MatcherKi
                     frontend::matcherKindName(kind));
 }
 
+/// Everything wicp_rgbd_slam's command line sets.
+struct SlamCommand {
+  std::string dataset, camera_spec, out_dir, vocabulary_path;
+  mapping::LoopEdgeSource loop_edge = mapping::LoopEdgeSource::Pnp;
+  std::size_t max_frames = 0, first_frame = 0;
+  bool overwrite = false;
+  mapping::LoopClosingSlamOptions closing;
+  simulation::SyntheticRgbdOptions synthetic;
+  /// The choices given as words ("on", "period", "427-960", ...), by option name, each read by
+  /// frontend::setFrontendChoice once parsed; the defaults are the options' own, so the help shows them.
+  std::map<std::string, std::string> choices;
+};
+
+/// The words of the front end's default choices that wicp_rgbd_slam reads as text.
+std::map<std::string, std::string> defaultChoiceWords(const frontend::FrontendOptions& options) {
+  const auto& features = options.features;
+  const bool own_size = features.min_working_width == 0 && features.max_working_width == 0;
+  return {{"describe", features.describe_equalized ? "equalized" : "original"},
+          {"gate-free-retry", options.gate_free_retry ? "on" : "off"},
+          {"motion-timing", options.motion_per_period ? "period" : "frame"},
+          {"keyframe-before-loss", options.keyframe_before_loss ? "on" : "off"},
+          {"feature-width",
+           own_size ? "full"
+                    : std::to_string(features.min_working_width) + "-" + std::to_string(features.max_working_width)},
+          {"pnp-thresholds", options.pnp_thresholds_in_working_pixels ? "working" : "frame"}};
+}
+
+/// The usage text and the general options: input, range, output, matcher, gate, loop closing.
+po::options_description generalOptions(SlamCommand& c) {
+  frontend::FrontendOptions& frontend = c.closing.slam.frontend;
+  mapping::LoopClosingOptions& loop_closing = c.closing.loop_closing;
+  po::options_description description(
+      "wicp_rgbd_slam [--dataset DIR] [--camera fr1|fr2|fr3|FILE.yaml] [--first-frame N] [--max-frames N]\n"
+      "               [--minimap-keyframes N] [--no-loop-closure | --vocabulary FILE] --out DIR [--overwrite]\n"
+      "Feature-based RGB-D SLAM producing weighted landmark maps, closing loops (place recognition with\n"
+      "the default vocabulary built with the tools, geometric verification, pose graph) unless\n"
+      "--no-loop-closure. DIR gets trajectory.txt, session.txt, minimaps/, map.ply, graph.txt, session/\n"
+      "(for wicp_merge) and report.json (docs/mapping.md). The outputs are built beside DIR\n"
+      "and published in one rename: DIR holds a whole run or is left as it was.\n"
+      "Exit 0: done (no ATE when the ground truth shares too few timestamps: a warning, and\n"
+      "report.json says why under \"ate_unavailable\"). Exit 1, with an error line and nothing\n"
+      "written: no frame tracked or no landmark mapped (black images, no depth, a wrong camera),\n"
+      "or any other error. Exit 2: bad command line. Exit 130/143: stopped by SIGINT/SIGTERM,\n"
+      "nothing written. Options");
+  // One option per line reads as a table: not reflowed.
+  // clang-format off
+  description.add_options()
+      ("help,h", "print this help")
+      ("dataset", po::value(&c.dataset), "TUM RGB-D folder (rgb.txt, depth.txt, optional groundtruth.txt); "
+                                         "default: the synthetic sequence")
+      ("camera", po::value(&c.camera_spec), "fr1, fr2, fr3 or a camera YAML; default: DIR/camera.yaml, else from the folder name")
+      ("first-frame", tools::rangedValue(&c.first_frame, std::size_t{0})->default_value(0),
+       "start at frame N (e.g. one run of a sequence cut in two for wicp_merge)")
+      ("max-frames", tools::rangedValue(&c.max_frames, std::size_t{0})->default_value(0),
+       "stop before frame N, counted from the sequence's start as --first-frame is (0 = at the end): "
+       "--first-frame 40 --max-frames 60 runs frames 40 to 59")
+      ("minimap-keyframes", tools::rangedValue(&c.closing.slam.minimap_keyframes, std::size_t{1}, std::size_t{100000})
+                                ->default_value(c.closing.slam.minimap_keyframes),
+       "keyframes per mini-map (1-100000)")
+      ("out", po::value(&c.out_dir)->required(), "output folder (created; published complete or not at all)")
+      ("overwrite", "replace --out if it exists and is not empty")
+      ("matcher", tools::namedValue(&frontend.matcher.kind, frontend::parseMatcherKind, frontend::matcherKindName),
+       "flann (FLANN's LSH), lsh (our LSH: the same scheme, flat buckets, popcount), brute-force (exact, popcount) or "
+       "kd-tree (our binary KD-tree, the KD-tree paper)")
+      ("no-quality-gate", "do not judge frame quality (no frame is refused as a keyframe)")
+      ("quality-gate", tools::namedValue(&frontend.quality.mode, frontend::parseQualityGateMode,
+                                         [](frontend::QualityGateMode m) { return frontend::toString(m); }),
+       "relative (sharpness against the sequence's recent frames, robust z-score), absolute (BRISQUE above 47) or paper "
+       "(BRISQUE on every frame, above 47)")
+      ("deterministic", "run bundle adjustment and loop closing inline instead of in their threads (reproducible)")
+      ("no-loop-closure", "track and map only: no place recognition, no pose graph")
+      ("loop-closing-niceness", tools::rangedValue(&loop_closing.background_niceness, 0, 19)
+                                    ->default_value(loop_closing.background_niceness),
+       "the loop-closing thread's nice value above tracking's (0-19): with the cores busy, tracking runs first "
+       "and loops are closed a little later (0: the same priority)")
+      ("vocabulary", po::value(&c.vocabulary_path), "place-recognition vocabulary (wicp_vocabulary train); "
+                                                    "default: the one built with the tools")
+      ("loop-edge", tools::namedValue(&c.loop_edge, mapping::parseLoopEdgeSource,
+                                      [](mapping::LoopEdgeSource e) { return mapping::toString(e); }),
+       "a verified loop's edge: PnP's pose (the weighted ICP checks it) or the ICP-refined pose")
+      ("odometry-information", tools::namedValue(&c.closing.odometry_from_tracking, tools::parseOdometryInformation,
+                                                 tools::odometryInformationName),
+       "the pose graph's odometry edges: information from tracking (reprojection Hessians) or the fixed noise model")
+      ("global-ba", tools::rangedValue(&c.closing.global_bundle_adjustment_iterations, 0, 1000)
+                        ->default_value(c.closing.global_bundle_adjustment_iterations),
+       "after the last frame and loop correction, a global bundle adjustment of every keyframe of the last segment "
+       "with this many iterations (0: none; docs/mapping.md)");
+  // clang-format on
+  return description;
+}
+
+/// The synthetic sequence's options, in their own group so that --dataset refuses each of them (not a list of
+/// names to keep in step).
+po::options_description syntheticOptions(simulation::SyntheticRgbdOptions& synthetic) {
+  po::options_description options("The synthetic sequence (without --dataset)");
+  // clang-format off
+  options.add_options()
+      ("synthetic-frames", tools::rangedValue(&synthetic.frames, std::size_t{1}, std::size_t{100000})
+                               ->default_value(synthetic.frames),
+       "frames (1-100000)")
+      ("seed", tools::rangedValue(&synthetic.seed, std::uint64_t{0})->default_value(synthetic.seed), "seed")
+      ("depth-noise", tools::rangedValue(&synthetic.depth_noise_coefficient, 0.0, 1.0)
+                          ->default_value(synthetic.depth_noise_coefficient),
+       "depth noise sigma_z = COEFF * z^2 (0-1)")
+      ("focal-error", tools::rangedValue(&synthetic.focal_length_error, -0.2, 0.2)->default_value(0.0),
+       "the tracker is given fx, fy off by this fraction (an uncalibrated camera; the images are "
+       "rendered with the true ones) (-0.2-0.2)")
+      ("cx-error", tools::rangedValue(&synthetic.principal_point_error_x_px, -100.0, 100.0)->default_value(0.0),
+       "the tracker is given cx off by this many pixels (-100-100)")
+      ("cy-error", tools::rangedValue(&synthetic.principal_point_error_y_px, -80.0, 80.0)->default_value(0.0),
+       "the tracker is given cy off by this many pixels (-80-80)");
+  // clang-format on
+  tools::addSyntheticSceneOptions(options, synthetic);
+  return options;
+}
+
+/// The papers' techniques, each an option off by default (issue #11; docs/frontend_ablation.md). Each name is read
+/// by the library's parser, so the names and the error listing them exist once.
+po::options_description ablationOptions(frontend::FrontendOptions& f, std::map<std::string, std::string>& words) {
+  const auto name = [](auto value) { return frontend::toString(value); };
+  po::options_description ablation("The papers' techniques, for the ablation (docs/frontend_ablation.md)");
+  // clang-format off
+  ablation.add_options()
+      ("descriptor", tools::namedValue(&f.features.descriptor, frontend::parseDescriptorKind, frontend::descriptorKindName),
+       "orb (ORB's rotated BRIEF) or modified-brief (front-end paper, Eq. 7)")
+      ("kd-backtracks", tools::rangedValue(&f.matcher.kd_tree.max_backtracks, 0, 100000)
+                            ->default_value(f.matcher.kd_tree.max_backtracks),
+       "--matcher kd-tree: leaves visited after the first (0-100000)")
+      ("lsh-seed", tools::rangedValue(&f.matcher.lsh_seed, std::uint64_t{0})->default_value(f.matcher.lsh_seed),
+       "--matcher lsh or flann: seed of the LSH index's random key bits (another seed, other approximate matches: how "
+       "much a result depends on them)")
+      ("match-region", tools::namedValue(&f.match_region, frontend::parseMatchRegion, frontend::matchRegionName),
+       "everywhere, projection (regions of interest around projected points) or homography (KD-tree paper, Eq. 8)")
+      ("dynamic-distance", tools::namedValue(&f.dynamic_distance, frontend::parseDynamicDistanceKind,
+                                             frontend::dynamicDistanceKindName),
+       "displacement (3D), epipolar-history (front-end paper, Eq. 6, against the point's earlier values) or both")
+      ("quality-measure", tools::namedValue(&f.quality.measure, frontend::parseQualityMeasure, name),
+       "relative gate's measure: sharpness (log10 Laplacian variance, every frame) or brisque (keyframe candidates)")
+      ("dense-odometry", tools::namedValue(&f.dense_odometry.use, frontend::parseDenseOdometryUse, name),
+       "OpenCV's dense RGB-D odometry as the PnP motion prior, as the pose when 3D-2D tracking fails, both, or off")
+      ("dense-odometry-kind", tools::namedValue(&f.dense_odometry.kind, frontend::parseDenseOdometryKind, name),
+       "which: cv::rgbd::RgbdOdometry, ICPOdometry or RgbdICPOdometry")
+      ("equalization", tools::namedValue(&f.features.equalization, frontend::parseEqualizationMethod, name),
+       "a frame with too few corners: CLAHE, global histogram equalisation (the front-end paper) or none")
+      ("describe", po::value(&words.at("describe"))->default_value(words.at("describe")),
+       "an equalised frame's corners described in the frame as it is (original) or in the equalised image "
+       "(equalized, before 2026-11-26)")
+      ("pnp", tools::namedValue(&f.pnp.method, frontend::parsePnpMethod, name),
+       "RANSAC PnP solver: ap3p (AP3P sets, EPnP) or iterative (the paper's iterative 5-point solution)")
+      ("gate-free-retry", po::value(&words.at("gate-free-retry"))->default_value(words.at("gate-free-retry")),
+       "on: when 3D-2D fails within both projection gates, PnP once more on the descriptor matches wherever the "
+       "landmarks project; off: the 2D-2D and coasting fallbacks directly (as before 2026-11-27)")
+      ("motion-timing", po::value(&words.at("motion-timing"))->default_value(words.at("motion-timing")),
+       "frame: the constant-velocity prediction repeats the last motion once a frame; period: once per frame "
+       "period the timestamps count (a dropped frame: twice), better at gaps, worse in the dark (README)")
+      ("keyframe-before-loss", po::value(&words.at("keyframe-before-loss"))->default_value(words.at("keyframe-before-loss")),
+       "on: when tracking is lost, the last frame 3D-2D tracked becomes the segment's last keyframe, for the next "
+       "segment's bridge to find; off: as before 2026-11-27 (afternoon)")
+      ("feature-width", po::value(&words.at("feature-width"))->default_value(words.at("feature-width")),
+       "MIN-MAX: frames narrower than MIN pixels are doubled, wider than MAX halved (until they are not) for "
+       "finding and describing features, the keypoints kept in the frame's pixels (0: never); full: every frame at "
+       "its own size")
+      ("pnp-thresholds", po::value(&words.at("pnp-thresholds"))->default_value(words.at("pnp-thresholds")),
+       "working: PnP's RANSAC threshold and Huber scale in pixels of the image features are found at (a frame "
+       "halved for them: twice its own pixels); frame: in the frame's own pixels (as before 2026-11-27)")
+      ("pnp-ransac-iterations", tools::rangedValue(&f.pnp.ransac_iterations, 1, 100000)
+                                    ->default_value(f.pnp.ransac_iterations),
+       "most RANSAC draws a frame's PnP makes; fewer when the inliers found already give 99 % confidence (1-100000)");
+  // clang-format on
+  return ablation;
+}
+
+/// Parses and checks the command line into `c`; false when only --help was asked for.
+bool parseCommand(int argc, char** argv, SlamCommand& c) {
+  frontend::RgbdSlamOptions& options = c.closing.slam;
+  c.choices = defaultChoiceWords(options.frontend);
+  po::options_description description = generalOptions(c);
+  const po::options_description synthetic_options = syntheticOptions(c.synthetic);
+  description.add(synthetic_options);
+  description.add(ablationOptions(options.frontend, c.choices));
+  po::variables_map vm;
+  if (!tools::parseCommandLine(argc, argv, description, vm)) return false;
+  try {
+    for (const auto& [key, word] : c.choices) frontend::setFrontendChoice(options.frontend, key, word);
+  } catch (const std::invalid_argument& e) {
+    throw po::error(std::string("--") + e.what());
+  }
+  c.overwrite = vm.count("overwrite") > 0;
+  options.frontend.quality_gate = !vm.count("no-quality-gate");
+  options.backend.background_thread = !vm.count("deterministic");
+  c.closing.loop_closing.background_thread = !vm.count("deterministic");
+  c.closing.loop_closure = !vm.count("no-loop-closure");
+  if (!c.closing.loop_closure && !c.vocabulary_path.empty())
+    throw po::error("--vocabulary has no use with --no-loop-closure");
+  tools::requireOptionsOfTheSource(vm, !c.dataset.empty(), synthetic_options);
+  requireOptionsOfTheMatcher(vm, options.frontend.matcher.kind);
+  return true;
+}
+
+/// The frames the command asks for: the TUM folder or the synthetic sequence.
+std::unique_ptr<FrameSource> openSource(const SlamCommand& c) {
+  if (c.dataset.empty()) return std::make_unique<SyntheticSource>(c.synthetic);
+  return std::make_unique<TumSource>(c.dataset, io::datasetCamera(c.dataset, c.camera_spec));
+}
+
+/// The frame the run stops before (--max-frames, at most the sequence's length); refuses a --first-frame at or
+/// beyond it.
+std::size_t endFrame(const SlamCommand& c, const FrameSource& source) {
+  const std::size_t frames = c.max_frames > 0 ? std::min(c.max_frames, source.size()) : source.size();
+  if (c.first_frame >= frames)
+    throw po::error("--first-frame " + std::to_string(c.first_frame) + " leaves no frame: the run stops before frame " +
+                    std::to_string(frames) +
+                    (c.max_frames > 0 && c.max_frames < source.size()
+                         ? " (--max-frames counts from the sequence's start)"
+                         : " (the sequence's length)"));
+  return frames;
+}
+
+/// Tracks, maps and closes loops over the command's frames, then writes and publishes every output.
+int run(const SlamCommand& c) {
+  const std::unique_ptr<FrameSource> source = openSource(c);
+  const std::size_t frames = endFrame(c, *source);
+  // Loaded before the long run, so a bad vocabulary costs nothing.
+  // Kept beside the loop closer's copy: its candidates are read for loop_candidates.txt after the run.
+  mapping::BowLoopDetector::Ptr bow_detector;
+  mapping::LoopDetector detector;
+  if (c.closing.loop_closure) {
+    bow_detector = makeDetector(c.vocabulary_path, source->camera(), c.loop_edge);
+    detector = mapping::asLoopDetector(bow_detector);
+  }
+  // Checked and created before the long run, so a refused --out costs nothing.
+  io::AtomicFolder folder = tools::openOutputFolder(c.out_dir, c.overwrite);
+  std::cout << "running on " << source->describe() << ", frames " << c.first_frame << " to " << frames
+            << (c.closing.loop_closure ? ", closing loops\n" : ", no loop closure\n");
+
+  mapping::LoopClosingSlam slam(source->camera(), std::move(detector), c.closing);
+  RunCounts counts = trackFrames(*source, c.first_frame, frames, slam);
+  slam.finish();  // joins the bundle-adjustment and loop-closing threads, also when interrupted
+  if (tools::interrupted()) return discardInterrupted(folder, counts.processed, frames - c.first_frame);
+  return writeAndPublish(folder, *source, frames - c.first_frame, c.closing.slam.minimap_keyframes, slam,
+                         bow_detector.get(), counts);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -462,211 +706,8 @@ int main(int argc, char** argv) {
   // it between writing a file and publishing the folder.
   tools::installInterruptHandlers();
   return tools::runTool("wicp_rgbd_slam", [&] {
-    std::string dataset, camera_spec, out_dir;
-    std::string vocabulary_path, describe = "original";
-    mapping::LoopEdgeSource loop_edge = mapping::LoopEdgeSource::Pnp;
-    std::size_t max_frames = 0, first_frame = 0;
-    mapping::LoopClosingSlamOptions closing_options;
-    frontend::RgbdSlamOptions& options = closing_options.slam;
-    std::string gate_free_retry = options.frontend.gate_free_retry ? "on" : "off";
-    std::string motion_timing = options.frontend.motion_per_period ? "period" : "frame";
-    std::string keyframe_before_loss = options.frontend.keyframe_before_loss ? "on" : "off";
-    std::string pnp_thresholds = options.frontend.pnp_thresholds_in_working_pixels ? "working" : "frame";
-    const auto& features = options.frontend.features;
-    const bool own_size = features.min_working_width == 0 && features.max_working_width == 0;
-    std::string feature_width =
-        own_size ? "full"
-                 : std::to_string(features.min_working_width) + "-" + std::to_string(features.max_working_width);
-    simulation::SyntheticRgbdOptions synthetic;
-    po::options_description description(
-        "wicp_rgbd_slam [--dataset DIR] [--camera fr1|fr2|fr3|FILE.yaml] [--first-frame N] [--max-frames N]\n"
-        "               [--minimap-keyframes N] [--no-loop-closure | --vocabulary FILE] --out DIR [--overwrite]\n"
-        "Feature-based RGB-D SLAM producing weighted landmark maps, closing loops (place recognition with\n"
-        "the default vocabulary built with the tools, geometric verification, pose graph) unless\n"
-        "--no-loop-closure. DIR gets trajectory.txt, session.txt, minimaps/, map.ply, graph.txt, session/\n"
-        "(for wicp_merge) and report.json (docs/mapping.md). The outputs are built beside DIR\n"
-        "and published in one rename: DIR holds a whole run or is left as it was.\n"
-        "Exit 0: done (no ATE when the ground truth shares too few timestamps: a warning, and\n"
-        "report.json says why under \"ate_unavailable\"). Exit 1, with an error line and nothing\n"
-        "written: no frame tracked or no landmark mapped (black images, no depth, a wrong camera),\n"
-        "or any other error. Exit 2: bad command line. Exit 130/143: stopped by SIGINT/SIGTERM,\n"
-        "nothing written. Options");
-    // One option per line reads as a table: not reflowed.
-    // clang-format off
-    description.add_options()
-        ("help,h", "print this help")
-        ("dataset", po::value(&dataset), "TUM RGB-D folder (rgb.txt, depth.txt, optional groundtruth.txt); "
-                                         "default: the synthetic sequence")
-        ("camera", po::value(&camera_spec), "fr1, fr2, fr3 or a camera YAML; default: DIR/camera.yaml, else from the folder name")
-        ("first-frame", tools::rangedValue(&first_frame, std::size_t{0})->default_value(0),
-         "start at frame N (e.g. one run of a sequence cut in two for wicp_merge)")
-        ("max-frames", tools::rangedValue(&max_frames, std::size_t{0})->default_value(0),
-         "stop before frame N, counted from the sequence's start as --first-frame is (0 = at the end): "
-         "--first-frame 40 --max-frames 60 runs frames 40 to 59")
-        ("minimap-keyframes", tools::rangedValue(&options.minimap_keyframes, std::size_t{1}, std::size_t{100000})
-                                  ->default_value(options.minimap_keyframes),
-         "keyframes per mini-map (1-100000)")
-        ("out", po::value(&out_dir)->required(), "output folder (created; published complete or not at all)")
-        ("overwrite", "replace --out if it exists and is not empty")
-        ("matcher", tools::namedValue(&options.frontend.matcher.kind, frontend::parseMatcherKind, frontend::matcherKindName),
-         "flann (FLANN's LSH), lsh (our LSH: the same scheme, flat buckets, popcount), brute-force (exact, popcount) or "
-         "kd-tree (our binary KD-tree, the KD-tree paper)")
-        ("no-quality-gate", "do not judge frame quality (no frame is refused as a keyframe)")
-        ("quality-gate", tools::namedValue(&options.frontend.quality.mode, frontend::parseQualityGateMode,
-                                           [](frontend::QualityGateMode m) { return frontend::toString(m); }),
-         "relative (sharpness against the sequence's recent frames, robust z-score), absolute (BRISQUE above 47) or paper "
-         "(BRISQUE on every frame, above 47)")
-        ("deterministic", "run bundle adjustment and loop closing inline instead of in their threads (reproducible)")
-        ("no-loop-closure", "track and map only: no place recognition, no pose graph")
-        ("loop-closing-niceness", tools::rangedValue(&closing_options.loop_closing.background_niceness, 0, 19)
-                                      ->default_value(closing_options.loop_closing.background_niceness),
-         "the loop-closing thread's nice value above tracking's (0-19): with the cores busy, tracking runs first "
-         "and loops are closed a little later (0: the same priority)")
-        ("vocabulary", po::value(&vocabulary_path), "place-recognition vocabulary (wicp_vocabulary train); "
-                                                    "default: the one built with the tools")
-        ("loop-edge", tools::namedValue(&loop_edge, mapping::parseLoopEdgeSource,
-                                        [](mapping::LoopEdgeSource e) { return mapping::toString(e); }),
-         "a verified loop's edge: PnP's pose (the weighted ICP checks it) or the ICP-refined pose")
-        ("odometry-information", tools::namedValue(&closing_options.odometry_from_tracking, tools::parseOdometryInformation,
-                                                   tools::odometryInformationName),
-         "the pose graph's odometry edges: information from tracking (reprojection Hessians) or the fixed noise model")
-        ("global-ba", tools::rangedValue(&closing_options.global_bundle_adjustment_iterations, 0, 1000)
-                          ->default_value(closing_options.global_bundle_adjustment_iterations),
-         "after the last frame and loop correction, a global bundle adjustment of every keyframe of the last segment "
-         "with this many iterations (0: none; docs/mapping.md)");
-    // clang-format on
-    // The synthetic sequence's options, in their own group so that --dataset refuses each of them (not a list of
-    // names to keep in step).
-    po::options_description synthetic_options("The synthetic sequence (without --dataset)");
-    // clang-format off
-    synthetic_options.add_options()
-        ("synthetic-frames", tools::rangedValue(&synthetic.frames, std::size_t{1}, std::size_t{100000})
-                                 ->default_value(synthetic.frames),
-         "frames (1-100000)")
-        ("seed", tools::rangedValue(&synthetic.seed, std::uint64_t{0})->default_value(synthetic.seed), "seed")
-        ("depth-noise", tools::rangedValue(&synthetic.depth_noise_coefficient, 0.0, 1.0)
-                            ->default_value(synthetic.depth_noise_coefficient),
-         "depth noise sigma_z = COEFF * z^2 (0-1)")
-        ("focal-error", tools::rangedValue(&synthetic.focal_length_error, -0.2, 0.2)->default_value(0.0),
-         "the tracker is given fx, fy off by this fraction (an uncalibrated camera; the images are "
-         "rendered with the true ones) (-0.2-0.2)")
-        ("cx-error", tools::rangedValue(&synthetic.principal_point_error_x_px, -100.0, 100.0)->default_value(0.0),
-         "the tracker is given cx off by this many pixels (-100-100)")
-        ("cy-error", tools::rangedValue(&synthetic.principal_point_error_y_px, -80.0, 80.0)->default_value(0.0),
-         "the tracker is given cy off by this many pixels (-80-80)");
-    // clang-format on
-    tools::addSyntheticSceneOptions(synthetic_options, synthetic);
-    description.add(synthetic_options);
-    // The papers' techniques, each an option off by default (issue #11; docs/frontend_ablation.md). Each name is
-    // read by the library's parser, so the names and the error listing them exist once.
-    const auto name = [](auto value) { return frontend::toString(value); };
-    po::options_description ablation("The papers' techniques, for the ablation (docs/frontend_ablation.md)");
-    // clang-format off
-    ablation.add_options()
-        ("descriptor", tools::namedValue(&options.frontend.features.descriptor, frontend::parseDescriptorKind,
-                                         frontend::descriptorKindName),
-         "orb (ORB's rotated BRIEF) or modified-brief (front-end paper, Eq. 7)")
-        ("kd-backtracks", tools::rangedValue(&options.frontend.matcher.kd_tree.max_backtracks, 0, 100000)
-                              ->default_value(options.frontend.matcher.kd_tree.max_backtracks),
-         "--matcher kd-tree: leaves visited after the first (0-100000)")
-        ("lsh-seed", tools::rangedValue(&options.frontend.matcher.lsh_seed, std::uint64_t{0})
-                         ->default_value(options.frontend.matcher.lsh_seed),
-         "--matcher lsh or flann: seed of the LSH index's random key bits (another seed, other approximate matches: how "
-         "much a result depends on them)")
-        ("match-region", tools::namedValue(&options.frontend.match_region, frontend::parseMatchRegion,
-                                           frontend::matchRegionName),
-         "everywhere, projection (regions of interest around projected points) or homography (KD-tree paper, Eq. 8)")
-        ("dynamic-distance", tools::namedValue(&options.frontend.dynamic_distance, frontend::parseDynamicDistanceKind,
-                                               frontend::dynamicDistanceKindName),
-         "displacement (3D), epipolar-history (front-end paper, Eq. 6, against the point's earlier values) or both")
-        ("quality-measure", tools::namedValue(&options.frontend.quality.measure, frontend::parseQualityMeasure, name),
-         "relative gate's measure: sharpness (log10 Laplacian variance, every frame) or brisque (keyframe candidates)")
-        ("dense-odometry", tools::namedValue(&options.frontend.dense_odometry.use, frontend::parseDenseOdometryUse, name),
-         "OpenCV's dense RGB-D odometry as the PnP motion prior, as the pose when 3D-2D tracking fails, both, or off")
-        ("dense-odometry-kind", tools::namedValue(&options.frontend.dense_odometry.kind, frontend::parseDenseOdometryKind,
-                                                  name),
-         "which: cv::rgbd::RgbdOdometry, ICPOdometry or RgbdICPOdometry")
-        ("equalization", tools::namedValue(&options.frontend.features.equalization, frontend::parseEqualizationMethod,
-                                           name),
-         "a frame with too few corners: CLAHE, global histogram equalisation (the front-end paper) or none")
-        ("describe", po::value(&describe)->default_value(describe),
-         "an equalised frame's corners described in the frame as it is (original) or in the equalised image "
-         "(equalized, before 2026-11-26)")
-        ("pnp", tools::namedValue(&options.frontend.pnp.method, frontend::parsePnpMethod, name),
-         "RANSAC PnP solver: ap3p (AP3P sets, EPnP) or iterative (the paper's iterative 5-point solution)")
-        ("gate-free-retry", po::value(&gate_free_retry)->default_value(gate_free_retry),
-         "on: when 3D-2D fails within both projection gates, PnP once more on the descriptor matches wherever the "
-         "landmarks project; off: the 2D-2D and coasting fallbacks directly (as before 2026-11-27)")
-        ("motion-timing", po::value(&motion_timing)->default_value(motion_timing),
-         "frame: the constant-velocity prediction repeats the last motion once a frame; period: once per frame "
-         "period the timestamps count (a dropped frame: twice), better at gaps, worse in the dark (README)")
-        ("keyframe-before-loss", po::value(&keyframe_before_loss)->default_value(keyframe_before_loss),
-         "on: when tracking is lost, the last frame 3D-2D tracked becomes the segment's last keyframe, for the next "
-         "segment's bridge to find; off: as before 2026-11-27 (afternoon)")
-        ("feature-width", po::value(&feature_width)->default_value(feature_width),
-         "MIN-MAX: frames narrower than MIN pixels are doubled, wider than MAX halved (until they are not) for "
-         "finding and describing features, the keypoints kept in the frame's pixels (0: never); full: every frame at "
-         "its own size")
-        ("pnp-thresholds", po::value(&pnp_thresholds)->default_value(pnp_thresholds),
-         "working: PnP's RANSAC threshold and Huber scale in pixels of the image features are found at (a frame "
-         "halved for them: twice its own pixels); frame: in the frame's own pixels (as before 2026-11-27)")
-        ("pnp-ransac-iterations", tools::rangedValue(&options.frontend.pnp.ransac_iterations, 1, 100000)
-                                      ->default_value(options.frontend.pnp.ransac_iterations),
-         "most RANSAC draws a frame's PnP makes; fewer when the inliers found already give 99 % confidence (1-100000)");
-    // clang-format on
-    description.add(ablation);
-    po::variables_map vm;
-    if (!tools::parseCommandLine(argc, argv, description, vm)) return 0;
-    try {
-      frontend::setFrontendChoice(options.frontend, "describe", describe);
-      frontend::setFrontendChoice(options.frontend, "gate-free-retry", gate_free_retry);
-      frontend::setFrontendChoice(options.frontend, "motion-timing", motion_timing);
-      frontend::setFrontendChoice(options.frontend, "keyframe-before-loss", keyframe_before_loss);
-      frontend::setFrontendChoice(options.frontend, "feature-width", feature_width);
-      frontend::setFrontendChoice(options.frontend, "pnp-thresholds", pnp_thresholds);
-    } catch (const std::invalid_argument& e) {
-      throw po::error(std::string("--") + e.what());
-    }
-    options.frontend.quality_gate = !vm.count("no-quality-gate");
-    options.backend.background_thread = !vm.count("deterministic");
-    closing_options.loop_closing.background_thread = !vm.count("deterministic");
-    closing_options.loop_closure = !vm.count("no-loop-closure");
-    if (!closing_options.loop_closure && !vocabulary_path.empty())
-      throw po::error("--vocabulary has no use with --no-loop-closure");
-    tools::requireOptionsOfTheSource(vm, !dataset.empty(), synthetic_options);
-    requireOptionsOfTheMatcher(vm, options.frontend.matcher.kind);
-
-    std::unique_ptr<FrameSource> source;
-    if (dataset.empty()) {
-      source = std::make_unique<SyntheticSource>(synthetic);
-    } else {
-      source = std::make_unique<TumSource>(dataset, io::datasetCamera(dataset, camera_spec));
-    }
-    const std::size_t frames = max_frames > 0 ? std::min(max_frames, source->size()) : source->size();
-    if (first_frame >= frames)
-      throw po::error("--first-frame " + std::to_string(first_frame) + " leaves no frame: the run stops before frame " +
-                      std::to_string(frames) +
-                      (max_frames > 0 && max_frames < source->size()
-                           ? " (--max-frames counts from the sequence's start)"
-                           : " (the sequence's length)"));
-    // Loaded before the long run, so a bad vocabulary costs nothing.
-    // Kept beside the loop closer's copy: its candidates are read for loop_candidates.txt after the run.
-    mapping::BowLoopDetector::Ptr bow_detector;
-    mapping::LoopDetector detector;
-    if (closing_options.loop_closure) {
-      bow_detector = makeDetector(vocabulary_path, source->camera(), loop_edge);
-      detector = mapping::asLoopDetector(bow_detector);
-    }
-    // Checked and created before the long run, so a refused --out costs nothing.
-    io::AtomicFolder folder = tools::openOutputFolder(out_dir, vm.count("overwrite") > 0);
-    std::cout << "running on " << source->describe() << ", frames " << first_frame << " to " << frames
-              << (closing_options.loop_closure ? ", closing loops\n" : ", no loop closure\n");
-
-    mapping::LoopClosingSlam slam(source->camera(), std::move(detector), closing_options);
-    RunCounts counts = trackFrames(*source, first_frame, frames, slam);
-    slam.finish();  // joins the bundle-adjustment and loop-closing threads, also when interrupted
-    if (tools::interrupted()) return discardInterrupted(folder, counts.processed, frames - first_frame);
-    return writeAndPublish(folder, *source, frames - first_frame, options.minimap_keyframes, slam, bow_detector.get(),
-                           counts);
+    SlamCommand command;
+    if (!parseCommand(argc, argv, command)) return 0;
+    return run(command);
   });
 }
