@@ -267,8 +267,6 @@ void bindTrackResult(py::module_& m) {
 /// The library's default matcher, by the name wicp_rgbd_slam's --matcher reads (one default, in the library).
 std::string defaultMatcherName() { return frontend::matcherKindName(frontend::DescriptorMatcherOptions{}.kind); }
 
-}  // namespace
-
 /// The constructor's docstring; its option keys are read from the front end's table, so that none is left out.
 const std::string& slamInitDoc() {
   static const std::string doc = [] {
@@ -282,9 +280,8 @@ const std::string& slamInitDoc() {
   return doc;
 }
 
-void bindFrontend(py::module_& m) {
-  bindCamera(m);
-  bindTrackResult(m);
+/// RgbdSlam: the front end fed frame by frame or over a TUM folder.
+void bindSlam(py::module_& m) {
   py::class_<PythonSlam>(m, "RgbdSlam",
                          "The RGB-D SLAM front end (wicp_rgbd_slam's): feed frames with track(), or a TUM folder "
                          "with run(); read the trajectory, keyframes and landmarks.")
@@ -346,6 +343,10 @@ void bindFrontend(py::module_& m) {
             return py::make_tuple(toArray(positions), toArray(computeWeights(map, weight)));
           },
           py::arg("strategy") = "covariance", "The landmark cloud with weights: ((N, 3) positions, (N,) weights).");
+}
+
+/// tum_frames and run_tum: a TUM folder as the front end reads it, and a run over it.
+void bindTumRuns(py::module_& m) {
   m.def(
       "tum_frames",
       [](const std::string& folder) {
@@ -381,6 +382,15 @@ void bindFrontend(py::module_& m) {
       "A new RgbdSlam run over a TUM folder; the camera, when not given, the folder's camera.yaml, else from its name "
       "(fr1 ...); "
       "options as RgbdSlam's.");
+}
+
+}  // namespace
+
+void bindFrontend(py::module_& m) {
+  bindCamera(m);
+  bindTrackResult(m);
+  bindSlam(m);
+  bindTumRuns(m);
 }
 
 }  // namespace weighted_icp::python

@@ -22,10 +22,8 @@ void bindStatistics(py::module_& m) {
       });
 }
 
-}  // namespace
-
-void bindMetrics(py::module_& m) {
-  bindStatistics(m);
+/// The result types: AbsoluteTrajectoryError, RelativePoseError, AteComparison.
+void bindMetricTypes(py::module_& m) {
   py::class_<metrics::AbsoluteTrajectoryError>(m, "AbsoluteTrajectoryError",
                                                "The ATE as evaluate_ate.py computes it (wicp_evaluate's ate_*).")
       .def_readonly("pairs", &metrics::AbsoluteTrajectoryError::pairs, "Associated (ground truth, estimate) poses.")
@@ -57,7 +55,10 @@ void bindMetrics(py::module_& m) {
       .def_readonly("first_lower_fraction", &metrics::AteComparison::first_lower_fraction,
                     "Fraction of resamples in which the first's RMSE is the lower (ties count half): near 0.5 no "
                     "difference the poses can show, above 0.95 the first is better beyond the scatter.");
+}
 
+/// ate, rpe, compare_ate and the TUM trajectory reader and writer.
+void bindMetricFunctions(py::module_& m) {
   m.def(
       "ate",
       [](const py::object& groundtruth, const py::object& estimate, double max_difference) {
@@ -108,6 +109,14 @@ void bindMetrics(py::module_& m) {
                             py::str(py::module_::import("os").attr("fspath")(path)));
       },
       py::arg("trajectory"), py::arg("path"), "Writes a trajectory (as ate() takes it) in TUM format, atomically.");
+}
+
+}  // namespace
+
+void bindMetrics(py::module_& m) {
+  bindStatistics(m);
+  bindMetricTypes(m);
+  bindMetricFunctions(m);
 }
 
 }  // namespace weighted_icp::python

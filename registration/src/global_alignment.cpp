@@ -403,6 +403,40 @@ Refined bestTilted(const Search& search, const std::vector<Refined>& results, Re
   return best;
 }
 
+/// The `count` best-voted hypotheses, each searched finely around and refined with the tight pass on every source
+/// point (in parallel), ranked by inliers, best first (ties keep the vote's order).
+std::vector<Refined> refineBestVoted(const Search& search, const std::vector<Hypothesis>& hypotheses, std::size_t count,
+                                     WorkerPool& pool, unsigned threads) {
+  std::vector<Refined> results(count);
+  pool.run(count, 1, threads, [&](std::size_t begin, std::size_t end, unsigned) {
+    for (std::size_t h = begin; h < end; ++h)
+      results[h] = refineHypothesis(search, Eigen::Matrix4d::Identity(), hypotheses[h].yaw, hypotheses[h].translation);
+  });
+  std::stable_sort(results.begin(), results.end(),
+                   [](const Refined& a, const Refined& b) { return a.inliers > b.inliers; });
+  return results;
+}
+
+/// Refuses what GlobalAlignment::align cannot use, naming it.
+void checkAlignArguments(const Eigen::Vector3d& source_up_axis, const Eigen::Vector3d& up_axis, double tilt_range_deg,
+                         double tilt_step_deg) {
+  if (!source_up_axis.allFinite())
+    throw std::invalid_argument("GlobalAlignment::align: the source's up axis must be finite (zero: the target's)");
+  if (!up_axis.allFinite() || !(up_axis.norm() > 0.0))
+    throw std::invalid_argument("GlobalAlignment::align: the up axis must be a finite non-zero vector");
+  if (!(tilt_range_deg >= 0.0 && tilt_range_deg <= 30.0 && tilt_range_deg / tilt_step_deg <= 20.0))
+    throw std::invalid_argument(
+        "GlobalAlignment::align: the tilt range must be in [0, 30] degrees and at most 20 "
+        "tilt steps");
+}
+
+/// The rotation that turns the source's up axis onto `axis` (the identity for a zero source axis: the target's).
+Eigen::Matrix3d levellingRotation(const Eigen::Vector3d& source_up_axis, const Eigen::Vector3d& axis) {
+  return source_up_axis.norm() > 0.0
+             ? Eigen::Quaterniond::FromTwoVectors(source_up_axis.normalized(), axis).toRotationMatrix()
+             : Eigen::Matrix3d::Identity();
+}
+
 }  // namespace
 
 GlobalAlignment::GlobalAlignment(GlobalAlignmentSettings settings)
@@ -475,22 +509,12 @@ GlobalAlignmentResult GlobalAlignment::align(const Cloud& source_cloud, const Ei
 GlobalAlignmentResult GlobalAlignment::align(const Cloud& source_cloud, const Eigen::Vector3d& source_up_axis,
                                              const Eigen::Vector3d& up_axis, double tilt_range_deg) const {
   if (target_->points.empty()) throw std::invalid_argument("GlobalAlignment::align: no target set");
-  if (!source_up_axis.allFinite())
-    throw std::invalid_argument("GlobalAlignment::align: the source's up axis must be finite (zero: the target's)");
-  if (!up_axis.allFinite() || !(up_axis.norm() > 0.0))
-    throw std::invalid_argument("GlobalAlignment::align: the up axis must be a finite non-zero vector");
-  if (!(tilt_range_deg >= 0.0 && tilt_range_deg <= 30.0 && tilt_range_deg / settings_.tilt_step_deg <= 20.0))
-    throw std::invalid_argument(
-        "GlobalAlignment::align: the tilt range must be in [0, 30] degrees and at most 20 "
-        "tilt steps");
+  checkAlignArguments(source_up_axis, up_axis, tilt_range_deg, settings_.tilt_step_deg);
   const auto start = std::chrono::steady_clock::now();
   const GlobalAlignmentSettings& s = settings_;
   // The source levelled: its own up axis turned onto the target's, so one axis serves both.
   const Eigen::Vector3d axis = up_axis.normalized();
-  const Eigen::Matrix3d level =
-      source_up_axis.norm() > 0.0
-          ? Eigen::Quaterniond::FromTwoVectors(source_up_axis.normalized(), axis).toRotationMatrix()
-          : Eigen::Matrix3d::Identity();
+  const Eigen::Matrix3d level = levellingRotation(source_up_axis, axis);
   Points source = finitePoints(source_cloud, "source");
   for (auto& p : source) p = (level * p.cast<double>()).cast<float>();
   const double spacing = target_->spacing;
@@ -520,13 +544,7 @@ GlobalAlignmentResult GlobalAlignment::align(const Cloud& source_cloud, const Ei
                       {2.0 * s.fine_cell, min_distance, s.shrink_factor, s.hypothesis_iterations},
                       inlier_distance};
   const std::size_t refined = std::min<std::size_t>(hypotheses.size(), s.refined_hypotheses);
-  std::vector<Refined> results(refined);
-  pool_->run(refined, 1, threadsFor(refined), [&](std::size_t begin, std::size_t end, unsigned) {
-    for (std::size_t h = begin; h < end; ++h)
-      results[h] = refineHypothesis(search, Eigen::Matrix4d::Identity(), hypotheses[h].yaw, hypotheses[h].translation);
-  });
-  std::stable_sort(results.begin(), results.end(),
-                   [](const Refined& a, const Refined& b) { return a.inliers > b.inliers; });
+  const std::vector<Refined> results = refineBestVoted(search, hypotheses, refined, *pool_, threadsFor(refined));
   Refined best = results.empty() ? Refined{} : results.front();
   // 2b. Tilts, when the up axes may disagree by a few degrees (each estimated from its map's cameras).
   if (tilt_range_deg > 0.0)

@@ -228,6 +228,62 @@ std::optional<Eigen::Isometry3d> poseOfSecondInFirst(const cv::Matx33d& rotation
   return pose_12;
 }
 
+/// A motion recovered from one model: rotation, unit translation and the matches in front of both cameras.
+struct TwoViewSolution {
+  cv::Matx33d rotation;
+  cv::Vec3d translation;
+  Triangulation inliers;
+};
+
+/// Of the homography's decompositions, the one with most of its inlier matches in front of both cameras.
+TwoViewSolution motionFromHomography(const cv::Mat& homography, const cv::Mat& homography_mask,
+                                     const cv::Matx33d& camera_matrix, const std::vector<cv::Point2d>& p1,
+                                     const std::vector<cv::Point2d>& p2) {
+  TwoViewSolution solution;
+  std::vector<cv::Mat> rotations, translations, normals;
+  cv::decomposeHomographyMat(homography, camera_matrix, rotations, translations, normals);
+  const std::vector<int> candidates = maskIndices(homography_mask);
+  for (std::size_t s = 0; s < rotations.size(); ++s) {
+    const cv::Matx33d r(rotations[s]);
+    cv::Vec3d t(translations[s]);
+    if (cv::norm(t) < 1e-12) continue;  // pure rotation: no depth to tell the solutions apart
+    t /= cv::norm(t);
+    Triangulation triangulation = triangulateInFront(camera_matrix, r, t, p1, p2, candidates);
+    if (triangulation.in_front.size() > solution.inliers.in_front.size()) {
+      solution.inliers = std::move(triangulation);
+      solution.rotation = r;
+      solution.translation = t;
+    }
+  }
+  return solution;
+}
+
+/// The essential matrix's motion (recoverPose picks the decomposition with most points in front of both cameras),
+/// refined on its epipolar inliers and the inliers chosen again until they settle.
+TwoViewSolution motionFromEssential(const cv::Mat& essential, const cv::Mat& essential_mask,
+                                    const PinholeCamera& camera, const std::vector<cv::Point2d>& p1,
+                                    const std::vector<cv::Point2d>& p2, double essential_px) {
+  const cv::Matx33d camera_matrix = camera.cameraMatrix();
+  TwoViewSolution solution;
+  cv::Mat r, t;
+  cv::Mat mask = essential_mask.clone();
+  cv::recoverPose(essential, p1, p2, camera_matrix, r, t, mask);
+  solution.rotation = cv::Matx33d(r);
+  solution.translation = cv::Vec3d(t);
+  Triangulation& inliers = solution.inliers;
+  inliers.in_front = maskIndices(mask);
+  for (int round = 0; round < kRefineRounds && static_cast<int>(inliers.in_front.size()) >= kMinMatches; ++round) {
+    refineEssentialMotion(camera, p1, p2, inliers.in_front, essential_px, solution.rotation, solution.translation);
+    Triangulation reselected =
+        triangulateInFront(camera_matrix, solution.rotation, solution.translation, p1, p2,
+                           epipolarInliers(camera, p1, p2, solution.rotation, solution.translation, essential_px));
+    const bool settled = reselected.in_front == inliers.in_front;
+    inliers = std::move(reselected);
+    if (settled) break;
+  }
+  return solution;
+}
+
 /// Fits both models to the finite matches p1/p2 and recovers the motion; the
 /// inliers index p1/p2. OpenCV may throw on degenerate matches.
 RelativeMotion fitTwoViewMotion(const std::vector<cv::Point2d>& p1, const std::vector<cv::Point2d>& p2,
@@ -257,59 +313,24 @@ RelativeMotion fitTwoViewMotion(const std::vector<cv::Point2d>& p1, const std::v
     return motion;
   }
   motion.used_homography = homography_score / (homography_score + essential_score) > kHomographyScoreRatio;
-
-  cv::Matx33d rotation;
-  cv::Vec3d translation;
-  Triangulation inliers;
-  if (motion.used_homography) {
-    std::vector<cv::Mat> rotations, translations, normals;
-    cv::decomposeHomographyMat(homography, camera_matrix, rotations, translations, normals);
-    const std::vector<int> candidates = maskIndices(homography_mask);
-    for (std::size_t s = 0; s < rotations.size(); ++s) {
-      const cv::Matx33d r(rotations[s]);
-      cv::Vec3d t(translations[s]);
-      if (cv::norm(t) < 1e-12) continue;  // pure rotation: no depth to tell the solutions apart
-      t /= cv::norm(t);
-      Triangulation triangulation = triangulateInFront(camera_matrix, r, t, p1, p2, candidates);
-      if (triangulation.in_front.size() > inliers.in_front.size()) {
-        inliers = std::move(triangulation);
-        rotation = r;
-        translation = t;
-      }
-    }
-  } else {
-    // recoverPose picks the decomposition with most points in front of both cameras.
-    cv::Mat r, t;
-    cv::Mat mask = essential_mask.clone();
-    cv::recoverPose(essential, p1, p2, camera_matrix, r, t, mask);
-    rotation = cv::Matx33d(r);
-    translation = cv::Vec3d(t);
-    inliers.in_front = maskIndices(mask);
-    for (int round = 0; round < kRefineRounds && static_cast<int>(inliers.in_front.size()) >= kMinMatches; ++round) {
-      refineEssentialMotion(camera, p1, p2, inliers.in_front, bounds.essential_px, rotation, translation);
-      Triangulation reselected =
-          triangulateInFront(camera_matrix, rotation, translation, p1, p2,
-                             epipolarInliers(camera, p1, p2, rotation, translation, bounds.essential_px));
-      const bool settled = reselected.in_front == inliers.in_front;
-      inliers = std::move(reselected);
-      if (settled) break;
-    }
-  }
-  if (static_cast<int>(inliers.in_front.size()) < kMinMatches) {
+  TwoViewSolution solution = motion.used_homography
+                                 ? motionFromHomography(homography, homography_mask, camera_matrix, p1, p2)
+                                 : motionFromEssential(essential, essential_mask, camera, p1, p2, bounds.essential_px);
+  if (static_cast<int>(solution.inliers.in_front.size()) < kMinMatches) {
     motion.failure = std::string(motion.used_homography ? "homography" : "essential matrix") + " leaves " +
-                     std::to_string(inliers.in_front.size()) + " matches in front of both cameras, " +
+                     std::to_string(solution.inliers.in_front.size()) + " matches in front of both cameras, " +
                      std::to_string(kMinMatches) + " needed";
     return motion;
   }
-  const auto pose_2_in_1 = poseOfSecondInFirst(rotation, translation);
+  const auto pose_2_in_1 = poseOfSecondInFirst(solution.rotation, solution.translation);
   if (!pose_2_in_1) {
     motion.failure = "the recovered motion has no translation";
     return motion;
   }
   motion.ok = true;
   motion.pose_2_in_1 = *pose_2_in_1;
-  motion.median_parallax_deg = median(inliers.parallax_deg);
-  motion.inliers = std::move(inliers.in_front);
+  motion.median_parallax_deg = median(solution.inliers.parallax_deg);
+  motion.inliers = std::move(solution.inliers.in_front);
   return motion;
 }
 
