@@ -11,6 +11,7 @@
 //   wicp_benchmark_cross_sequence --scratch DIR [--data DIR] [--max-frames N]
 //                                 [--synthetic-frames N] [--sequences LIST] [--variants LIST] [--runs LIST]
 //                                 [--resolution-scale S] [--depth-resolution-scale S] [--crop-aspect A]
+//                                 [--exposure-stops S] [--frame-step N]
 //                                 [--trajectories DIR]
 
 #include <cmath>
@@ -180,6 +181,8 @@ bool parseCommand(int argc, char** argv, CrossSequenceCommand& c) {
       ("resolution-scale", po::value(&p.resolution_scale)->default_value(p.resolution_scale), "variant resolution: new width / old (0.25-4)")
       ("depth-resolution-scale", po::value(&p.depth_resolution_scale)->default_value(p.depth_resolution_scale), "variant depth-resolution: depth width / colour width (0.25-4)")
       ("crop-aspect", po::value(&p.crop_aspect)->default_value(p.crop_aspect), "variant crop: width / height kept (1-4; 1.7778: 16:9)")
+      ("exposure-stops", po::value(&p.exposure_stops)->default_value(p.exposure_stops), "variant exposure: most stops a frame's light is off (0-4)")
+      ("frame-step", po::value(&p.frame_step)->default_value(p.frame_step), "variant frame-step: keep every N-th frame (1-30)")
       ("frontend-option", po::value(&c.choices)->composing(),
        "KEY=VALUE, repeatable: a front-end choice by wicp_rgbd_slam's option name (pnp=iterative, "
        "descriptor=modified-brief, dense-odometry=prior, ...), applied to every run but opencv")

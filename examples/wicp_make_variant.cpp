@@ -35,7 +35,8 @@ bool parseCommand(int argc, char** argv, VariantCommand& c) {
       "variant.txt and, for bursts, bursts.txt. Kinds, applied in the order given: jpeg, mm-depth, focal,\n"
       "unregistered, blur, low-light, burst, resolution, depth-noise, depth-resolution (a depth camera of\n"
       "its own size, after focal, resolution and unregistered), crop (the middle rows: another aspect ratio,\n"
-      "before unregistered and depth-resolution); there-and-back re-orders the frames before\n"
+      "before unregistered and depth-resolution), exposure (auto exposure: each frame's light changed smoothly);\n"
+      "frame-step keeps every N-th frame (a lower frame rate) and there-and-back re-orders the frames, both before\n"
       "any other (even ones forward, then odd ones back: a real revisit). Without --dataset the synthetic\n"
       "sequence is used.\n"
       "Exit 1 on an error (nothing written), 2 on a bad command line. Options");
@@ -45,7 +46,7 @@ bool parseCommand(int argc, char** argv, VariantCommand& c) {
       ("help,h", "print this help")
       ("dataset", po::value(&c.dataset), "TUM RGB-D folder; default: the synthetic sequence")
       ("camera", po::value(&c.camera_spec), "fr1, fr2, fr3 or a camera YAML; default: DIR/camera.yaml, else from the folder name")
-      ("variant", po::value(&c.kinds)->required(), "comma-separated kinds (jpeg,mm-depth,focal,unregistered,blur,low-light,burst,there-and-back,resolution,depth-noise,depth-resolution,crop)")
+      ("variant", po::value(&c.kinds)->required(), "comma-separated kinds (jpeg,mm-depth,focal,unregistered,blur,low-light,burst,there-and-back,resolution,depth-noise,depth-resolution,crop,exposure,frame-step)")
       ("out", po::value(&c.out_dir)->required(), "output folder (written complete or not at all)")
       ("overwrite", "replace --out if it exists and is not empty")
       ("jpeg-quality", tools::rangedValue(&c.options.jpeg_quality, 1, 100)->default_value(c.options.jpeg_quality), "jpeg: quality (1-100)")
@@ -54,6 +55,9 @@ bool parseCommand(int argc, char** argv, VariantCommand& c) {
       ("resolution-scale", tools::rangedValue(&c.options.resolution_scale, 0.25, 4.0)->default_value(c.options.resolution_scale), "resolution: new width / old, same field of view (0.25-4; 0.5: 640x480 becomes 320x240)")
       ("depth-resolution-scale", tools::rangedValue(&c.options.depth_resolution_scale, 0.25, 4.0)->default_value(c.options.depth_resolution_scale), "depth-resolution: depth width / colour width, same field of view (0.25-4; 0.5: 320x240 depth beside 640x480 colour)")
       ("crop-aspect", tools::rangedValue(&c.options.crop_aspect, 1.0, 4.0)->default_value(c.options.crop_aspect), "crop: width / height kept, the middle rows (1-4, at least the source's; 1.7778: 16:9, 640x480 becomes 640x360); before unregistered and depth-resolution")
+      ("exposure-stops", tools::rangedValue(&c.options.exposure_stops, 0.0, 4.0)->default_value(c.options.exposure_stops), "exposure: most stops a frame is off (0-4; 1: between half and twice the light)")
+      ("exposure-period", tools::rangedValue(&c.options.exposure_period_frames, 2.0, 10000.0)->default_value(c.options.exposure_period_frames), "exposure: frames of the slower swing (2-10000)")
+      ("frame-step", tools::rangedValue(&c.options.frame_step, std::size_t{1}, std::size_t{30})->default_value(c.options.frame_step), "frame-step: keep every N-th frame (1-30; 2: 30 Hz becomes 15 Hz)")
       ("depth-noise", tools::rangedValue(&c.options.depth_noise_coefficient, 0.0, 0.1)->default_value(c.options.depth_noise_coefficient), "depth-noise: sigma = this z^2, metres (0-0.1; a Kinect v1 about 0.0015, a stereo camera 0.01)")
       ("depth-noise-correlation", tools::rangedValue(&c.options.depth_noise_correlation_px, 0.0, 50.0)->default_value(c.options.depth_noise_correlation_px), "depth-noise: errors correlated over this many px (0-50)")
       ("depth-offset", tools::rangedValue(&c.offset_x, -0.5, 0.5)->default_value(c.offset_x), "unregistered: depth camera x offset, m")

@@ -2,10 +2,12 @@
 // else; the camera, lists and ground truth written with it read the variant back
 // consistently; bad options and outputs fail before anything is written.
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <string>
 #include <tuple>
 #include <vector>
 
@@ -401,6 +403,93 @@ TEST(SequenceVariants, ThereAndBackShowsEvenFramesForwardThenOddFramesBackWithTh
     EXPECT_NEAR(truth->translation().x(), 0.01 * static_cast<double>(shown[j]), 1e-6) << "frame " << j;
   }
   EXPECT_THROW(simulation::thereAndBack(smallSynthetic(3)), std::invalid_argument);
+}
+
+TEST(SequenceVariants, FrameStepKeepsEveryNthFrameWithItsTimesAndTheWholeGroundTruth) {
+  const simulation::VariantSource source = smallSynthetic(7);
+  simulation::SequenceVariantOptions options = kinds("frame-step");
+  options.frame_step = 3;
+  const Written variant = writeAndOpen(source, options, scratchDir("variant") / "frame_step");
+  const std::vector<std::size_t> kept = {0, 3, 6};
+  ASSERT_EQ(variant.sequence.size(), kept.size());
+  for (std::size_t j = 0; j < kept.size(); ++j) {
+    const RgbdFrame original = source.load(kept[j]), read = variant.sequence.loadFrame(j, variant.camera);
+    EXPECT_EQ(cv::norm(original.color, read.color, cv::NORM_INF), 0.0) << "frame " << j;
+    EXPECT_NEAR(read.timestamp, original.timestamp, 1e-6) << "frame " << j;
+    EXPECT_NEAR(variant.sequence.frame(j).depth_timestamp, source.depth_timestamp(kept[j]), 1e-6) << "frame " << j;
+  }
+  EXPECT_EQ(variant.sequence.groundTruth().size(), source.groundtruth.size()) << "every pose, for the association";
+  EXPECT_EQ(simulation::everyNthFrame(source, 1).size, source.size);
+  EXPECT_EQ(simulation::everyNthFrame(source, 10).size, 1u);
+  EXPECT_THROW(simulation::everyNthFrame(source, 0), std::invalid_argument);
+  options.frame_step = 31;
+  EXPECT_THROW(simulation::writeSequenceVariant(source, options, (scratchDir("variant") / "step31").string()),
+               std::invalid_argument);
+}
+
+TEST(SequenceVariants, FrameStepComesBeforeThereAndBack) {
+  const simulation::VariantSource source = smallSynthetic(8);
+  const Written variant = writeAndOpen(source, kinds("there-and-back,frame-step"), scratchDir("variant") / "tb_step");
+  // Frames 0, 2, 4, 6 kept, then there and back over them: 0, 4 forward and 6, 2 back.
+  const std::vector<std::size_t> shown = {0, 4, 6, 2};
+  ASSERT_EQ(variant.sequence.size(), shown.size());
+  for (std::size_t j = 0; j < shown.size(); ++j)
+    EXPECT_EQ(cv::norm(source.load(shown[j]).color, variant.sequence.loadFrame(j, variant.camera).color, cv::NORM_INF),
+              0.0)
+        << "frame " << j;
+}
+
+TEST(SequenceVariants, ExposureChangesEachFramesLightSmoothlyWithinItsStops) {
+  simulation::SequenceVariantOptions options = kinds("exposure");
+  options.exposure_stops = 1.0;
+  options.exposure_period_frames = 30.0;
+  double lowest = 0.0, highest = 0.0, largest_step = 0.0, previous = simulation::exposureStops(0, options);
+  for (std::size_t i = 0; i < 300; ++i) {
+    const double stops = simulation::exposureStops(i, options);
+    EXPECT_LE(std::abs(stops), 1.0 + 1e-12) << "frame " << i;
+    EXPECT_EQ(stops, simulation::exposureStops(i, options)) << "frame " << i << ": frame i's own";
+    lowest = std::min(lowest, stops);
+    highest = std::max(highest, stops);
+    largest_step = std::max(largest_step, std::abs(stops - previous));
+    previous = stops;
+  }
+  EXPECT_LT(lowest, -0.5);
+  EXPECT_GT(highest, 0.5);
+  // Auto exposure follows the scene, without jumps: at most the sinusoids' steepest slope a frame.
+  EXPECT_LE(largest_step, 2.0 * M_PI / 30.0 * (0.6 + 0.4 / 0.37));
+  EXPECT_GT(largest_step, 0.1);
+  simulation::SequenceVariantOptions other = options;
+  other.seed = 2;
+  EXPECT_NE(simulation::exposureStops(5, options), simulation::exposureStops(5, other));
+
+  // Written: a brighter frame is brighter, a darker one darker, depth untouched.
+  const simulation::VariantSource source = smallSynthetic(12);
+  const Written variant = writeAndOpen(source, options, scratchDir("variant") / "exposure");
+  for (std::size_t i = 0; i < source.size; ++i) {
+    const RgbdFrame original = source.load(i), read = variant.sequence.loadFrame(i, variant.camera);
+    const double stops = simulation::exposureStops(i, options);
+    const double before = cv::mean(original.color)[0], after = cv::mean(read.color)[0];
+    if (stops > 0.1) EXPECT_GT(after, before) << "frame " << i;
+    if (stops < -0.1) EXPECT_LT(after, before) << "frame " << i;
+    EXPECT_EQ(cv::norm(original.depth, read.depth, cv::NORM_INF), 0.0) << "frame " << i;
+  }
+}
+
+TEST(ImageDegradations, ExposureIsLinearLightGainSaturating) {
+  cv::Mat grey(4, 4, CV_8UC1);
+  for (int i = 0; i < 16; ++i) grey.at<unsigned char>(i / 4, i % 4) = static_cast<unsigned char>(16 * i + 10);
+  EXPECT_EQ(cv::norm(simulation::changeExposure(grey, 0.0), grey, cv::NORM_INF), 0.0);
+  const cv::Mat mid(1, 1, CV_8UC1, cv::Scalar(100));
+  // Twice the light: 100 becomes 100 * 2^(1 / 2.2) (8-bit values are gamma 2.2), half: 100 / 2^(1 / 2.2).
+  EXPECT_NEAR(simulation::changeExposure(mid, 1.0).at<unsigned char>(0, 0), 100.0 * std::pow(2.0, 1.0 / 2.2), 0.6);
+  EXPECT_NEAR(simulation::changeExposure(mid, -1.0).at<unsigned char>(0, 0), 100.0 / std::pow(2.0, 1.0 / 2.2), 0.6);
+  const cv::Mat bright(1, 1, CV_8UC3, cv::Scalar(250, 200, 20));
+  const cv::Vec3b up = simulation::changeExposure(bright, 2.0).at<cv::Vec3b>(0, 0);
+  EXPECT_EQ(up[0], 255);  // the highlights clip
+  EXPECT_EQ(up[1], 255);
+  EXPECT_GT(up[2], 20);
+  EXPECT_THROW(simulation::changeExposure(cv::Mat(2, 2, CV_32F), 1.0), std::invalid_argument);
+  EXPECT_THROW(simulation::changeExposure(grey, 9.0), std::invalid_argument);
 }
 
 TEST(SequenceVariants, TheSameSeedWritesTheSameImages) {

@@ -100,6 +100,20 @@ cv::Mat lowLight(const cv::Mat& image, double gain, double gamma, double noise_s
   return addGaussianNoise(dark, noise_sigma, rng);
 }
 
+cv::Mat changeExposure(const cv::Mat& image, double stops) {
+  requireEightBit(image, "changeExposure");
+  if (!(std::abs(stops) <= 8.0)) throw std::invalid_argument("changeExposure: stops must be in [-8, 8]");
+  constexpr double kGamma = 2.2;  // 8-bit values are gamma-encoded; the light adds up in linear units
+  const double gain = std::pow(2.0, stops);
+  cv::Mat table(1, 256, CV_8U);
+  for (int v = 0; v < 256; ++v)
+    table.at<unsigned char>(v) = cv::saturate_cast<unsigned char>(
+        255.0 * std::pow(std::min(1.0, gain * std::pow(v / 255.0, kGamma)), 1.0 / kGamma));
+  cv::Mat exposed;
+  cv::LUT(image, table, exposed);
+  return exposed;
+}
+
 PinholeCamera zoomedCamera(const PinholeCamera& camera, double scale) {
   if (!(scale > 0.0) || !std::isfinite(scale))
     throw std::invalid_argument("zoomedCamera: scale must be > 0, got " + std::to_string(scale));

@@ -40,7 +40,9 @@ const std::vector<std::pair<VariantKind, const char*>>& kindNames() {
       {VariantKind::Resolution, "resolution"},
       {VariantKind::DepthNoise, "depth-noise"},
       {VariantKind::DepthResolution, "depth-resolution"},
-      {VariantKind::Crop, "crop"}};
+      {VariantKind::Crop, "crop"},
+      {VariantKind::Exposure, "exposure"},
+      {VariantKind::FrameStep, "frame-step"}};
   return names;
 }
 
@@ -72,6 +74,10 @@ void checkOptions(const SequenceVariantOptions& options) {
           "depth resolution scale must be in [0.25, 4]");
   const auto at = [&](VariantKind kind) { return std::find(options.kinds.begin(), options.kinds.end(), kind); };
   require(options.crop_aspect >= 1.0 && options.crop_aspect <= 4.0, "crop aspect must be in [1, 4] (width / height)");
+  require(options.exposure_stops >= 0.0 && options.exposure_stops <= 4.0, "exposure stops must be in [0, 4]");
+  require(options.exposure_period_frames >= 2.0 && options.exposure_period_frames <= 10000.0,
+          "exposure period must be in [2, 10000] frames");
+  require(options.frame_step >= 1 && options.frame_step <= 30, "frame step must be in [1, 30]");
   // A crop cuts the colour camera's rows out of depth registered to it: before the depth has a camera of its own.
   for (const VariantKind kind : {VariantKind::Unregistered, VariantKind::DepthResolution})
     require(!has(options, VariantKind::Crop) || !has(options, kind) || at(VariantKind::Crop) < at(kind),
@@ -175,7 +181,9 @@ RgbdFrame applyKinds(RgbdFrame frame, std::size_t i, PinholeCamera camera, const
     switch (kind) {
       case VariantKind::Jpeg:
       case VariantKind::MillimetreDepth: break;  // how the images are written
-      case VariantKind::ThereAndBack: break;     // the order of the frames: thereAndBack, before any frame
+      case VariantKind::ThereAndBack:            // the order of the frames: thereAndBack, before any frame
+      case VariantKind::FrameStep: break;        // which frames: everyNthFrame, before thereAndBack
+      case VariantKind::Exposure: frame.color = changeExposure(frame.color, exposureStops(i, options)); break;
       case VariantKind::Focal: {
         const double scale = options.focal_length_px / camera.fx;
         frame.color = zoomImage(frame.color, camera, scale, cv::INTER_LINEAR);
@@ -250,6 +258,10 @@ void writeDescription(const fs::path& path, const VariantSource& source, const S
   if (has(options, VariantKind::DepthResolution))
     text << "\ndepth_resolution_scale: " << options.depth_resolution_scale;
   if (has(options, VariantKind::Crop)) text << "\ncrop_aspect: " << options.crop_aspect;
+  if (has(options, VariantKind::Exposure))
+    text << "\nexposure_stops: " << options.exposure_stops
+         << "\nexposure_period_frames: " << options.exposure_period_frames;
+  if (has(options, VariantKind::FrameStep)) text << "\nframe_step: " << options.frame_step;
   if (has(options, VariantKind::DepthNoise))
     text << "\ndepth_noise_coefficient: " << options.depth_noise_coefficient
          << "\ndepth_noise_correlation_px: " << options.depth_noise_correlation_px;
@@ -404,12 +416,34 @@ VariantSource thereAndBack(const VariantSource& source) {
   return result;
 }
 
+VariantSource everyNthFrame(const VariantSource& source, std::size_t step) {
+  if (step == 0) throw std::invalid_argument("every n-th frame: the step must be at least 1");
+  if (source.size == 0) throw std::invalid_argument("every n-th frame: the source has no frame");
+  VariantSource result = source;
+  result.size = (source.size + step - 1) / step;
+  result.load = [source, step](std::size_t j) { return source.load(j * step); };
+  if (source.timestamp) result.timestamp = [source, step](std::size_t j) { return source.timestamp(j * step); };
+  result.depth_timestamp = [source, step](std::size_t j) { return source.depth_timestamp(j * step); };
+  result.description = source.description + ", every " + std::to_string(step) + " frames";
+  return result;
+}
+
+double exposureStops(std::size_t i, const SequenceVariantOptions& options) {
+  // The phases depend on the seed only, so frame i's exposure does not depend on the frames before it.
+  cv::RNG rng(options.seed * 0xD1B54A32D192ED03ull + 7);
+  const double slow_phase = rng.uniform(0.0, 2.0 * M_PI), fast_phase = rng.uniform(0.0, 2.0 * M_PI);
+  const double t = 2.0 * M_PI * static_cast<double>(i) / options.exposure_period_frames;
+  return options.exposure_stops * (0.6 * std::sin(t + slow_phase) + 0.4 * std::sin(t / 0.37 + fast_phase));
+}
+
 VariantSummary writeSequenceVariant(const VariantSource& original, const SequenceVariantOptions& options,
                                     const std::string& dir, bool overwrite,
                                     const std::function<void(std::size_t)>& frame_written) {
   checkOptions(options);
   if (original.size == 0) throw std::invalid_argument("sequence variant: the source has no frame");
-  const VariantSource source = has(options, VariantKind::ThereAndBack) ? thereAndBack(original) : original;
+  VariantSource source = original;
+  if (has(options, VariantKind::FrameStep)) source = everyNthFrame(source, options.frame_step);
+  if (has(options, VariantKind::ThereAndBack)) source = thereAndBack(source);
   VariantSummary summary;
   summary.camera = variantCamera(source.camera, options);
   summary.frames = source.size;

@@ -44,6 +44,13 @@ cv::Mat noisyDepth(const cv::Mat& depth, double coefficient, double correlation_
 /// @param rng the source of the noise
 cv::Mat lowLight(const cv::Mat& image, double gain, double gamma, double noise_sigma, cv::RNG& rng);
 
+/// @brief Another exposure of the same scene: the light times 2^stops, in linear light (8-bit values taken as
+/// gamma 2.2), saturating at 255, as a camera's auto exposure or gain changes it from frame to frame (a brighter
+/// exposure also clips the highlights, a darker one crushes the shadows into fewer grey levels).
+/// @param image 8-bit, 1 to 4 channels
+/// @param stops the change in stops, in [-8, 8] (0: a copy; 1: twice the light)
+cv::Mat changeExposure(const cv::Mat& image, double stops);
+
 /// @brief The camera of zoomImage: focal lengths times `scale`, the principal
 /// point, distortion (in normalised coordinates, unchanged by a zoom about the
 /// principal point), size and depth factor unchanged. An unregistered depth camera's image is zoomed about the

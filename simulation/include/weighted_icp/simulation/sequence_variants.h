@@ -38,12 +38,14 @@ enum class VariantKind {
   DepthResolution,  // a depth camera of another resolution than the colour camera's (depth_resolution_scale), named
                     // in camera.yaml with its own size (depth_width, depth_height); after focal, resolution and
                     // unregistered
-  Crop              // another aspect ratio: the middle rows of colour and depth (crop_aspect, e.g. 16:9), same
+  Crop,             // another aspect ratio: the middle rows of colour and depth (crop_aspect, e.g. 16:9), same
                     // pixels and lens; before unregistered and depth-resolution
+  Exposure,         // the exposure changing from frame to frame, as auto exposure does (exposureStops)
+  FrameStep         // a lower frame rate: every frame_step-th frame (everyNthFrame), before there-and-back
 };
 
 /// @brief "jpeg", "mm-depth", "focal", "unregistered", "blur", "low-light", "burst", "there-and-back", "resolution",
-/// "depth-noise", "depth-resolution", "crop".
+/// "depth-noise", "depth-resolution", "crop", "exposure", "frame-step".
 /// @param kind the kind to name
 std::string toString(VariantKind kind);
 /// @brief The kind of a name written by toString; std::invalid_argument naming the
@@ -68,6 +70,12 @@ struct SequenceVariantOptions {
   double depth_resolution_scale = 0.5;
   /// Crop: width / height of the cropped images, in [the source's, 4] (16 / 9: 640x480 becomes 640x360).
   double crop_aspect = 16.0 / 9.0;
+  /// Exposure: the most stops a frame's exposure is off (1: between half and twice the light), in [0, 4], and the
+  /// period in frames of its slower swing (a faster one has 0.37 of it), in [2, 10000].
+  double exposure_stops = 1.0;
+  double exposure_period_frames = 30.0;
+  /// Frame step: keep every frame_step-th frame (2: a 30 Hz sequence at 15 Hz), in [1, 30].
+  std::size_t frame_step = 2;
   /// Depth noise: sigma = coefficient z^2 (m); 0.01 is a consumer stereo depth camera's (2 % at 2 m), several times
   /// a Kinect v1's. Its errors are correlated over about correlation_px pixels.
   double depth_noise_coefficient = 0.01;
@@ -130,6 +138,19 @@ VariantSource syntheticVariantSource(const SyntheticRgbdOptions& options);
 /// interpolated at each frame's original timestamp (a frame outside it gets none).
 /// @param source the sequence; fewer than 4 frames throw std::invalid_argument
 VariantSource thereAndBack(const VariantSource& source);
+
+/// @brief The sequence at a lower frame rate: frames 0, step, 2 step, ... with their timestamps, depth timestamps
+/// and the whole ground truth (poses are associated by timestamp).
+/// @param source the sequence
+/// @param step frames from one kept frame to the next, >= 1; a source with no frame throws std::invalid_argument
+VariantSource everyNthFrame(const VariantSource& source, std::size_t step);
+
+/// @brief The exposure variant's change for frame i, in stops: two sinusoids (periods exposure_period_frames and
+/// 0.37 of it, weights 0.6 and 0.4, phases drawn from the seed), times exposure_stops: smooth, as auto exposure
+/// follows the scene, never more than exposure_stops off.
+/// @param i the frame's index in the variant
+/// @param options exposure_stops, exposure_period_frames and seed are read
+double exposureStops(std::size_t i, const SequenceVariantOptions& options);
 
 /// @brief What writeSequenceVariant wrote.
 struct VariantSummary {
