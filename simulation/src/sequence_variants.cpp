@@ -21,6 +21,8 @@
 #include "weighted_icp/io/camera.h"
 #include "weighted_icp/simulation/image_degradations.h"
 
+#include "random_source.h"
+
 namespace weighted_icp::simulation {
 
 namespace {
@@ -430,8 +432,9 @@ VariantSource everyNthFrame(const VariantSource& source, std::size_t step) {
 
 double exposureStops(std::size_t i, const SequenceVariantOptions& options) {
   // The phases depend on the seed only, so frame i's exposure does not depend on the frames before it.
-  cv::RNG rng(options.seed * 0xD1B54A32D192ED03ull + 7);
-  const double slow_phase = rng.uniform(0.0, 2.0 * M_PI), fast_phase = rng.uniform(0.0, 2.0 * M_PI);
+  constexpr std::uint64_t kExposureStream = 1;  // this file's only stream of the simulators' random source
+  const double slow_phase = 2.0 * M_PI * unitInterval(subSeed(options.seed, kExposureStream, 0));
+  const double fast_phase = 2.0 * M_PI * unitInterval(subSeed(options.seed, kExposureStream, 1));
   const double t = 2.0 * M_PI * static_cast<double>(i) / options.exposure_period_frames;
   return options.exposure_stops * (0.6 * std::sin(t + slow_phase) + 0.4 * std::sin(t / 0.37 + fast_phase));
 }
