@@ -11,9 +11,10 @@
 // Displacements are rotations about the world's z axis and translations in its
 // xy plane. The world is the map's own frame unless --camera-frame (the map
 // re-expressed in its first camera's frame, as a SLAM without gravity writes
-// it) or --map-pose (the map's frame placed in a z-up world, e.g. by ground
-// truth; after --camera-frame, the camera frame's) says otherwise: then the
-// search's --up-axis matters.
+// it), --map-pose (the map's frame placed in a z-up world, e.g. by ground
+// truth; after --camera-frame, the camera frame's) or --tilt (the map
+// re-expressed in a frame turned about x) says otherwise: then the search's
+// --up-axis matters.
 
 #include <chrono>
 #include <cmath>
@@ -145,6 +146,7 @@ Eigen::Isometry3d parseTumPose(const std::string& text) {
 struct GlobalSweepCommand {
   std::string map_path, method = "global", perturb_text, map_pose_text, up_axis_text = "auto";
   bool camera_frame = false;
+  double tilt_deg = 0.0;  // --tilt: the map re-expressed in a frame this far off z
   tools::UpAxisOption up_axis;
   /// The map's frame in the z-up world displacements are made in (--camera-frame, --map-pose).
   Eigen::Isometry3d world_from_map = Eigen::Isometry3d::Identity();
@@ -198,6 +200,9 @@ bool parseCommand(int argc, char** argv, GlobalSweepCommand& c) {
       ("camera-frame", po::bool_switch(&c.camera_frame),
        "re-express the map in its first camera's frame (as a SLAM without gravity writes it); displacements stay "
        "rotations about the original z axis unless --map-pose places the new frame")
+      ("tilt", tools::rangedValue(&c.tilt_deg, -90.0, 90.0)->default_value(c.tilt_deg),
+       "re-express the map in a frame turned this many degrees about its x axis (a map written with its z axis "
+       "that far off gravity, -90-90); displacements stay rotations about the original z axis")
       ("map-pose", po::value(&c.map_pose_text),
        "the map's frame in a z-up world, \"tx ty tz qx qy qz qw\" (a TUM trajectory line's order, e.g. the ground "
        "truth of the map's first frame): displacements are rotations about that world's z axis")
@@ -221,11 +226,14 @@ bool parseCommand(int argc, char** argv, GlobalSweepCommand& c) {
     throw po::error(std::string("--up-axis: ") + e.what());
   }
   if (!c.map_pose_text.empty()) c.world_from_map = parseTumPose(c.map_pose_text);
+  if (c.tilt_deg != 0.0 && (c.camera_frame || !c.map_pose_text.empty()))
+    throw po::error("--tilt re-expresses the map itself: not with --camera-frame or --map-pose");
   return true;
 }
 
 /// @brief The map pairs are cut from: the file, or a synthetic session's estimated map; with --camera-frame
-/// re-expressed in its first camera's frame (and `c.world_from_map` set to that camera's pose).
+/// re-expressed in its first camera's frame (and `c.world_from_map` set to that camera's pose), with --tilt in a
+/// frame turned about x (and `c.world_from_map` set to that turn).
 LandmarkMap loadMap(GlobalSweepCommand& c) {
   LandmarkMap map;
   if (!c.synthetic) {
@@ -241,6 +249,12 @@ LandmarkMap loadMap(GlobalSweepCommand& c) {
     const Eigen::Isometry3d first = map.frames.begin()->second;
     map.transform(first.inverse());
     if (c.map_pose_text.empty()) c.world_from_map = first;  // turns about the original z axis
+  }
+  if (c.tilt_deg != 0.0) {
+    Eigen::Isometry3d tilted = Eigen::Isometry3d::Identity();  // the new frame's axes in the map's
+    tilted.linear() = Eigen::AngleAxisd(c.tilt_deg * M_PI / 180.0, Eigen::Vector3d::UnitX()).toRotationMatrix();
+    map.transform(tilted.inverse());
+    c.world_from_map = tilted;  // turns about the original z axis
   }
   return map;
 }

@@ -97,6 +97,13 @@ TEST(ToolOptions, OutOfRangeNumbersAreCommandLineErrorsNamingTheOption) {
        "--up-axis: expected auto, z or \"X Y Z\" (three finite numbers, not all zero), got '0 0 0'"},
       {"wicp_global_sweep", "--synthetic --up-axis y", "--up-axis: expected auto, z or \"X Y Z\""},
       {"wicp_global_sweep", "--synthetic --map-pose \"0 0 0 0 0 0 2\"", "--map-pose: the quaternion is not a unit one"},
+      {"wicp_global_sweep", "--synthetic --tilt 12 --camera-frame",
+       "--tilt re-expresses the map itself: not with --camera-frame or --map-pose"},
+      {"wicp_global_sweep", "--synthetic --tilt 91", "--tilt must be between -90 and 90 (got 91)"},
+      {"wicp_make_variant", "--variant frame-step --frame-step 0 --out x",
+       "--frame-step must be between 1 and 30 (got 0)"},
+      {"wicp_make_variant", "--variant exposure --exposure-stops 5 --out x",
+       "--exposure-stops must be between 0 and 4 (got 5)"},
   };
   for (const auto& c : cases) {
     SCOPED_TRACE(std::string(c.tool) + " " + c.args);

@@ -65,8 +65,11 @@ struct SharedUpAxes {
 /// otherwise each map's own estimate with tilts, and z tried as well.
 /// @param source_estimate  estimateUpAxis() of the source map
 /// @param target_estimate  estimateUpAxis() of the target map
-/// @param z_tolerance_deg  largest angle to ±z for a map to count as z-up (the paper's real map: 3.4°)
+/// @param z_tolerance_deg  largest angle to ±z for a map to count as z-up: 8° by default, just above the
+///        estimates' own error on a z-up map (the paper's real map: 3.4° whole, 0.4-7.2° for its mini-maps), so
+///        that a map written 10-15° off gravity is levelled rather than searched about a wrong axis (15° until
+///        2026-11-27: 53-58 of 100 such pairs found, 90 since; docs/global_alignment.md)
 SharedUpAxes chooseUpAxes(const UpAxisEstimate& source_estimate, const UpAxisEstimate& target_estimate,
-                          double z_tolerance_deg = 15.0);
+                          double z_tolerance_deg = 8.0);
 
 }  // namespace weighted_icp
