@@ -103,6 +103,22 @@ TEST(UpAxis, TheRealMapsUpIsZWithinAFewDegrees) {
   EXPECT_LT(angleDeg(e.axis, Eigen::Vector3d::UnitZ()), 5.0) << e.axis.transpose();
 }
 
+/// Mini-maps `first` (frames [0, first_end]) and `second` (frames [second_begin, last]) of `map` with no landmark
+/// in both: of the landmarks both saw, the even ones stay in the first and the odd ones in the second.
+std::pair<LandmarkMap, LandmarkMap> disjointMiniMaps(const LandmarkMap& map, FrameId first_end, FrameId second_begin,
+                                                     FrameId last) {
+  LandmarkMap first = map.miniMap(0, first_end), second = map.miniMap(second_begin, last);
+  std::vector<Landmark> kept;
+  for (const auto& l : second.landmarks)
+    if (l.id % 2 == 1 || l.observations.front().frame_id > first_end) kept.push_back(l);
+  second.landmarks = kept;
+  kept.clear();
+  for (const auto& l : first.landmarks)
+    if (l.id % 2 == 0 || l.observations.back().frame_id < second_begin) kept.push_back(l);
+  first.landmarks = kept;
+  return {first, second};
+}
+
 // Two mini-maps of the real map re-expressed in its first camera's frame, a third of their frames shared and no
 // landmark in both: each one's cameras estimate its up axis (frames 96-239: 5.6° off the truth, the other 0.4°),
 // and the search, levelling the source by its own and trying tilts, recovers a turn of 180° about the true up.
@@ -111,15 +127,7 @@ TEST(UpAxis, GlobalSearchRecoversAMapLevelledByItsOwnCameras) {
   LandmarkMap map = io::readLandmarkMap(weighted_icp::testing::realMapPath().string());
   const Eigen::Isometry3d first = map.frames.begin()->second;
   map.transform(first.inverse());
-  LandmarkMap target = map.miniMap(0, 143), source = map.miniMap(96, 239);
-  std::vector<Landmark> kept;
-  for (const auto& l : source.landmarks)  // landmarks both saw: the odd ones stay in the source only
-    if (l.id % 2 == 1 || l.observations.front().frame_id > 143) kept.push_back(l);
-  source.landmarks = kept;
-  kept.clear();
-  for (const auto& l : target.landmarks)
-    if (l.id % 2 == 0 || l.observations.back().frame_id < 96) kept.push_back(l);
-  target.landmarks = kept;
+  auto [target, source] = disjointMiniMaps(map, 143, 96, 239);
   const Eigen::Vector3d up = first.linear().transpose() * Eigen::Vector3d::UnitZ();
   Eigen::Isometry3d moved = Eigen::Isometry3d::Identity();
   moved.linear() = Eigen::AngleAxisd(M_PI, up).toRotationMatrix();
@@ -148,15 +156,7 @@ TEST(UpAxis, AMapWrittenTwelveDegreesOffGravityIsLevelledNotSearchedAboutZ) {
   Eigen::Isometry3d tilted = Eigen::Isometry3d::Identity();  // the map's new frame, in the z-up world
   tilted.linear() = Eigen::AngleAxisd(12.0 * M_PI / 180.0, Eigen::Vector3d::UnitX()).toRotationMatrix();
   map.transform(tilted.inverse());
-  LandmarkMap target = map.miniMap(0, 159), source = map.miniMap(80, 239);
-  std::vector<Landmark> kept;
-  for (const auto& l : source.landmarks)  // landmarks both saw: the odd ones stay in the source only
-    if (l.id % 2 == 1 || l.observations.front().frame_id > 159) kept.push_back(l);
-  source.landmarks = kept;
-  kept.clear();
-  for (const auto& l : target.landmarks)
-    if (l.id % 2 == 0 || l.observations.back().frame_id < 80) kept.push_back(l);
-  target.landmarks = kept;
+  auto [target, source] = disjointMiniMaps(map, 159, 80, 239);
   const Eigen::Vector3d up = tilted.linear().transpose() * Eigen::Vector3d::UnitZ();  // gravity in the map's frame
   Eigen::Isometry3d moved = Eigen::Isometry3d::Identity();
   moved.linear() = Eigen::AngleAxisd(M_PI / 2.0, up).toRotationMatrix();
