@@ -2,9 +2,7 @@
 // alternate-landmark halves (no landmark in both), the source displaced by
 // yaw 180° and (1.5, -1) m. "global_search" is GlobalAlignment alone,
 // "with_weighted_icp" adds the final weighted ICP with refinement, as
-// wicp_align --global runs it without cameras; "up_axes_from_cameras" as it
-// runs by default on maps with cameras (z-up ones: about z, with tilts);
-// "camera_frame" is the same pair written in the
+// wicp_align --global runs it; "camera_frame" is the same pair written in the
 // map's first camera's frame and turned about the true up by 120°, so that
 // each map is levelled by its cameras, tilts are tried and the search about z
 // runs as well (GlobalLandmarkAligner::align with chooseUpAxes's axes). The
@@ -32,15 +30,13 @@ std::string map_path = std::string(WEIGHTED_ICP_DATA_DIR) + "/map_fr1_desk.txt";
 
 struct Pair {
   LandmarkCloud::Ptr source, target;
-  SharedUpAxes axes;  // chooseUpAxes's, as wicp_align --global's default finds them: z, with tilts
 };
 
 const Pair& pair() {
   static const Pair p = [] {
     auto [even, odd] = io::readLandmarkMap(map_path).withMinObservations(2).alternateHalves();
     odd.transform(Displacement{1.5, -1.0, 0.0, 0.0, 0.0, 180.0}.toIsometry());
-    return Pair{toLandmarkCloud(odd, CovarianceWeight{}), toLandmarkCloud(even, CovarianceWeight{}),
-                chooseUpAxes(estimateUpAxis(odd.frames), estimateUpAxis(even.frames))};
+    return Pair{toLandmarkCloud(odd, CovarianceWeight{}), toLandmarkCloud(even, CovarianceWeight{})};
   }();
   return p;
 }
@@ -93,14 +89,6 @@ void BM_GlobalWithWeightedIcp(benchmark::State& state) {
   for (auto _ : state) benchmark::DoNotOptimize(aligner.align(pair().source).alignment.iterations);
 }
 
-void BM_WithUpAxesFromCameras(benchmark::State& state) {
-  AlignmentSettings icp;
-  icp.threads = static_cast<unsigned>(state.range(0));
-  GlobalLandmarkAligner aligner(searchThreads(state), icp);
-  aligner.setTarget(pair().target);
-  for (auto _ : state) benchmark::DoNotOptimize(aligner.align(pair().source, pair().axes).alignment.iterations);
-}
-
 void BM_CameraFrame(benchmark::State& state) {
   AlignmentSettings icp;
   icp.threads = static_cast<unsigned>(state.range(0));
@@ -112,7 +100,6 @@ void BM_CameraFrame(benchmark::State& state) {
 
 BENCHMARK(BM_GlobalSearch)->Name("global_search")->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_GlobalWithWeightedIcp)->Name("with_weighted_icp")->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_WithUpAxesFromCameras)->Name("up_axes_from_cameras")->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_CameraFrame)->Name("camera_frame")->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
 
 }  // namespace
