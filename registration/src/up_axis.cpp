@@ -57,12 +57,8 @@ SharedUpAxes chooseUpAxes(const UpAxisEstimate& source_estimate, const UpAxisEst
     return std::abs(e.axis.normalized().z()) >= std::cos(z_tolerance_deg * M_PI / 180.0);
   };
   SharedUpAxes axes;
-  if (source_estimate.cameras == 0 || target_estimate.cameras == 0) return axes;
-  if (z_up(source_estimate) && z_up(target_estimate)) {
-    // About z, with tilts: the estimates cannot tell a map a few degrees off gravity from a z-up one.
-    axes.tilt_range_deg = 8.0;
+  if (source_estimate.cameras == 0 || target_estimate.cameras == 0 || (z_up(source_estimate) && z_up(target_estimate)))
     return axes;
-  }
   axes.source = source_estimate.axis.normalized();
   axes.target = target_estimate.axis.normalized();
   axes.tilt_range_deg = 8.0;

@@ -47,23 +47,21 @@ struct SharedUpAxes {
   Eigen::Vector3d target = Eigen::Vector3d::UnitZ();
   /// How far the two axes may disagree, for GlobalAlignmentSettings::tilt_range_deg: 0 for axes known to be
   /// shared, 8° for axes estimated from each map's cameras (a hand-held camera's roll drifts: mini-maps of the
-  /// paper's real map, a third to two thirds of its frames, estimate their up axis 0.4-7.2° off the truth), and
-  /// 8° about z for maps whose estimates count as z-up (one written a few degrees off gravity looks the same).
+  /// paper's real map, a third to two thirds of its frames, estimate their up axis 0.4-7.2° off the truth).
   double tilt_range_deg = 0.0;
   /// Search about the maps' z axis as well, and keep whichever search leaves more source points with a close
   /// counterpart: the estimates are a guess, and two maps of one frame displaced about its z axis (as a test
   /// of a map written in a camera's frame would) share z exactly.
   bool also_try_z = false;
-  /// True when both are +z and no other axis is tried (tilts about z may be).
+  /// True when both are +z and nothing else is tried.
   bool zUpOnly() const {
     return !also_try_z && source == Eigen::Vector3d::UnitZ() && target == Eigen::Vector3d::UnitZ();
   }
 };
 
-/// @brief Chooses the up axes for aligning `source` onto `target`: +z for both, without tilts, when either map
-/// has no camera; +z for both with tilts within ±8° when both maps' estimated up axes are within
-/// `z_tolerance_deg` of ±z (maps written gravity-aligned, as the paper's and TUM's: levelling such maps by their
-/// estimates would only add the estimates' own errors, and one written a few degrees off gravity looks the same);
+/// @brief Chooses the up axes for aligning `source` onto `target`: +z for both when both maps' estimated up
+/// axes are within `z_tolerance_deg` of ±z (maps written gravity-aligned, as the paper's and TUM's: levelling
+/// such maps by their estimates would only add the estimates' own errors), or when either map has no camera;
 /// otherwise each map's own estimate with tilts, and z tried as well.
 /// @param source_estimate  estimateUpAxis() of the source map
 /// @param target_estimate  estimateUpAxis() of the target map
