@@ -1,8 +1,9 @@
 #pragma once
 // Image-level simulations of other sensors and conditions, applied to real or
-// synthetic RGB-D frames: motion blur, low light, sensor noise, another focal
-// length (zoom about the principal point) and depth that is not registered to
-// the colour image. sequence_variants.h applies them to whole sequences.
+// synthetic RGB-D frames: motion blur, low light, another exposure, sensor
+// noise, another focal length (zoom about the principal point), resolution or
+// aspect ratio, and depth that is not registered to the colour image.
+// sequence_variants.h applies them to whole sequences.
 
 #include <Eigen/Geometry>
 #include <opencv2/core.hpp>

@@ -1,7 +1,8 @@
 #pragma once
 // Variants of an RGB-D sequence as other sensors and conditions would record
 // it (JPEG colour, depth in millimetres, another focal length, unregistered
-// depth, motion blur, low light, bursts of bad frames) or as a camera that
+// depth, motion blur, low light, bursts of bad frames, other resolutions and
+// aspect ratios, auto exposure, a lower frame rate) or as a camera that
 // comes back would (there and back), written in the TUM layout with a
 // camera.yaml, so that a default chosen on one sequence can be checked on
 // others (issues #11 and #6).
