@@ -193,6 +193,8 @@ bool parseCommand(int argc, char** argv, GlobalSweepCommand& c) {
       ("yaw-hypotheses", tools::rangedValue(&g.yaw_hypotheses, 1u, 3600u)->default_value(g.yaw_hypotheses),
        "rotations (1-3600)")
       ("vote-cell", tools::positiveValue(&g.vote_cell)->default_value(g.vote_cell), "vote cell (m)")
+      ("refined-hypotheses", tools::rangedValue(&g.refined_hypotheses, 1u, 360u)->default_value(g.refined_hypotheses),
+       "best-voted hypotheses searched finely and refined (1-360)")
       ("perturb", po::value(&c.perturb_text), "method truth: start this far from the truth")
       ("fpfh-radius-scale", tools::rangedValue(&c.fpfh_radius_scale, 0.1, 100.0)->default_value(c.fpfh_radius_scale),
        "methods fpfh*: multiply the normal (2 cells) and feature (5 cells) radii by this (0.1-100)")
