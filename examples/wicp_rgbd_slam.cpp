@@ -576,6 +576,11 @@ po::options_description syntheticOptions(simulation::SyntheticRgbdOptions& synth
 /// by the library's parser, so the names and the error listing them exist once.
 po::options_description ablationOptions(frontend::FrontendOptions& f, std::map<std::string, std::string>& words) {
   const auto name = [](auto value) { return frontend::toString(value); };
+  // A choice read as a word, its default the options' own.
+  const auto word = [&words](const char* key) {
+    std::string& value = words.at(key);
+    return po::value(&value)->default_value(value);
+  };
   po::options_description ablation("The papers' techniques, for the ablation (docs/frontend_ablation.md)");
   // clang-format off
   ablation.add_options()
@@ -600,25 +605,25 @@ po::options_description ablationOptions(frontend::FrontendOptions& f, std::map<s
        "which: cv::rgbd::RgbdOdometry, ICPOdometry or RgbdICPOdometry")
       ("equalization", tools::namedValue(&f.features.equalization, frontend::parseEqualizationMethod, name),
        "a frame with too few corners: CLAHE, global histogram equalisation (the front-end paper) or none")
-      ("describe", po::value(&words.at("describe"))->default_value(words.at("describe")),
+      ("describe", word("describe"),
        "an equalised frame's corners described in the frame as it is (original) or in the equalised image "
        "(equalized, before 2026-11-26)")
       ("pnp", tools::namedValue(&f.pnp.method, frontend::parsePnpMethod, name),
        "RANSAC PnP solver: ap3p (AP3P sets, EPnP) or iterative (the paper's iterative 5-point solution)")
-      ("gate-free-retry", po::value(&words.at("gate-free-retry"))->default_value(words.at("gate-free-retry")),
+      ("gate-free-retry", word("gate-free-retry"),
        "on: when 3D-2D fails within both projection gates, PnP once more on the descriptor matches wherever the "
        "landmarks project; off: the 2D-2D and coasting fallbacks directly (as before 2026-11-27)")
-      ("motion-timing", po::value(&words.at("motion-timing"))->default_value(words.at("motion-timing")),
+      ("motion-timing", word("motion-timing"),
        "frame: the constant-velocity prediction repeats the last motion once a frame; period: once per frame "
        "period the timestamps count (a dropped frame: twice), better at gaps, worse in the dark (README)")
-      ("keyframe-before-loss", po::value(&words.at("keyframe-before-loss"))->default_value(words.at("keyframe-before-loss")),
+      ("keyframe-before-loss", word("keyframe-before-loss"),
        "on: when tracking is lost, the last frame 3D-2D tracked becomes the segment's last keyframe, for the next "
        "segment's bridge to find; off: as before 2026-11-27 (afternoon)")
-      ("feature-width", po::value(&words.at("feature-width"))->default_value(words.at("feature-width")),
+      ("feature-width", word("feature-width"),
        "MIN-MAX: frames narrower than MIN pixels are doubled, wider than MAX halved (until they are not) for "
        "finding and describing features, the keypoints kept in the frame's pixels (0: never); full: every frame at "
        "its own size")
-      ("pnp-thresholds", po::value(&words.at("pnp-thresholds"))->default_value(words.at("pnp-thresholds")),
+      ("pnp-thresholds", word("pnp-thresholds"),
        "working: PnP's RANSAC threshold and Huber scale in pixels of the image features are found at (a frame "
        "halved for them: twice its own pixels); frame: in the frame's own pixels (as before 2026-11-27)")
       ("pnp-ransac-iterations", tools::rangedValue(&f.pnp.ransac_iterations, 1, 100000)
