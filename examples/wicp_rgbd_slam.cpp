@@ -471,16 +471,11 @@ struct SlamCommand {
 
 /// The words of the front end's default choices that wicp_rgbd_slam reads as text.
 std::map<std::string, std::string> defaultChoiceWords(const frontend::FrontendOptions& options) {
-  const auto& features = options.features;
-  const bool own_size = features.min_working_width == 0 && features.max_working_width == 0;
-  return {{"describe", features.describe_equalized ? "equalized" : "original"},
-          {"gate-free-retry", options.gate_free_retry ? "on" : "off"},
-          {"motion-timing", options.motion_per_period ? "period" : "frame"},
-          {"keyframe-before-loss", options.keyframe_before_loss ? "on" : "off"},
-          {"feature-width",
-           own_size ? "full"
-                    : std::to_string(features.min_working_width) + "-" + std::to_string(features.max_working_width)},
-          {"pnp-thresholds", options.pnp_thresholds_in_working_pixels ? "working" : "frame"}};
+  std::map<std::string, std::string> words;
+  for (const char* key :
+       {"describe", "gate-free-retry", "motion-timing", "keyframe-before-loss", "feature-width", "pnp-thresholds"})
+    words[key] = frontend::frontendChoiceWord(options, key);
+  return words;
 }
 
 /// The usage text and the general options: input, range, output, matcher, gate, loop closing.

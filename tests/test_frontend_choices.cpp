@@ -81,6 +81,28 @@ TEST(FrontendChoices, EachKeySetsItsOption) {
   EXPECT_EQ(options.features.max_working_width, 800);
 }
 
+TEST(FrontendChoices, EachKeysWordSetsBackTheSameChoice) {
+  // The word read for a key, set again on the defaults, gives back the options it was read from: the two directions
+  // of the table agree for every key, on the defaults and on a changed value.
+  FrontendOptions changed;
+  setFrontendChoice(changed, "pnp", "iterative");
+  setFrontendChoice(changed, "descriptor", "modified-brief");
+  setFrontendChoice(changed, "gate-free-retry", "off");
+  setFrontendChoice(changed, "feature-width", "400-800");
+  setFrontendChoice(changed, "dense-odometry", "prior");
+  for (const FrontendOptions& source : {FrontendOptions{}, changed}) {
+    FrontendOptions copy;
+    for (const std::string& key : frontendChoiceKeys()) setFrontendChoice(copy, key, frontendChoiceWord(source, key));
+    for (const std::string& key : frontendChoiceKeys())
+      EXPECT_EQ(frontendChoiceWord(copy, key), frontendChoiceWord(source, key)) << key;
+  }
+  EXPECT_EQ(frontendChoiceWord(changed, "pnp"), "iterative");
+  EXPECT_EQ(frontendChoiceWord(changed, "feature-width"), "400-800");
+  EXPECT_EQ(frontendChoiceWord(changed, "gate-free-retry"), "off");
+  EXPECT_EQ(frontendChoiceWord(FrontendOptions{}, "gate-free-retry"), "on");
+  EXPECT_THROW(frontendChoiceWord(changed, "pnp-method"), std::invalid_argument);
+}
+
 TEST(FrontendChoices, AWrongKeyOrValueIsNamed) {
   FrontendOptions options;
   try {

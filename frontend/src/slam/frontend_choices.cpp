@@ -12,6 +12,7 @@ namespace weighted_icp::frontend {
 namespace {
 
 using Setter = std::function<void(FrontendOptions&, const std::string&)>;
+using Getter = std::function<std::string(const FrontendOptions&)>;
 
 /// A choice of two words: true for `second`, false for `first`, anything else refused naming both.
 bool secondOfTwo(const std::string& value, const std::string& first, const std::string& second) {
@@ -48,56 +49,85 @@ std::pair<int, int> parseFeatureWidths(const std::string& value) {
   return {widths[0], widths[1]};
 }
 
-const std::vector<std::pair<std::string, Setter>>& setters() {
-  static const std::vector<std::pair<std::string, Setter>> table = {
-      {"matcher", [](FrontendOptions& o, const std::string& v) { o.matcher.kind = parseMatcherKind(v); }},
-      {"quality-gate", [](FrontendOptions& o, const std::string& v) { o.quality.mode = parseQualityGateMode(v); }},
-      {"quality-measure", [](FrontendOptions& o, const std::string& v) { o.quality.measure = parseQualityMeasure(v); }},
-      {"descriptor", [](FrontendOptions& o, const std::string& v) { o.features.descriptor = parseDescriptorKind(v); }},
-      {"match-region", [](FrontendOptions& o, const std::string& v) { o.match_region = parseMatchRegion(v); }},
+/// The words of feature-width's value: "full" or "MIN-MAX".
+std::string featureWidthsWord(const FeatureExtractorOptions& features) {
+  if (features.min_working_width == 0 && features.max_working_width == 0) return "full";
+  return std::to_string(features.min_working_width) + "-" + std::to_string(features.max_working_width);
+}
+
+/// One named choice: how its word sets the options and which word the options hold, side by side so that the two
+/// directions cannot drift apart.
+struct Choice {
+  std::string key;
+  Setter set;
+  Getter get;
+};
+
+/// The word of a choice of two: `second` when true, `first` when false.
+const char* wordOfTwo(bool value, const char* first, const char* second) { return value ? second : first; }
+
+const std::vector<Choice>& choices() {
+  static const std::vector<Choice> table = {
+      {"matcher", [](FrontendOptions& o, const std::string& v) { o.matcher.kind = parseMatcherKind(v); },
+       [](const FrontendOptions& o) { return matcherKindName(o.matcher.kind); }},
+      {"quality-gate", [](FrontendOptions& o, const std::string& v) { o.quality.mode = parseQualityGateMode(v); },
+       [](const FrontendOptions& o) { return toString(o.quality.mode); }},
+      {"quality-measure", [](FrontendOptions& o, const std::string& v) { o.quality.measure = parseQualityMeasure(v); },
+       [](const FrontendOptions& o) { return toString(o.quality.measure); }},
+      {"descriptor", [](FrontendOptions& o, const std::string& v) { o.features.descriptor = parseDescriptorKind(v); },
+       [](const FrontendOptions& o) { return descriptorKindName(o.features.descriptor); }},
+      {"match-region", [](FrontendOptions& o, const std::string& v) { o.match_region = parseMatchRegion(v); },
+       [](const FrontendOptions& o) { return matchRegionName(o.match_region); }},
       {"dynamic-distance",
-       [](FrontendOptions& o, const std::string& v) { o.dynamic_distance = parseDynamicDistanceKind(v); }},
+       [](FrontendOptions& o, const std::string& v) { o.dynamic_distance = parseDynamicDistanceKind(v); },
+       [](const FrontendOptions& o) { return dynamicDistanceKindName(o.dynamic_distance); }},
       {"equalization",
-       [](FrontendOptions& o, const std::string& v) { o.features.equalization = parseEqualizationMethod(v); }},
+       [](FrontendOptions& o, const std::string& v) { o.features.equalization = parseEqualizationMethod(v); },
+       [](const FrontendOptions& o) { return toString(o.features.equalization); }},
       {"describe",
        [](FrontendOptions& o, const std::string& v) {
          o.features.describe_equalized = secondOfTwo(v, "original", "equalized");
+       },
+       [](const FrontendOptions& o) -> std::string {
+         return wordOfTwo(o.features.describe_equalized, "original", "equalized");
        }},
-      {"pnp", [](FrontendOptions& o, const std::string& v) { o.pnp.method = parsePnpMethod(v); }},
+      {"pnp", [](FrontendOptions& o, const std::string& v) { o.pnp.method = parsePnpMethod(v); },
+       [](const FrontendOptions& o) { return toString(o.pnp.method); }},
       {"pnp-thresholds",
        [](FrontendOptions& o, const std::string& v) {
          o.pnp_thresholds_in_working_pixels = secondOfTwo(v, "frame", "working");
+       },
+       [](const FrontendOptions& o) -> std::string {
+         return wordOfTwo(o.pnp_thresholds_in_working_pixels, "frame", "working");
        }},
       {"gate-free-retry",
-       [](FrontendOptions& o, const std::string& v) { o.gate_free_retry = secondOfTwo(v, "off", "on"); }},
+       [](FrontendOptions& o, const std::string& v) { o.gate_free_retry = secondOfTwo(v, "off", "on"); },
+       [](const FrontendOptions& o) -> std::string { return wordOfTwo(o.gate_free_retry, "off", "on"); }},
       {"motion-timing",
-       [](FrontendOptions& o, const std::string& v) { o.motion_per_period = secondOfTwo(v, "frame", "period"); }},
+       [](FrontendOptions& o, const std::string& v) { o.motion_per_period = secondOfTwo(v, "frame", "period"); },
+       [](const FrontendOptions& o) -> std::string { return wordOfTwo(o.motion_per_period, "frame", "period"); }},
       {"keyframe-before-loss",
-       [](FrontendOptions& o, const std::string& v) { o.keyframe_before_loss = secondOfTwo(v, "off", "on"); }},
+       [](FrontendOptions& o, const std::string& v) { o.keyframe_before_loss = secondOfTwo(v, "off", "on"); },
+       [](const FrontendOptions& o) -> std::string { return wordOfTwo(o.keyframe_before_loss, "off", "on"); }},
       {"feature-width",
        [](FrontendOptions& o, const std::string& v) {
          std::tie(o.features.min_working_width, o.features.max_working_width) = parseFeatureWidths(v);
-       }},
+       },
+       [](const FrontendOptions& o) { return featureWidthsWord(o.features); }},
       {"dense-odometry",
-       [](FrontendOptions& o, const std::string& v) { o.dense_odometry.use = parseDenseOdometryUse(v); }},
+       [](FrontendOptions& o, const std::string& v) { o.dense_odometry.use = parseDenseOdometryUse(v); },
+       [](const FrontendOptions& o) { return toString(o.dense_odometry.use); }},
       {"dense-odometry-kind",
-       [](FrontendOptions& o, const std::string& v) { o.dense_odometry.kind = parseDenseOdometryKind(v); }},
+       [](FrontendOptions& o, const std::string& v) { o.dense_odometry.kind = parseDenseOdometryKind(v); },
+       [](const FrontendOptions& o) { return toString(o.dense_odometry.kind); }},
   };
   return table;
 }
 
-}  // namespace
-
-void setFrontendChoice(FrontendOptions& options, const std::string& key, const std::string& value) {
-  for (const auto& [name, set] : setters()) {
-    if (name != key) continue;
-    try {
-      set(options, value);
-    } catch (const std::invalid_argument& e) {
-      throw std::invalid_argument(key + ": " + e.what());
-    }
-    return;
-  }
+/// The choice named `key`, or an error listing every key.
+const Choice& choiceNamed(const std::string& key) {
+  for (const Choice& choice : choices())
+    if (choice.key == key) return choice;
   std::string expected;
   const auto keys = frontendChoiceKeys();
   for (std::size_t i = 0; i < keys.size(); ++i)
@@ -105,9 +135,24 @@ void setFrontendChoice(FrontendOptions& options, const std::string& key, const s
   throw std::invalid_argument("unknown front-end option '" + key + "' (expected " + expected + ")");
 }
 
+}  // namespace
+
+void setFrontendChoice(FrontendOptions& options, const std::string& key, const std::string& value) {
+  const Choice& choice = choiceNamed(key);
+  try {
+    choice.set(options, value);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(key + ": " + e.what());
+  }
+}
+
+std::string frontendChoiceWord(const FrontendOptions& options, const std::string& key) {
+  return choiceNamed(key).get(options);
+}
+
 std::vector<std::string> frontendChoiceKeys() {
   std::vector<std::string> keys;
-  for (const auto& entry : setters()) keys.push_back(entry.first);
+  for (const Choice& choice : choices()) keys.push_back(choice.key);
   return keys;
 }
 

@@ -17,6 +17,13 @@ namespace weighted_icp::frontend {
 /// @throws std::invalid_argument "unknown front-end option '<key>' (expected ...)" or "<key>: unknown ..."
 void setFrontendChoice(FrontendOptions& options, const std::string& key, const std::string& value);
 
+/// @brief The word `options` holds for one named choice, the inverse of setFrontendChoice: setting that word back
+/// leaves the options as they were ("feature-width" -> "full" or "427-960", "gate-free-retry" -> "on" or "off").
+/// @param options the options to read
+/// @param key     an option name from frontendChoiceKeys()
+/// @throws std::invalid_argument "unknown front-end option '<key>' (expected ...)"
+std::string frontendChoiceWord(const FrontendOptions& options, const std::string& key);
+
 /// @brief The keys setFrontendChoice accepts, in the order its messages list them.
 std::vector<std::string> frontendChoiceKeys();
 
