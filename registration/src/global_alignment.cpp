@@ -417,6 +417,13 @@ std::vector<Refined> refineBestVoted(const Search& search, const std::vector<Hyp
   return results;
 }
 
+/// Whether a tilt range can be searched: finite, in [0, 30] degrees and at most 20 steps of `tilt_step_deg` (the
+/// settings' check and align's per-call argument share it).
+bool tiltRangeFits(double tilt_range_deg, double tilt_step_deg) {
+  return std::isfinite(tilt_range_deg) && tilt_range_deg >= 0.0 && tilt_range_deg <= 30.0 &&
+         tilt_range_deg / tilt_step_deg <= 20.0;
+}
+
 /// Refuses what GlobalAlignment::align cannot use, naming it.
 void checkAlignArguments(const Eigen::Vector3d& source_up_axis, const Eigen::Vector3d& up_axis, double tilt_range_deg,
                          double tilt_step_deg) {
@@ -424,7 +431,7 @@ void checkAlignArguments(const Eigen::Vector3d& source_up_axis, const Eigen::Vec
     throw std::invalid_argument("GlobalAlignment::align: the source's up axis must be finite (zero: the target's)");
   if (!up_axis.allFinite() || !(up_axis.norm() > 0.0))
     throw std::invalid_argument("GlobalAlignment::align: the up axis must be a finite non-zero vector");
-  if (!(tilt_range_deg >= 0.0 && tilt_range_deg <= 30.0 && tilt_range_deg / tilt_step_deg <= 20.0))
+  if (!tiltRangeFits(tilt_range_deg, tilt_step_deg))
     throw std::invalid_argument(
         "GlobalAlignment::align: the tilt range must be in [0, 30] degrees and at most 20 "
         "tilt steps");
@@ -466,7 +473,7 @@ GlobalAlignment::GlobalAlignment(GlobalAlignmentSettings settings)
   require(s.peaks_per_rotation >= 1 && s.refined_hypotheses >= 1, "peaks and refined hypotheses must be >= 1");
   require(std::isfinite(s.tilt_range_deg) && s.tilt_range_deg >= 0.0 && s.tilt_range_deg <= 30.0,
           "tilt_range_deg must be in [0, 30]");
-  require(std::isfinite(s.tilt_step_deg) && s.tilt_step_deg > 0.0 && s.tilt_range_deg / s.tilt_step_deg <= 20.0,
+  require(std::isfinite(s.tilt_step_deg) && s.tilt_step_deg > 0.0 && tiltRangeFits(s.tilt_range_deg, s.tilt_step_deg),
           "tilt_step_deg must be > 0 and at least tilt_range_deg / 20");
   require(s.threads <= 1024, "threads must be at most 1024 (0: every hardware thread)");
   require(s.hypothesis_iterations >= 1 && s.final_iterations >= 1, "iteration counts must be >= 1");
