@@ -195,6 +195,10 @@ bool parseCommand(int argc, char** argv, GlobalSweepCommand& c) {
       ("vote-cell", tools::positiveValue(&g.vote_cell)->default_value(g.vote_cell), "vote cell (m)")
       ("refined-hypotheses", tools::rangedValue(&g.refined_hypotheses, 1u, 360u)->default_value(g.refined_hypotheses),
        "best-voted hypotheses searched finely and refined (1-360)")
+      ("climbed-hypotheses", tools::rangedValue(&g.climbed_hypotheses, 0u, 360u)->default_value(g.climbed_hypotheses),
+       "best refined hypotheses searched again from where they ended while their inliers grow (0-360; 0: none)")
+      ("climb-rounds", tools::rangedValue(&g.climb_rounds, 0u, 100u)->default_value(g.climb_rounds),
+       "most times each is searched again (0-100)")
       ("perturb", po::value(&c.perturb_text), "method truth: start this far from the truth")
       ("fpfh-radius-scale", tools::rangedValue(&c.fpfh_radius_scale, 0.1, 100.0)->default_value(c.fpfh_radius_scale),
        "methods fpfh*: multiply the normal (2 cells) and feature (5 cells) radii by this (0.1-100)")

@@ -58,6 +58,13 @@ struct GlobalAlignmentSettings {
   double fine_window = 0.3;
   double medium_cell = 0.05;
   double fine_cell = 0.02;
+  /// The `climbed_hypotheses` best refined hypotheses are searched again (medium and fine vote, trimmed ICP) from
+  /// where their trimmed ICP ended, at most `climb_rounds` times while their inliers grow: a vote reaches only
+  /// fine_yaw_range_deg and fine_window from its start, and a coarse hypothesis next to the truth's can end a
+  /// little beyond that, short of it. The one with the most inliers wins over the results as refined; the tilts
+  /// below start from those results, not the climbed ones. 0: none.
+  unsigned int climbed_hypotheses = 3;
+  unsigned int climb_rounds = 2;
   /// Tilts tried when the two maps' up axes may disagree (each estimated from its own cameras, up_axis.h):
   /// around the `tilted_hypotheses` best refined hypotheses, rotations within ±tilt_range_deg about the two
   /// axes perpendicular to the up axis in tilt_step_deg steps, the one whose fine vote is fullest refined
