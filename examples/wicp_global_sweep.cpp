@@ -162,11 +162,32 @@ struct GlobalSweepCommand {
 /// @brief Success means within these of the truth (the 2 degrees and 5 cm).
 constexpr double kMaxRotationDeg = 2.0, kMaxTranslationM = 0.05;
 
+/// @brief The global search's settings the sweep can change, as a table of options writing into `g`.
+po::options_description searchOptions(GlobalAlignmentSettings& g) {
+  po::options_description options("The global search");
+  // One option per line reads as a table: not reflowed.
+  // clang-format off
+  options.add_options()
+      ("shrink", tools::positiveValue(&g.shrink_factor, 100.0)->default_value(g.shrink_factor), "trimmed ICP shrink factor")
+      ("min-distance", tools::rangedValue(&g.min_distance, 0.0)->default_value(g.min_distance), "trimmed ICP floor (m; 0: derived)")
+      ("inlier-distance", tools::rangedValue(&g.inlier_distance, 0.0)->default_value(g.inlier_distance), "inlier radius (m; 0: 2 target spacings)")
+      ("yaw-hypotheses", tools::rangedValue(&g.yaw_hypotheses, 1u, 3600u)->default_value(g.yaw_hypotheses),
+       "rotations (1-3600)")
+      ("vote-cell", tools::positiveValue(&g.vote_cell)->default_value(g.vote_cell), "vote cell (m)")
+      ("refined-hypotheses", tools::rangedValue(&g.refined_hypotheses, 1u, 360u)->default_value(g.refined_hypotheses),
+       "best-voted hypotheses searched finely and refined (1-360)")
+      ("climbed-hypotheses", tools::rangedValue(&g.climbed_hypotheses, 0u, 360u)->default_value(g.climbed_hypotheses),
+       "best refined hypotheses searched again from where they ended while their inliers grow (0-360; 0: none)")
+      ("climb-rounds", tools::rangedValue(&g.climb_rounds, 0u, 100u)->default_value(g.climb_rounds),
+       "most times each is searched again (0-100)");
+  // clang-format on
+  return options;
+}
+
 /// @brief Parses and checks the command line; false when only --help was asked for.
 bool parseCommand(int argc, char** argv, GlobalSweepCommand& c) {
   std::string overlaps_text = "0.33,0.5,0.67", yaws_text = "0,30,60,90,120,150,180";
   std::string xy_text = "0:0,2:2,-2:1,1:-2,-2:-2";
-  GlobalAlignmentSettings& g = c.settings;
   po::options_description options("wicp_global_sweep (--map FILE | --synthetic) [options]\nOptions");
   // One option per line reads as a table: not reflowed.
   // clang-format off
@@ -187,18 +208,6 @@ bool parseCommand(int argc, char** argv, GlobalSweepCommand& c) {
        "| fpfh (PCL's FPFH + SampleConsensusPrerejective alone) | fpfh-trimmed (then the trimmed ICP)")
       ("min-observations", tools::rangedValue(&c.min_observations, std::size_t{0}, std::size_t{1000000})
                                ->default_value(c.min_observations), "as wicp_align")
-      ("shrink", tools::positiveValue(&g.shrink_factor, 100.0)->default_value(g.shrink_factor), "trimmed ICP shrink factor")
-      ("min-distance", tools::rangedValue(&g.min_distance, 0.0)->default_value(g.min_distance), "trimmed ICP floor (m; 0: derived)")
-      ("inlier-distance", tools::rangedValue(&g.inlier_distance, 0.0)->default_value(g.inlier_distance), "inlier radius (m; 0: 2 target spacings)")
-      ("yaw-hypotheses", tools::rangedValue(&g.yaw_hypotheses, 1u, 3600u)->default_value(g.yaw_hypotheses),
-       "rotations (1-3600)")
-      ("vote-cell", tools::positiveValue(&g.vote_cell)->default_value(g.vote_cell), "vote cell (m)")
-      ("refined-hypotheses", tools::rangedValue(&g.refined_hypotheses, 1u, 360u)->default_value(g.refined_hypotheses),
-       "best-voted hypotheses searched finely and refined (1-360)")
-      ("climbed-hypotheses", tools::rangedValue(&g.climbed_hypotheses, 0u, 360u)->default_value(g.climbed_hypotheses),
-       "best refined hypotheses searched again from where they ended while their inliers grow (0-360; 0: none)")
-      ("climb-rounds", tools::rangedValue(&g.climb_rounds, 0u, 100u)->default_value(g.climb_rounds),
-       "most times each is searched again (0-100)")
       ("perturb", po::value(&c.perturb_text), "method truth: start this far from the truth")
       ("fpfh-radius-scale", tools::rangedValue(&c.fpfh_radius_scale, 0.1, 100.0)->default_value(c.fpfh_radius_scale),
        "methods fpfh*: multiply the normal (2 cells) and feature (5 cells) radii by this (0.1-100)")
@@ -214,6 +223,7 @@ bool parseCommand(int argc, char** argv, GlobalSweepCommand& c) {
        "truth of the map's first frame): displacements are rotations about that world's z axis")
       ("verbose,v", po::bool_switch(&c.verbose), "one line per case");
   // clang-format on
+  options.add(searchOptions(c.settings));
   po::variables_map vm;
   if (!tools::parseCommandLine(argc, argv, options, vm)) return false;
   if (c.synthetic == !c.map_path.empty()) throw po::error("give exactly one of --map FILE and --synthetic");
