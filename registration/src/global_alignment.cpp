@@ -587,7 +587,7 @@ GlobalAlignmentResult GlobalAlignment::align(const Cloud& source_cloud, const Ei
   const std::size_t refined = std::min<std::size_t>(hypotheses.size(), s.refined_hypotheses);
   const std::vector<Refined> results = refineBestVoted(search, hypotheses, refined, *pool_, threadsFor(refined));
   // 2a. The best of them searched again from where they ended while their inliers grow. The tilts below start
-  // from the results as voted: starting them from the climbed ones was as good over the sweeps but not case for
+  // from the results as refined: starting them from the climbed ones was as good over the sweeps but not case for
   // case (docs/global_alignment.md, "The climb").
   Refined best =
       bestClimbed(search, results, s.climbed_hypotheses, s.climb_rounds, *pool_, threadsFor(s.climbed_hypotheses));
