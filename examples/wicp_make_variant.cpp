@@ -27,28 +27,13 @@ struct VariantCommand {
   bool overwrite = false;
 };
 
-/// Parses and checks the command line into `c`; false when only --help was asked for.
-bool parseCommand(int argc, char** argv, VariantCommand& c) {
-  po::options_description description(
-      "wicp_make_variant [--dataset DIR [--camera fr1|fr2|fr3|FILE.yaml]] --variant KIND[,KIND...] --out DIR\n"
-      "Writes DIR in the TUM layout (rgb/, depth/, rgb.txt, depth.txt, groundtruth.txt) with camera.yaml,\n"
-      "variant.txt and, for bursts, bursts.txt. Kinds, applied in the order given: jpeg, mm-depth, focal,\n"
-      "unregistered, blur, low-light, burst, resolution, depth-noise, depth-resolution (a depth camera of\n"
-      "its own size, after focal, resolution and unregistered), crop (the middle rows: another aspect ratio,\n"
-      "before unregistered and depth-resolution), exposure (auto exposure: each frame's light changed smoothly);\n"
-      "frame-step keeps every N-th frame (a lower frame rate) and there-and-back re-orders the frames, both before\n"
-      "any other (even ones forward, then odd ones back: a real revisit). Without --dataset the synthetic\n"
-      "sequence is used.\n"
-      "Exit 1 on an error (nothing written), 2 on a bad command line. Options");
+/// @brief The settings of each variant kind, in their own group of --help.
+/// @param c where the values go
+po::options_description kindOptions(VariantCommand& c) {
+  po::options_description kinds("Settings of the kinds");
   // One option per line reads as a table: not reflowed.
   // clang-format off
-  description.add_options()
-      ("help,h", "print this help")
-      ("dataset", po::value(&c.dataset), "TUM RGB-D folder; default: the synthetic sequence")
-      ("camera", po::value(&c.camera_spec), "fr1, fr2, fr3 or a camera YAML; default: DIR/camera.yaml, else from the folder name")
-      ("variant", po::value(&c.kinds)->required(), "comma-separated kinds (jpeg,mm-depth,focal,unregistered,blur,low-light,burst,there-and-back,resolution,depth-noise,depth-resolution,crop,exposure,frame-step)")
-      ("out", po::value(&c.out_dir)->required(), "output folder (written complete or not at all)")
-      ("overwrite", "replace --out if it exists and is not empty")
+  kinds.add_options()
       ("jpeg-quality", tools::rangedValue(&c.options.jpeg_quality, 1, 100)->default_value(c.options.jpeg_quality), "jpeg: quality (1-100)")
       ("depth-factor", tools::rangedValue(&c.options.depth_factor, 100.0, 65535.0)->default_value(c.options.depth_factor), "mm-depth: raw value per metre (100-65535)")
       ("focal", tools::rangedValue(&c.options.focal_length_px, 50.0, 5000.0)->default_value(c.options.focal_length_px), "focal: new fx in px (50-5000)")
@@ -74,6 +59,33 @@ bool parseCommand(int argc, char** argv, VariantCommand& c) {
       ("burst-noise", tools::rangedValue(&c.options.burst_noise_sigma, 0.0, 100.0)->default_value(c.options.burst_noise_sigma), "burst: noise sigma, grey levels")
       ("seed", tools::rangedValue(&c.options.seed, std::uint64_t{0})->default_value(c.options.seed), "blur directions and noise");
   // clang-format on
+  return kinds;
+}
+
+/// Parses and checks the command line into `c`; false when only --help was asked for.
+bool parseCommand(int argc, char** argv, VariantCommand& c) {
+  po::options_description description(
+      "wicp_make_variant [--dataset DIR [--camera fr1|fr2|fr3|FILE.yaml]] --variant KIND[,KIND...] --out DIR\n"
+      "Writes DIR in the TUM layout (rgb/, depth/, rgb.txt, depth.txt, groundtruth.txt) with camera.yaml,\n"
+      "variant.txt and, for bursts, bursts.txt. Kinds, applied in the order given: jpeg, mm-depth, focal,\n"
+      "unregistered, blur, low-light, burst, resolution, depth-noise, depth-resolution (a depth camera of\n"
+      "its own size, after focal, resolution and unregistered), crop (the middle rows: another aspect ratio,\n"
+      "before unregistered and depth-resolution), exposure (auto exposure: each frame's light changed smoothly);\n"
+      "frame-step keeps every N-th frame (a lower frame rate) and there-and-back re-orders the frames, both before\n"
+      "any other (even ones forward, then odd ones back: a real revisit). Without --dataset the synthetic\n"
+      "sequence is used.\n"
+      "Exit 1 on an error (nothing written), 2 on a bad command line. Options");
+  // One option per line reads as a table: not reflowed.
+  // clang-format off
+  description.add_options()
+      ("help,h", "print this help")
+      ("dataset", po::value(&c.dataset), "TUM RGB-D folder; default: the synthetic sequence")
+      ("camera", po::value(&c.camera_spec), "fr1, fr2, fr3 or a camera YAML; default: DIR/camera.yaml, else from the folder name")
+      ("variant", po::value(&c.kinds)->required(), "comma-separated kinds (jpeg,mm-depth,focal,unregistered,blur,low-light,burst,there-and-back,resolution,depth-noise,depth-resolution,crop,exposure,frame-step)")
+      ("out", po::value(&c.out_dir)->required(), "output folder (written complete or not at all)")
+      ("overwrite", "replace --out if it exists and is not empty");
+  // clang-format on
+  description.add(kindOptions(c));
   // Their own group, so that --dataset refuses each of them.
   po::options_description synthetic_options("The synthetic sequence (without --dataset)");
   // clang-format off

@@ -168,6 +168,22 @@ std::string miniMapName(std::size_t index) {
   return name.str();
 }
 
+/// @brief The mini-maps of `map`: consecutive runs of `frames_per_minimap` frames, or one per range of `ranges`
+/// when it is not empty (a range without a frame of the map is an error naming `map_path`).
+std::vector<LandmarkMap> cutMiniMaps(const LandmarkMap& map, const std::string& map_path,
+                                     std::size_t frames_per_minimap, const std::vector<FrameRange>& ranges) {
+  if (ranges.empty()) return map.splitIntoMiniMaps(frames_per_minimap);
+  std::vector<LandmarkMap> minis;
+  for (const auto& range : ranges) {
+    LandmarkMap mini = map.miniMap(range.first, range.last);
+    if (mini.frames.empty())
+      throw std::runtime_error(map_path + " has no frame in the range " + std::to_string(range.first) + "-" +
+                               std::to_string(range.last));
+    minis.push_back(std::move(mini));
+  }
+  return minis;
+}
+
 int cut(int argc, char** argv) {
   std::string map_path, out_dir, ranges_text;
   std::size_t frames_per_minimap = 0, min_count = 1;
@@ -203,18 +219,7 @@ int cut(int argc, char** argv) {
   const std::vector<FrameRange> ranges = vm.count("ranges") ? parseRanges(ranges_text) : std::vector<FrameRange>{};
 
   const LandmarkMap map = io::readLandmarkMap(map_path);
-  std::vector<LandmarkMap> minis;
-  if (ranges.empty()) {
-    minis = map.splitIntoMiniMaps(frames_per_minimap);
-  } else {
-    for (const auto& range : ranges) {
-      LandmarkMap mini = map.miniMap(range.first, range.last);
-      if (mini.frames.empty())
-        throw std::runtime_error(map_path + " has no frame in the range " + std::to_string(range.first) + "-" +
-                                 std::to_string(range.last));
-      minis.push_back(std::move(mini));
-    }
-  }
+  const std::vector<LandmarkMap> minis = cutMiniMaps(map, map_path, frames_per_minimap, ranges);
   if (minis.empty()) {
     std::cout << map_path << " has no frames: no mini-map written\n";
     return 0;

@@ -35,6 +35,18 @@ bool plainDigits(const std::string& word) {
          std::all_of(word.begin(), word.end(), [](char c) { return c >= '0' && c <= '9'; });
 }
 
+/// "format ascii|binary_little_endian|binary_big_endian 1.0", split into words.
+bool formatLine(const std::vector<std::string>& w) {
+  return w.size() == 3 && w[0] == "format" &&
+         (w[1] == "ascii" || w[1] == "binary_little_endian" || w[1] == "binary_big_endian") && w[2] == "1.0";
+}
+
+/// "property TYPE NAME" or "property list TYPE TYPE NAME" with types PLY knows, split into words.
+bool propertyLine(const std::vector<std::string>& w) {
+  const bool list = w.size() == 5 && w[1] == "list" && knownType(w[2]) && knownType(w[3]);
+  return list || (w.size() == 3 && knownType(w[1]));
+}
+
 }  // namespace
 
 void requireWellFormedPlyHeader(std::istream& in, const std::string& path, std::uint64_t file_size) {
@@ -54,11 +66,7 @@ void requireWellFormedPlyHeader(std::istream& in, const std::string& path, std::
   };
   if (!next() || line != "ply") fail("the first line is not 'ply'; not a PLY file");
   if (!next()) fail("no format line");
-  const auto format = words(line);
-  if (format.size() != 3 || format[0] != "format" ||
-      (format[1] != "ascii" && format[1] != "binary_little_endian" && format[1] != "binary_big_endian") ||
-      format[2] != "1.0")
-    fail("expected 'format ascii|binary_little_endian|binary_big_endian 1.0'");
+  if (!formatLine(words(line))) fail("expected 'format ascii|binary_little_endian|binary_big_endian 1.0'");
   std::uint64_t instances = 0, count = 0, properties = 0;
   bool in_element = false;
   const auto closeElement = [&] {
@@ -94,9 +102,7 @@ void requireWellFormedPlyHeader(std::istream& in, const std::string& path, std::
     }
     if (w[0] == "property") {
       if (!in_element) fail("a property before any element");
-      const bool list = w.size() == 5 && w[1] == "list" && knownType(w[2]) && knownType(w[3]);
-      if (!list && !(w.size() == 3 && knownType(w[1])))
-        fail("expected 'property TYPE NAME' or 'property list TYPE TYPE NAME' with known types");
+      if (!propertyLine(w)) fail("expected 'property TYPE NAME' or 'property list TYPE TYPE NAME' with known types");
       ++properties;
       continue;
     }

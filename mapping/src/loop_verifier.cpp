@@ -282,6 +282,28 @@ std::pair<std::string, std::string> disagreement(const LoopVerification& result,
   return {};
 }
 
+/// The keyframe `id` of `map`; `role` ("query", "candidate") names it in the error when it is missing.
+const frontend::Keyframe& keyframeIn(const KeyframeSnapshot& map, frontend::KeyframeId id, const char* role) {
+  const auto found = map.keyframes.find(id);
+  if (found == map.keyframes.end())
+    throw std::invalid_argument(std::string("LoopVerifier: no ") + role + " keyframe " + std::to_string(id));
+  return found->second;
+}
+
+/// Step 2 of LoopVerifier::verify: the two local landmark clouds (weighted as the options say) aligned by ICP
+/// from PnP's `guess` (checkWithIcp), or only measured there (checkAtPnpPose); none when either cloud has fewer
+/// than 3 landmarks.
+std::optional<IcpCheck> checkLocalClouds(const LandmarkMap& query_local, const LandmarkMap& match_local,
+                                         const Eigen::Isometry3d& guess, const LoopVerificationOptions& options,
+                                         bool has_prior) {
+  const WeightFunction weight = weightFunction(options.weight);
+  const LandmarkCloud::Ptr query_cloud = toLandmarkCloud(query_local, weight);
+  const LandmarkCloud::Ptr match_cloud = toLandmarkCloud(match_local, weight);
+  if (query_cloud->size() < 3 || match_cloud->size() < 3) return std::nullopt;
+  return options.icp_check ? checkWithIcp(query_cloud, match_cloud, guess, options, has_prior)
+                           : checkAtPnpPose(query_cloud, match_cloud, guess, options);
+}
+
 }  // namespace
 
 LoopVerifier::LoopVerifier(const PinholeCamera& camera, LoopVerificationOptions options)
@@ -319,14 +341,9 @@ LoopPrior odometryPrior(const KeyframeSnapshot& map, frontend::KeyframeId query,
 LoopVerification LoopVerifier::verify(const KeyframeSnapshot& query_map, frontend::KeyframeId query,
                                       const KeyframeSnapshot& match_map, frontend::KeyframeId match,
                                       const std::optional<LoopPrior>& prior) const {
-  const auto query_keyframe = query_map.keyframes.find(query);
-  const auto match_keyframe = match_map.keyframes.find(match);
-  if (query_keyframe == query_map.keyframes.end())
-    throw std::invalid_argument("LoopVerifier: no query keyframe " + std::to_string(query));
-  if (match_keyframe == match_map.keyframes.end())
-    throw std::invalid_argument("LoopVerifier: no candidate keyframe " + std::to_string(match));
-  const Eigen::Isometry3d query_wc = query_keyframe->second.pose_wc;
-  const Eigen::Isometry3d match_wc = match_keyframe->second.pose_wc;
+  const frontend::Keyframe& query_keyframe = keyframeIn(query_map, query, "query");
+  const Eigen::Isometry3d query_wc = query_keyframe.pose_wc;
+  const Eigen::Isometry3d match_wc = keyframeIn(match_map, match, "candidate").pose_wc;
 
   LoopVerification result;
   result.constraint.query = query;
@@ -340,7 +357,7 @@ LoopVerification LoopVerifier::verify(const KeyframeSnapshot& query_map, fronten
   // 1. Where is the query camera in the match map? Descriptor matches, then RANSAC PnP (any rotation).
   const LandmarkMap match_local =
       match_map.localLandmarks(match_map.neighbourhood(match, options_.neighbour_keyframes));
-  const Matches matches = matchToLandmarks(query_keyframe->second, match_map, match_local, options_);
+  const Matches matches = matchToLandmarks(query_keyframe, match_map, match_local, options_);
   result.matches = matches.points.size();
   if (matches.points.size() < options_.min_inliers)
     return refuse("descriptor_matches", "too few descriptor matches (" + std::to_string(matches.points.size()) + ")");
@@ -354,14 +371,12 @@ LoopVerification LoopVerifier::verify(const KeyframeSnapshot& query_map, fronten
   // 2. ICP between the local landmark clouds, started where PnP put the query (checkWithIcp).
   const LandmarkMap query_local =
       query_map.localLandmarks(query_map.neighbourhood(query, options_.query_neighbour_keyframes));
-  const WeightFunction weight = weightFunction(options_.weight);
-  const LandmarkCloud::Ptr query_cloud = toLandmarkCloud(query_local, weight);
-  const LandmarkCloud::Ptr match_cloud = toLandmarkCloud(match_local, weight);
-  if (query_cloud->size() < 3 || match_cloud->size() < 3) return refuse("icp_landmarks", "too few landmarks for ICP");
   const Eigen::Isometry3d guess = pnp.pose_wc * query_wc.inverse();
   result.pnp_query_in_match = match_wc.inverse() * pnp.pose_wc;
-  const IcpCheck icp = options_.icp_check ? checkWithIcp(query_cloud, match_cloud, guess, options_, prior.has_value())
-                                          : checkAtPnpPose(query_cloud, match_cloud, guess, options_);
+  const std::optional<IcpCheck> checked =
+      checkLocalClouds(query_local, match_local, guess, options_, prior.has_value());
+  if (!checked) return refuse("icp_landmarks", "too few landmarks for ICP");
+  const IcpCheck& icp = *checked;
   if (!icp.degenerate.empty()) return refuse("icp_degenerate", "ICP degenerate: " + icp.degenerate);
   const Eigen::Isometry3d& correction = icp.correction;
   const Overlap& overlap = icp.overlap;
@@ -381,10 +396,11 @@ LoopVerification LoopVerifier::verify(const KeyframeSnapshot& query_map, fronten
   if (const auto [check, why] = disagreement(result, options_, prior); !check.empty()) return refuse(check, why);
 
   result.constraint.information = pnp_edge ? pnpInformation(matches, pnp.inliers, pnp.pose_wc, match_wc, camera_,
-                                                            pnp.rms_reprojection_px, options_.min_pixel_sigma_px)
+                                                            pnp.rms_reprojection_px, options_.min_pixel_sigma_px) /
+                                                 options_.covariance_inflation
                                            : icpInformation(query_local, match_local, overlap, query_wc, match_wc,
-                                                            correction, result.constraint.query_in_match);
-  result.constraint.information /= options_.covariance_inflation;
+                                                            correction, result.constraint.query_in_match) /
+                                                 options_.covariance_inflation;
   result.accepted = true;
   return result;
 }

@@ -92,38 +92,11 @@ void transformMap(LandmarkMap& map, const py::handle& matrix) {
   map.transform(motion);
 }
 
-}  // namespace
+using MapClass = py::class_<LandmarkMap, std::shared_ptr<LandmarkMap>>;
 
-void bindMaps(py::module_& m) {
-  py::class_<LandmarkMap, std::shared_ptr<LandmarkMap>>(m, "LandmarkMap",
-                                                        "A landmark map in the paper's model: frame poses and, per "
-                                                        "landmark, position, covariance and observations.\n\n"
-                                                        "The array properties are new arrays on every access.")
-      .def(py::init<>(), "An empty map.")
-      .def_static("load", &loadMap, py::arg("path"), py::arg("min_observations") = 0,
-                  "Reads a map in the paper's format (FRAME / LANDMARK lines).\n\n"
-                  "min_observations drops landmarks seen fewer times (wicp_align's default is 2, this "
-                  "function's 0 keeps the file as it is). Raises ValueError naming the file and line for a "
-                  "malformed file, FileNotFoundError when there is none.")
-      .def_static("from_positions", &fromPositions, py::arg("positions"), py::arg("covariances") = py::none(),
-                  "A map of bare landmarks (ids 0..N-1, no frames, no observations) from an (N, 3) array and "
-                  "optional (N, 3, 3) covariances.")
-      .def(
-          "save",
-          [](const LandmarkMap& map, const py::object& path) {
-            io::writeLandmarkMap(map, py::str(py::module_::import("os").attr("fspath")(path)));
-          },
-          py::arg("path"), "Writes the map in the paper's format, atomically (a temporary file, then a rename).")
-      .def(
-          "copy", [](const LandmarkMap& map) { return LandmarkMap(map); }, "An independent copy.")
-      .def(
-          "__len__", [](const LandmarkMap& map) { return map.landmarks.size(); }, "The number of landmarks.")
-      .def("__repr__",
-           [](const LandmarkMap& map) {
-             return "<LandmarkMap: " + std::to_string(map.landmarks.size()) + " landmarks, " +
-                    std::to_string(map.frames.size()) + " frames>";
-           })
-      .def_property_readonly("positions", &positions, "(N, 3) float64: landmark positions (world).")
+/// LandmarkMap's per-landmark and per-frame arrays.
+void addMapArrays(MapClass& map_class) {
+  map_class.def_property_readonly("positions", &positions, "(N, 3) float64: landmark positions (world).")
       .def_property_readonly("covariances", &covariances, "(N, 3, 3) float64: position covariances.")
       .def_property_readonly(
           "observation_counts",
@@ -151,7 +124,12 @@ void bindMaps(py::module_& m) {
             for (const auto& frame : map.frames) ids.push_back(frame.first);
             return toArray(ids);
           },
-          "(F,) uint64: frame ids, ascending.")
+          "(F,) uint64: frame ids, ascending.");
+}
+
+/// LandmarkMap's operations that make other maps or move this one.
+void addMapOperations(MapClass& map_class) {
+  map_class
       .def("with_min_observations", &LandmarkMap::withMinObservations, py::arg("min_observations"),
            "The landmarks observed at least min_observations times; frames kept.")
       .def("mini_map", &LandmarkMap::miniMap, py::arg("first"), py::arg("last"),
@@ -164,7 +142,10 @@ void bindMaps(py::module_& m) {
            "identity.")
       .def("transform", &transformMap, py::arg("matrix"),
            "Moves the map in place by a (4, 4) rigid motion: frame poses, positions, covariances.");
+}
 
+/// The weight functions over a map, by strategy name.
+void bindWeights(py::module_& m) {
   m.def(
       "weights",
       [](const LandmarkMap& map, const std::string& strategy) {
@@ -182,6 +163,41 @@ void bindMaps(py::module_& m) {
         return names;
       },
       "The weight strategies' names, as weights() and align() take them.");
+}
+
+}  // namespace
+
+void bindMaps(py::module_& m) {
+  MapClass map_class(m, "LandmarkMap",
+                     "A landmark map in the paper's model: frame poses and, per "
+                     "landmark, position, covariance and observations.\n\n"
+                     "The array properties are new arrays on every access.");
+  map_class.def(py::init<>(), "An empty map.")
+      .def_static("load", &loadMap, py::arg("path"), py::arg("min_observations") = 0,
+                  "Reads a map in the paper's format (FRAME / LANDMARK lines).\n\n"
+                  "min_observations drops landmarks seen fewer times (wicp_align's default is 2, this "
+                  "function's 0 keeps the file as it is). Raises ValueError naming the file and line for a "
+                  "malformed file, FileNotFoundError when there is none.")
+      .def_static("from_positions", &fromPositions, py::arg("positions"), py::arg("covariances") = py::none(),
+                  "A map of bare landmarks (ids 0..N-1, no frames, no observations) from an (N, 3) array and "
+                  "optional (N, 3, 3) covariances.")
+      .def(
+          "save",
+          [](const LandmarkMap& map, const py::object& path) {
+            io::writeLandmarkMap(map, py::str(py::module_::import("os").attr("fspath")(path)));
+          },
+          py::arg("path"), "Writes the map in the paper's format, atomically (a temporary file, then a rename).")
+      .def(
+          "copy", [](const LandmarkMap& map) { return LandmarkMap(map); }, "An independent copy.")
+      .def(
+          "__len__", [](const LandmarkMap& map) { return map.landmarks.size(); }, "The number of landmarks.")
+      .def("__repr__", [](const LandmarkMap& map) {
+        return "<LandmarkMap: " + std::to_string(map.landmarks.size()) + " landmarks, " +
+               std::to_string(map.frames.size()) + " frames>";
+      });
+  addMapArrays(map_class);
+  addMapOperations(map_class);
+  bindWeights(m);
 }
 
 }  // namespace weighted_icp::python
