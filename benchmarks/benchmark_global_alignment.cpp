@@ -5,7 +5,9 @@
 // wicp_align --global runs it; "camera_frame" is the same pair written in the
 // map's first camera's frame and turned about the true up by 120°, so that
 // each map is levelled by its cameras, tilts are tried and the search about z
-// runs as well (GlobalLandmarkAligner::align with chooseUpAxes's axes). The
+// runs as well (GlobalLandmarkAligner::align with chooseUpAxes's axes);
+// "z_up_auto" is the first pair with the axes chooseUpAxes gives it, as
+// wicp_align --global's default --up-axis auto: z, with tilts. The
 // argument is the number of search threads (1, 2): the same result on each.
 //
 //   wicp_benchmark_global_alignment [--map FILE] [Google Benchmark flags]
@@ -30,13 +32,15 @@ std::string map_path = std::string(WEIGHTED_ICP_DATA_DIR) + "/map_fr1_desk.txt";
 
 struct Pair {
   LandmarkCloud::Ptr source, target;
+  SharedUpAxes axes;  // chooseUpAxes's: both z-up, searched with tilts
 };
 
 const Pair& pair() {
   static const Pair p = [] {
     auto [even, odd] = io::readLandmarkMap(map_path).withMinObservations(2).alternateHalves();
     odd.transform(Displacement{1.5, -1.0, 0.0, 0.0, 0.0, 180.0}.toIsometry());
-    return Pair{toLandmarkCloud(odd, CovarianceWeight{}), toLandmarkCloud(even, CovarianceWeight{})};
+    return Pair{toLandmarkCloud(odd, CovarianceWeight{}), toLandmarkCloud(even, CovarianceWeight{}),
+                chooseUpAxes(estimateUpAxis(odd.frames), estimateUpAxis(even.frames))};
   }();
   return p;
 }
@@ -98,9 +102,19 @@ void BM_CameraFrame(benchmark::State& state) {
     benchmark::DoNotOptimize(aligner.align(cameraFramePair().source, cameraFramePair().axes).alignment.iterations);
 }
 
+void BM_ZUpAuto(benchmark::State& state) {
+  AlignmentSettings icp;
+  icp.threads = static_cast<unsigned>(state.range(0));
+  GlobalLandmarkAligner aligner(searchThreads(state), icp);
+  aligner.setTarget(pair().target);
+  for (auto _ : state) benchmark::DoNotOptimize(aligner.align(pair().source, pair().axes).alignment.iterations);
+  state.counters["tilt_range_deg"] = pair().axes.tilt_range_deg;
+}
+
 BENCHMARK(BM_GlobalSearch)->Name("global_search")->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_GlobalWithWeightedIcp)->Name("with_weighted_icp")->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_CameraFrame)->Name("camera_frame")->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_ZUpAuto)->Name("z_up_auto")->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 

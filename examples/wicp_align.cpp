@@ -82,9 +82,9 @@ bool parseCommand(int argc, char** argv, AlignCommand& c) {
       ("global", po::bool_switch(&c.global), "find the start from geometry alone, any yaw and translation, partial "
                                               "overlap allowed (docs/global_alignment.md); implies --refine")
       ("up-axis", po::value(&c.up_axis_text)->default_value(c.up_axis_text),
-       "with --global, the axis the search rotates about: auto (both maps' cameras level about z within 8 deg: z; "
-       "otherwise each map levelled by its own cameras, as maps written in a first camera's frame need), z, or "
-       "\"X Y Z\" for both maps")
+       "with --global, the axis the search rotates about: auto (both maps' cameras level about z within 8 deg: z, "
+       "with tilts up to 16 deg; otherwise each map levelled by its own cameras, as maps written in a first camera's frame need), z, or "
+       "\"X Y Z\" for both maps (no tilts: the fastest, for maps known to share it)")
       ("threads", tools::rangedValue(&c.settings.threads, 0u, 1024u)->default_value(c.settings.threads),
        "search threads, 0 = all (at most 1024)")
       ("json", po::bool_switch(&c.json), "print the result as one JSON object on the last line of stdout")

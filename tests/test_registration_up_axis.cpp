@@ -84,14 +84,17 @@ TEST(UpAxis, MapsLevelAboutZKeepZAndOthersAreLevelledByTheirOwn) {
   camera_frame.axis = Eigen::Vector3d(0.05, -0.8, -0.6).normalized();
   const SharedUpAxes both_z = chooseUpAxes(z_up, tilted);
   EXPECT_TRUE(both_z.zUpOnly());
-  EXPECT_EQ(both_z.tilt_range_deg, 0.0);
+  EXPECT_DOUBLE_EQ(both_z.tilt_range_deg, 16.0);  // each may be 8° off gravity
+  EXPECT_DOUBLE_EQ(chooseUpAxes(z_up, tilted, 20.0).tilt_range_deg, kMaxZUpTiltRangeDeg);
   const SharedUpAxes own = chooseUpAxes(camera_frame, tilted);
   EXPECT_FALSE(own.zUpOnly());
   EXPECT_TRUE(own.also_try_z);
   EXPECT_LT(angleDeg(own.source, camera_frame.axis), 1e-9);
   EXPECT_LT(angleDeg(own.target, tilted.axis), 1e-9);
   EXPECT_GT(own.tilt_range_deg, 0.0);
-  EXPECT_TRUE(chooseUpAxes(camera_frame, none).zUpOnly());  // nothing to level the cameraless map by
+  const SharedUpAxes cameraless = chooseUpAxes(camera_frame, none);
+  EXPECT_TRUE(cameraless.zUpOnly());          // nothing to level the cameraless map by
+  EXPECT_EQ(cameraless.tilt_range_deg, 0.0);  // nor any estimate whose error tilts would make up for
 }
 
 TEST(UpAxis, TheRealMapsUpIsZWithinAFewDegrees) {
@@ -170,9 +173,39 @@ TEST(UpAxis, AMapWrittenTwelveDegreesOffGravityIsLevelledNotSearchedAboutZ) {
   const Eigen::Isometry3d estimate(aligner.align(source_cloud, axes).alignment.transformation);
   EXPECT_LT(rotationErrorDeg(estimate, moved.inverse()), 2.0);
   EXPECT_LT(translationError(estimate, moved.inverse()), 0.05);
-  const SharedUpAxes as_z_up = chooseUpAxes(source_up, target_up, 15.0);
+  SharedUpAxes as_z_up = chooseUpAxes(source_up, target_up, 15.0);
   ASSERT_TRUE(as_z_up.zUpOnly());
+  as_z_up.tilt_range_deg = 0.0;  // about z alone, as maps counting as z-up were searched until 2026-11-28
   const Eigen::Isometry3d about_z(aligner.align(source_cloud, as_z_up).alignment.transformation);
+  EXPECT_GT(rotationErrorDeg(about_z, moved.inverse()), 2.0);
+}
+
+// The same mini-maps written 6° off gravity: their estimates are within the 8° tolerance, so they count as z-up and
+// are searched about z, which is 6° off the axis they were turned about; a turn of 135° then leaves a relative tilt
+// of about 11°, which the search about z alone does not undo and its tilts (up to twice the tolerance) do.
+TEST(UpAxis, AMapSixDegreesOffGravityCountsAsZUpAndItsTiltIsSearched) {
+  WEIGHTED_ICP_REQUIRE_FILE(weighted_icp::testing::realMapPath());
+  LandmarkMap map = io::readLandmarkMap(weighted_icp::testing::realMapPath().string());
+  Eigen::Isometry3d tilted = Eigen::Isometry3d::Identity();  // the map's new frame, in the z-up world
+  tilted.linear() = Eigen::AngleAxisd(6.0 * M_PI / 180.0, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  map.transform(tilted.inverse());
+  auto [target, source] = disjointMiniMaps(map, 159, 80, 239);
+  const Eigen::Vector3d up = tilted.linear().transpose() * Eigen::Vector3d::UnitZ();  // gravity in the map's frame
+  Eigen::Isometry3d moved = Eigen::Isometry3d::Identity();
+  moved.linear() = Eigen::AngleAxisd(135.0 * M_PI / 180.0, up).toRotationMatrix();
+  source.transform(moved);
+
+  GlobalLandmarkAligner aligner;
+  aligner.setTarget(toLandmarkCloud(target.withMinObservations(2), CovarianceWeight{}));
+  const LandmarkCloud::Ptr source_cloud = toLandmarkCloud(source.withMinObservations(2), CovarianceWeight{});
+  SharedUpAxes axes = chooseUpAxes(estimateUpAxis(source.frames), estimateUpAxis(target.frames));
+  ASSERT_TRUE(axes.zUpOnly());
+  ASSERT_GT(axes.tilt_range_deg, 12.0);
+  const Eigen::Isometry3d estimate(aligner.align(source_cloud, axes).alignment.transformation);
+  EXPECT_LT(rotationErrorDeg(estimate, moved.inverse()), 2.0);
+  EXPECT_LT(translationError(estimate, moved.inverse()), 0.05);
+  axes.tilt_range_deg = 0.0;
+  const Eigen::Isometry3d about_z(aligner.align(source_cloud, axes).alignment.transformation);
   EXPECT_GT(rotationErrorDeg(about_z, moved.inverse()), 2.0);
 }
 

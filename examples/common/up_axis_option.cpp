@@ -52,8 +52,9 @@ ResolvedUpAxes resolveUpAxes(const UpAxisOption& option, const LandmarkMap& sour
   if (s.cameras == 0 || t.cameras == 0)
     resolved.description = "up axis z for both maps (a map without cameras to estimate it from)";
   else if (resolved.axes.zUpOnly())
-    resolved.description = "up axis z for both maps (their cameras are level about z: " + estimateText("source", s) +
-                           ", " + estimateText("target", t) + ")";
+    resolved.description =
+        "up axis z for both maps, with tilts (their cameras are level about z: " + estimateText("source", s) + ", " +
+        estimateText("target", t) + ")";
   else
     resolved.description = "each map levelled by its cameras (" + estimateText("source", s) + ", " +
                            estimateText("target", t) + "), with tilts, and the search about z tried as well";

@@ -200,7 +200,8 @@ void bindRegistration(py::module_& m) {
         "Aligns source onto target from any start, as wicp_align --global: a search over rotations about the up "
         "axis and every translation, partial overlap allowed, then the weighted ICP with its refinement stage.\n\n"
         "source, target, target_weights, k, strategy: as align().\n"
-        "up_axis: 'auto' (two LandmarkMaps: z when both maps' cameras are level about it within 8 degrees, else "
+        "up_axis: 'auto' (two LandmarkMaps: z, with tilts up to 16 degrees, when both maps' "
+        "cameras are level about it within 8 degrees, else "
         "each map levelled by its own cameras, with tilts, and z tried as well; arrays: z), 'z', or three numbers "
         "for both maps.\n"
         "The GIL is released while it runs.");

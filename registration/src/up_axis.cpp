@@ -57,8 +57,13 @@ SharedUpAxes chooseUpAxes(const UpAxisEstimate& source_estimate, const UpAxisEst
     return std::abs(e.axis.normalized().z()) >= std::cos(z_tolerance_deg * M_PI / 180.0);
   };
   SharedUpAxes axes;
-  if (source_estimate.cameras == 0 || target_estimate.cameras == 0 || (z_up(source_estimate) && z_up(target_estimate)))
+  if (source_estimate.cameras == 0 || target_estimate.cameras == 0) return axes;
+  if (z_up(source_estimate) && z_up(target_estimate)) {
+    // Each map may be up to the tolerance off gravity, and a turn about gravity doubles a common tilt: searched
+    // about z, the two can disagree by twice the tolerance (a map 6 deg off, turned 180 deg: 12 deg).
+    axes.tilt_range_deg = std::min(2.0 * z_tolerance_deg, kMaxZUpTiltRangeDeg);
     return axes;
+  }
   axes.source = source_estimate.axis.normalized();
   axes.target = target_estimate.axis.normalized();
   axes.tilt_range_deg = 8.0;
