@@ -148,22 +148,32 @@ TEST(UpAxis, GlobalSearchRecoversAMapLevelledByItsOwnCameras) {
   EXPECT_LT(translationError(estimate, moved.inverse()), 0.05);
 }
 
+/// The real map's overlap-0.5 disjoint mini-maps (frames 0-159 and 80-239) written in a frame `tilt_deg` off
+/// gravity (turned about x), the source then turned `turn_deg` about gravity: `moved`, the truth's inverse.
+struct TiltedPair {
+  LandmarkMap target, source;
+  Eigen::Isometry3d moved;
+};
+TiltedPair tiltedTurnedPair(double tilt_deg, double turn_deg) {
+  LandmarkMap map = io::readLandmarkMap(weighted_icp::testing::realMapPath().string());
+  Eigen::Isometry3d tilted = Eigen::Isometry3d::Identity();  // the map's new frame, in the z-up world
+  tilted.linear() = Eigen::AngleAxisd(tilt_deg * M_PI / 180.0, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  map.transform(tilted.inverse());
+  auto [target, source] = disjointMiniMaps(map, 159, 80, 239);
+  const Eigen::Vector3d up = tilted.linear().transpose() * Eigen::Vector3d::UnitZ();  // gravity in the map's frame
+  Eigen::Isometry3d moved = Eigen::Isometry3d::Identity();
+  moved.linear() = Eigen::AngleAxisd(turn_deg * M_PI / 180.0, up).toRotationMatrix();
+  source.transform(moved);
+  return {std::move(target), std::move(source), moved};
+}
+
 // Two mini-maps of the real map written in a frame 12° off gravity (as a map whose first camera looked nearly
 // straight down, or one levelled by a poor gravity estimate, is): their estimates, 12-16° off z, are not z-up by
 // the 8° tolerance, so the search levels each map by its own and finds a turn of 90° about the true up; counted as
 // z-up (the former 15° tolerance) the search about z ends degrees off.
 TEST(UpAxis, AMapWrittenTwelveDegreesOffGravityIsLevelledNotSearchedAboutZ) {
   WEIGHTED_ICP_REQUIRE_FILE(weighted_icp::testing::realMapPath());
-  LandmarkMap map = io::readLandmarkMap(weighted_icp::testing::realMapPath().string());
-  Eigen::Isometry3d tilted = Eigen::Isometry3d::Identity();  // the map's new frame, in the z-up world
-  tilted.linear() = Eigen::AngleAxisd(12.0 * M_PI / 180.0, Eigen::Vector3d::UnitX()).toRotationMatrix();
-  map.transform(tilted.inverse());
-  auto [target, source] = disjointMiniMaps(map, 159, 80, 239);
-  const Eigen::Vector3d up = tilted.linear().transpose() * Eigen::Vector3d::UnitZ();  // gravity in the map's frame
-  Eigen::Isometry3d moved = Eigen::Isometry3d::Identity();
-  moved.linear() = Eigen::AngleAxisd(M_PI / 2.0, up).toRotationMatrix();
-  source.transform(moved);
-
+  const auto [target, source, moved] = tiltedTurnedPair(12.0, 90.0);
   GlobalLandmarkAligner aligner;
   aligner.setTarget(toLandmarkCloud(target.withMinObservations(2), CovarianceWeight{}));
   const LandmarkCloud::Ptr source_cloud = toLandmarkCloud(source.withMinObservations(2), CovarianceWeight{});
@@ -185,16 +195,7 @@ TEST(UpAxis, AMapWrittenTwelveDegreesOffGravityIsLevelledNotSearchedAboutZ) {
 // of about 11°, which the search about z alone does not undo and its tilts (up to twice the tolerance) do.
 TEST(UpAxis, AMapSixDegreesOffGravityCountsAsZUpAndItsTiltIsSearched) {
   WEIGHTED_ICP_REQUIRE_FILE(weighted_icp::testing::realMapPath());
-  LandmarkMap map = io::readLandmarkMap(weighted_icp::testing::realMapPath().string());
-  Eigen::Isometry3d tilted = Eigen::Isometry3d::Identity();  // the map's new frame, in the z-up world
-  tilted.linear() = Eigen::AngleAxisd(6.0 * M_PI / 180.0, Eigen::Vector3d::UnitX()).toRotationMatrix();
-  map.transform(tilted.inverse());
-  auto [target, source] = disjointMiniMaps(map, 159, 80, 239);
-  const Eigen::Vector3d up = tilted.linear().transpose() * Eigen::Vector3d::UnitZ();  // gravity in the map's frame
-  Eigen::Isometry3d moved = Eigen::Isometry3d::Identity();
-  moved.linear() = Eigen::AngleAxisd(135.0 * M_PI / 180.0, up).toRotationMatrix();
-  source.transform(moved);
-
+  const auto [target, source, moved] = tiltedTurnedPair(6.0, 135.0);
   GlobalLandmarkAligner aligner;
   aligner.setTarget(toLandmarkCloud(target.withMinObservations(2), CovarianceWeight{}));
   const LandmarkCloud::Ptr source_cloud = toLandmarkCloud(source.withMinObservations(2), CovarianceWeight{});
