@@ -5,6 +5,7 @@
 #include <iomanip>
 #include <sstream>
 #include <stdexcept>
+#include <string>
 
 namespace weighted_icp::tools {
 
@@ -53,8 +54,8 @@ ResolvedUpAxes resolveUpAxes(const UpAxisOption& option, const LandmarkMap& sour
     resolved.description = "up axis z for both maps (a map without cameras to estimate it from)";
   else if (resolved.axes.zUpOnly())
     resolved.description =
-        "up axis z for both maps, with tilts (their cameras are level about z: " + estimateText("source", s) + ", " +
-        estimateText("target", t) + ")";
+        "up axis z for both maps, with tilts up to " + std::to_string(std::lround(resolved.axes.tilt_range_deg)) +
+        " deg (their cameras are level about z: " + estimateText("source", s) + ", " + estimateText("target", t) + ")";
   else
     resolved.description = "each map levelled by its cameras (" + estimateText("source", s) + ", " +
                            estimateText("target", t) + "), with tilts, and the search about z tried as well";
