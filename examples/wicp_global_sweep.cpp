@@ -170,6 +170,8 @@ po::options_description searchOptions(GlobalAlignmentSettings& g) {
   options.add_options()
       ("shrink", tools::positiveValue(&g.shrink_factor, 100.0)->default_value(g.shrink_factor), "trimmed ICP shrink factor")
       ("min-distance", tools::rangedValue(&g.min_distance, 0.0)->default_value(g.min_distance), "trimmed ICP floor (m; 0: derived)")
+      ("initial-distance", tools::rangedValue(&g.initial_distance, 0.0)->default_value(g.initial_distance),
+       "method truth and fpfh-trimmed: the trimmed ICP's first limit (m; 0: 2 vote cells; the search's own last pass starts at 2 fine cells, 0.04)")
       ("inlier-distance", tools::rangedValue(&g.inlier_distance, 0.0)->default_value(g.inlier_distance), "inlier radius (m; 0: 2 target spacings)")
       ("yaw-hypotheses", tools::rangedValue(&g.yaw_hypotheses, 1u, 3600u)->default_value(g.yaw_hypotheses),
        "rotations (1-3600)")
