@@ -266,21 +266,34 @@ std::pair<Eigen::Matrix4d, std::size_t> fineVote(const Points& sample, const Glo
   return best;
 }
 
-std::size_t countInliers(const Points& source, const GlobalAlignment::Target& target,
-                         const Eigen::Matrix4d& transformation, double radius) {
+/// The source points with a target point within `radius` of where `transformation` puts them, and their MSAC
+/// score (Torr and Zisserman's): each such point counts 1 - (d / radius)^2, so that of two poses with as many
+/// inliers the tighter fit ranks higher.
+struct Inliers {
+  std::size_t count = 0;
+  double score = 0.0;
+};
+
+Inliers countInliers(const Points& source, const GlobalAlignment::Target& target, const Eigen::Matrix4d& transformation,
+                     double radius) {
   NearestNeighborIndex::Scratch scratch(1);
-  std::size_t inliers = 0;
-  for (const auto& p : source)
-    if (target.nearest(apply(transformation, p), scratch) <= radius) ++inliers;
+  Inliers inliers;
+  for (const auto& p : source) {
+    const double d = target.nearest(apply(transformation, p), scratch) / radius;
+    if (d > 1.0) continue;
+    ++inliers.count;
+    inliers.score += 1.0 - d * d;
+  }
   return inliers;
 }
 
-/// A hypothesis after the fine search and the trimmed ICP: where its yaw and centroid went, and its inliers.
+/// A hypothesis after the fine search and the trimmed ICP: where its yaw and centroid went, and its inlier score
+/// (countInliers), by which hypotheses are ranked.
 struct Refined {
   Eigen::Matrix4d transformation = Eigen::Matrix4d::Identity();
   double yaw = 0.0;
   Eigen::Vector3d translation = Eigen::Vector3d::Zero();
-  std::size_t inliers = 0;
+  double score = 0.0;
 };
 
 /// The trimmed ICP's start distance, floor, shrink factor and iterations.
@@ -310,7 +323,7 @@ struct Search {
 };
 
 /// One hypothesis (yaw, centroid translation) of the source first moved by `tilt`: the medium then the fine vote
-/// around it, the trimmed ICP from there on every source point, and the inliers of the result.
+/// around it, the trimmed ICP from there on every source point, and the inlier score of the result.
 Refined refineHypothesis(const Search& search, const Eigen::Matrix4d& tilt, double yaw, Eigen::Vector3d t) {
   Points tilted;
   tilted.reserve(search.sample.size());
@@ -322,11 +335,11 @@ Refined refineHypothesis(const Search& search, const Eigen::Matrix4d& tilt, doub
   const TrimmedFit fit = trimmedIcp(search.source, search.target, pose * tilt, icp.start_distance, icp.min_distance,
                                     icp.shrink_factor, icp.iterations);
   return {fit.transformation, yaw, t,
-          countInliers(search.source, search.target, fit.transformation, search.inlier_distance)};
+          countInliers(search.source, search.target, fit.transformation, search.inlier_distance).score};
 }
 
 /// `refined` searched again from where its trimmed ICP ended (its yaw about the up axis and where it put the
-/// sample's centroid), at most `rounds` times while its inliers grow.
+/// sample's centroid), at most `rounds` times while its inlier score grows.
 Refined climb(const Search& search, Refined refined, unsigned int rounds) {
   const Eigen::Vector3d e1 = search.axis.unitOrthogonal(), e2 = search.axis.cross(e1);
   for (unsigned int round = 0; round < rounds; ++round) {
@@ -335,7 +348,7 @@ Refined climb(const Search& search, Refined refined, unsigned int rounds) {
     const double yaw = std::atan2(x.dot(e2), x.dot(e1));  // AngleAxis(yaw, axis) turns e1 towards e2
     const Eigen::Vector3d t = rotation * search.centroid + refined.transformation.topRightCorner<3, 1>();
     Refined again = refineHypothesis(search, Eigen::Matrix4d::Identity(), yaw, t);
-    if (again.inliers <= refined.inliers) break;
+    if (again.score <= refined.score) break;
     refined = std::move(again);
   }
   return refined;
@@ -401,7 +414,7 @@ std::vector<Hypothesis> voteRotations(const Points& sample, const Eigen::Vector3
 }
 
 /// Around the `s.tilted_hypotheses` best refined hypotheses (`results`, best first), the tilt whose fine vote is
-/// fullest, each refined again; the result with the most inliers, `best` unless one has more.
+/// fullest, each refined again; the result with the highest inlier score, `best` unless one scores higher.
 Refined bestTilted(const Search& search, const std::vector<Refined>& results, Refined best, double range_deg,
                    const GlobalAlignmentSettings& s, WorkerPool& pool, unsigned threads) {
   const std::size_t count = std::min<std::size_t>(results.size(), s.tilted_hypotheses);
@@ -415,12 +428,12 @@ Refined bestTilted(const Search& search, const std::vector<Refined>& results, Re
                tilted[h] = refineHypothesis(search, tilts[h], results[h].yaw, results[h].translation);
            });
   for (const Refined& t : tilted)
-    if (t.inliers > best.inliers) best = t;
+    if (t.score > best.score) best = t;
   return best;
 }
 
 /// The `count` best-voted hypotheses, each searched finely around and refined with the tight pass on every source
-/// point (in parallel), ranked by inliers, best first (ties keep the vote's order).
+/// point (in parallel), ranked by inlier score, best first (ties keep the vote's order).
 std::vector<Refined> refineBestVoted(const Search& search, const std::vector<Hypothesis>& hypotheses, std::size_t count,
                                      WorkerPool& pool, unsigned threads) {
   std::vector<Refined> results(count);
@@ -429,12 +442,13 @@ std::vector<Refined> refineBestVoted(const Search& search, const std::vector<Hyp
       results[h] = refineHypothesis(search, Eigen::Matrix4d::Identity(), hypotheses[h].yaw, hypotheses[h].translation);
   });
   std::stable_sort(results.begin(), results.end(),
-                   [](const Refined& a, const Refined& b) { return a.inliers > b.inliers; });
+                   [](const Refined& a, const Refined& b) { return a.score > b.score; });
   return results;
 }
 
-/// The best of the `count` first of `results` (best first) each climbed (climb(), in parallel): the most inliers,
-/// ties to the earlier; results.front() when none is climbed. `results` stay as they were (the tilts start from them).
+/// The best of the `count` first of `results` (best first) each climbed (climb(), in parallel): the highest inlier
+/// score, ties to the earlier; results.front() when none is climbed. `results` stay as they were (the tilts start from
+/// them).
 Refined bestClimbed(const Search& search, const std::vector<Refined>& results, std::size_t count, unsigned int rounds,
                     WorkerPool& pool, unsigned threads) {
   if (results.empty()) return Refined{};
@@ -446,7 +460,7 @@ Refined bestClimbed(const Search& search, const std::vector<Refined>& results, s
   });
   Refined best = climbed.front();
   for (const Refined& c : climbed)
-    if (c.inliers > best.inliers) best = c;
+    if (c.score > best.score) best = c;
   return best;
 }
 
@@ -572,7 +586,7 @@ GlobalAlignmentResult GlobalAlignment::align(const Cloud& source_cloud, const Ei
       voteRotations(sample, centroid, *target_, axis, s, *pool_, threadsFor(s.yaw_hypotheses));
 
   // 2. The best-voted hypotheses, each searched finely around, refined with the tight pass on every source
-  // point and ranked by inliers.
+  // point and ranked by inlier score.
   const Search search{sample,
                       source,
                       *target_,
@@ -586,7 +600,7 @@ GlobalAlignmentResult GlobalAlignment::align(const Cloud& source_cloud, const Ei
                       inlier_distance};
   const std::size_t refined = std::min<std::size_t>(hypotheses.size(), s.refined_hypotheses);
   const std::vector<Refined> results = refineBestVoted(search, hypotheses, refined, *pool_, threadsFor(refined));
-  // 2a. The best of them searched again from where they ended while their inliers grow. The tilts below start
+  // 2a. The best of them searched again from where they ended while their inlier score grows. The tilts below start
   // from the results as refined: starting them from the climbed ones was as good over the sweeps but not case for
   // case (docs/global_alignment.md, "The climb").
   Refined best =
@@ -633,7 +647,9 @@ GlobalAlignmentResult GlobalAlignment::finish(const Points& source, const Eigen:
       trimmedIcp(source, *target_, start, start_distance, min_distance, s.shrink_factor, s.final_iterations);
   GlobalAlignmentResult result;
   result.transformation = fit.transformation;
-  result.inliers = countInliers(source, *target_, fit.transformation, inlier_distance);
+  const Inliers inliers = countInliers(source, *target_, fit.transformation, inlier_distance);
+  result.inliers = inliers.count;
+  result.inlier_score = inliers.score;
   result.inlier_fraction = static_cast<double>(result.inliers) / static_cast<double>(source.size());
   result.distance_limit = fit.distance_limit;
   result.median_residual = fit.median_residual;

@@ -46,7 +46,7 @@ GlobalLandmarkAlignmentResult GlobalLandmarkAligner::align(const LandmarkCloud::
     GlobalAlignmentResult z = global_.align(xyz, Eigen::Vector3d::UnitZ(), Eigen::Vector3d::UnitZ(), 0.0);
     // A tie keeps the maps' own z, as before the axes were estimated. No margin in its favour: on a sparse map
     // a pose tens of degrees off can leave nearly as many inliers as the truth (fr3's, overlap 0.2).
-    if (z.inliers >= best.inliers) {
+    if (z.inlier_score >= best.inlier_score) {
       z.time_ms += best.time_ms;
       best = z, source_up = target_up = Eigen::Vector3d::UnitZ();
     } else {

@@ -59,9 +59,9 @@ struct GlobalAlignmentSettings {
   double medium_cell = 0.05;
   double fine_cell = 0.02;
   /// The `climbed_hypotheses` best refined hypotheses are searched again (medium and fine vote, trimmed ICP) from
-  /// where their trimmed ICP ended, at most `climb_rounds` times while their inliers grow: a vote reaches only
+  /// where their trimmed ICP ended, at most `climb_rounds` times while their inlier score grows: a vote reaches only
   /// fine_yaw_range_deg and fine_window from its start, and a coarse hypothesis next to the truth's can end a
-  /// little beyond that, short of it. The one with the most inliers wins over the results as refined; the tilts
+  /// little beyond that, short of it. The one with the highest inlier score wins over the results as refined; the tilts
   /// below start from those results, not the climbed ones. 0: none.
   unsigned int climbed_hypotheses = 3;
   unsigned int climb_rounds = 2;
@@ -102,6 +102,10 @@ struct GlobalAlignmentResult {
   /// an estimate of the overlap.
   double inlier_fraction = 0.0;
   std::size_t inliers = 0;
+  /// The inliers' MSAC score: each counts 1 - (d / inlier_distance)^2, d its distance to the nearest target point.
+  /// Hypotheses are ranked by it (since 2026-11-28; by the count before): of two poses with as many inliers, the
+  /// tighter fit wins.
+  double inlier_score = 0.0;
   /// The trimmed ICP's last distance limit and the median residual of its pairs.
   double distance_limit = 0.0;
   double median_residual = 0.0;
