@@ -51,7 +51,7 @@ class GlobalLandmarkAligner {
   /// @param source  as LandmarkAligner::align() requires; a degenerate problem is reported in the result
   GlobalLandmarkAlignmentResult align(const LandmarkCloud::ConstPtr& source);
   /// @brief As align(source), the search about the given up axes (chooseUpAxes(): each map levelled by its own,
-  /// with tilts, and z tried as well when `axes.also_try_z`; the search with more inliers kept).
+  /// with tilts, and z tried as well when `axes.also_try_z`; the search with the higher inlier score kept).
   /// @param source  as align(source)
   /// @param axes    the source's and the target's up axes; the settings' up_axis and tilt_range_deg give way
   GlobalLandmarkAlignmentResult align(const LandmarkCloud::ConstPtr& source, const SharedUpAxes& axes);

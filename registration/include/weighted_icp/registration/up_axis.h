@@ -52,9 +52,9 @@ struct SharedUpAxes {
   /// that far off gravity, and a turn about gravity doubles a common tilt (since 2026-11-28; a map 6° off gravity:
   /// 70 -> 84 of 100 pairs found, every z-up sweep unchanged case for case, about 1.5 times the time).
   double tilt_range_deg = 0.0;
-  /// Search about the maps' z axis as well, and keep whichever search leaves more source points with a close
-  /// counterpart: the estimates are a guess, and two maps of one frame displaced about its z axis (as a test
-  /// of a map written in a camera's frame would) share z exactly.
+  /// Search about the maps' z axis as well, and keep whichever search's source points have the closer counterparts
+  /// (the higher GlobalAlignmentResult::inlier_score): the estimates are a guess, and two maps of one frame displaced
+  /// about its z axis (as a test of a map written in a camera's frame would) share z exactly.
   bool also_try_z = false;
   /// True when both are +z and nothing else is tried.
   bool zUpOnly() const {
