@@ -85,7 +85,7 @@ TEST(UpAxis, MapsLevelAboutZKeepZAndOthersAreLevelledByTheirOwn) {
   const SharedUpAxes both_z = chooseUpAxes(z_up, tilted);
   EXPECT_TRUE(both_z.zUpOnly());
   EXPECT_DOUBLE_EQ(both_z.tilt_range_deg, 16.0);  // each may be 8° off gravity
-  EXPECT_DOUBLE_EQ(chooseUpAxes(z_up, tilted, 20.0).tilt_range_deg, kMaxZUpTiltRangeDeg);
+  EXPECT_DOUBLE_EQ(chooseUpAxes(z_up, tilted, 20.0).tilt_range_deg, kMaxTiltRangeDeg);
   const SharedUpAxes own = chooseUpAxes(camera_frame, tilted);
   EXPECT_FALSE(own.zUpOnly());
   EXPECT_TRUE(own.also_try_z);
@@ -150,10 +150,11 @@ TEST(UpAxis, GlobalSearchRecoversAMapLevelledByItsOwnCameras) {
 
 /// The real map's disjoint mini-maps of frames 0-`first_end` and `second_begin`-239 (by default overlap 0.5) written
 /// in a frame `tilt_deg` off gravity (turned about x), the source then turned `turn_deg` about gravity: `moved`, the
-/// truth's inverse.
+/// truth's inverse; their clouds as wicp_align makes them (landmarks seen twice or more, covariance weights).
 struct TiltedPair {
   LandmarkMap target, source;
   Eigen::Isometry3d moved;
+  LandmarkCloud::Ptr target_cloud, source_cloud;
 };
 TiltedPair tiltedTurnedPair(double tilt_deg, double turn_deg, FrameId first_end = 159, FrameId second_begin = 80) {
   LandmarkMap map = io::readLandmarkMap(weighted_icp::testing::realMapPath().string());
@@ -165,7 +166,9 @@ TiltedPair tiltedTurnedPair(double tilt_deg, double turn_deg, FrameId first_end 
   Eigen::Isometry3d moved = Eigen::Isometry3d::Identity();
   moved.linear() = Eigen::AngleAxisd(turn_deg * M_PI / 180.0, up).toRotationMatrix();
   source.transform(moved);
-  return {std::move(target), std::move(source), moved};
+  LandmarkCloud::Ptr target_cloud = toLandmarkCloud(target.withMinObservations(2), CovarianceWeight{});
+  LandmarkCloud::Ptr source_cloud = toLandmarkCloud(source.withMinObservations(2), CovarianceWeight{});
+  return {std::move(target), std::move(source), moved, std::move(target_cloud), std::move(source_cloud)};
 }
 
 // Two mini-maps of the real map written in a frame 12° off gravity (as a map whose first camera looked nearly
@@ -174,10 +177,9 @@ TiltedPair tiltedTurnedPair(double tilt_deg, double turn_deg, FrameId first_end 
 // z-up (the former 15° tolerance) the search about z ends degrees off.
 TEST(UpAxis, AMapWrittenTwelveDegreesOffGravityIsLevelledNotSearchedAboutZ) {
   WEIGHTED_ICP_REQUIRE_FILE(weighted_icp::testing::realMapPath());
-  const auto [target, source, moved] = tiltedTurnedPair(12.0, 90.0);
+  const auto [target, source, moved, target_cloud, source_cloud] = tiltedTurnedPair(12.0, 90.0);
   GlobalLandmarkAligner aligner;
-  aligner.setTarget(toLandmarkCloud(target.withMinObservations(2), CovarianceWeight{}));
-  const LandmarkCloud::Ptr source_cloud = toLandmarkCloud(source.withMinObservations(2), CovarianceWeight{});
+  aligner.setTarget(target_cloud);
   const UpAxisEstimate source_up = estimateUpAxis(source.frames), target_up = estimateUpAxis(target.frames);
   const SharedUpAxes axes = chooseUpAxes(source_up, target_up);
   ASSERT_FALSE(axes.zUpOnly());
@@ -196,10 +198,9 @@ TEST(UpAxis, AMapWrittenTwelveDegreesOffGravityIsLevelledNotSearchedAboutZ) {
 // of about 11°, which the search about z alone does not undo and its tilts (up to twice the tolerance) do.
 TEST(UpAxis, AMapSixDegreesOffGravityCountsAsZUpAndItsTiltIsSearched) {
   WEIGHTED_ICP_REQUIRE_FILE(weighted_icp::testing::realMapPath());
-  const auto [target, source, moved] = tiltedTurnedPair(6.0, 135.0);
+  const auto [target, source, moved, target_cloud, source_cloud] = tiltedTurnedPair(6.0, 135.0);
   GlobalLandmarkAligner aligner;
-  aligner.setTarget(toLandmarkCloud(target.withMinObservations(2), CovarianceWeight{}));
-  const LandmarkCloud::Ptr source_cloud = toLandmarkCloud(source.withMinObservations(2), CovarianceWeight{});
+  aligner.setTarget(target_cloud);
   SharedUpAxes axes = chooseUpAxes(estimateUpAxis(source.frames), estimateUpAxis(target.frames));
   ASSERT_TRUE(axes.zUpOnly());
   ASSERT_GT(axes.tilt_range_deg, 12.0);
@@ -217,12 +218,11 @@ TEST(UpAxis, AMapSixDegreesOffGravityCountsAsZUpAndItsTiltIsSearched) {
 // inliers' MSAC score, the tighter fit, the truth's (0.24° off).
 TEST(UpAxis, OfTwoPosesWithAsManyInliersTheTighterFitWins) {
   WEIGHTED_ICP_REQUIRE_FILE(weighted_icp::testing::realMapPath());
-  const auto [target, source, moved] = tiltedTurnedPair(6.0, 45.0, 132, 107);
+  const auto [target, source, moved, target_cloud, source_cloud] = tiltedTurnedPair(6.0, 45.0, 132, 107);
   GlobalLandmarkAligner aligner;
-  aligner.setTarget(toLandmarkCloud(target.withMinObservations(2), CovarianceWeight{}));
+  aligner.setTarget(target_cloud);
   const GlobalLandmarkAlignmentResult result =
-      aligner.align(toLandmarkCloud(source.withMinObservations(2), CovarianceWeight{}),
-                    chooseUpAxes(estimateUpAxis(source.frames), estimateUpAxis(target.frames)));
+      aligner.align(source_cloud, chooseUpAxes(estimateUpAxis(source.frames), estimateUpAxis(target.frames)));
   const Eigen::Isometry3d estimate(result.alignment.transformation);
   EXPECT_LT(rotationErrorDeg(estimate, moved.inverse()), 1.0);
   EXPECT_LT(translationError(estimate, moved.inverse()), 0.02);

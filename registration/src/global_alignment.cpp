@@ -467,7 +467,7 @@ Refined bestClimbed(const Search& search, const std::vector<Refined>& results, s
 /// Whether a tilt range can be searched: finite, in [0, 30] degrees and at most 20 steps of `tilt_step_deg` (the
 /// settings' check and align's per-call argument share it).
 bool tiltRangeFits(double tilt_range_deg, double tilt_step_deg) {
-  return std::isfinite(tilt_range_deg) && tilt_range_deg >= 0.0 && tilt_range_deg <= 30.0 &&
+  return std::isfinite(tilt_range_deg) && tilt_range_deg >= 0.0 && tilt_range_deg <= kMaxTiltRangeDeg &&
          tilt_range_deg / tilt_step_deg <= 20.0;
 }
 
@@ -519,7 +519,7 @@ GlobalAlignment::GlobalAlignment(GlobalAlignmentSettings settings)
   require(s.max_source_samples >= 3 && s.max_target_samples >= 3, "sample caps must be >= 3");
   require(s.peaks_per_rotation >= 1 && s.refined_hypotheses >= 1, "peaks and refined hypotheses must be >= 1");
   require(s.climb_rounds <= 100, "climb_rounds must be at most 100");
-  require(std::isfinite(s.tilt_range_deg) && s.tilt_range_deg >= 0.0 && s.tilt_range_deg <= 30.0,
+  require(std::isfinite(s.tilt_range_deg) && s.tilt_range_deg >= 0.0 && s.tilt_range_deg <= kMaxTiltRangeDeg,
           "tilt_range_deg must be in [0, 30]");
   require(std::isfinite(s.tilt_step_deg) && s.tilt_step_deg > 0.0 && tiltRangeFits(s.tilt_range_deg, s.tilt_step_deg),
           "tilt_step_deg must be > 0 and at least tilt_range_deg / 20");

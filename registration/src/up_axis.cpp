@@ -7,6 +7,8 @@
 
 #include <Eigen/Eigenvalues>
 
+#include "weighted_icp/registration/global_alignment.h"
+
 namespace weighted_icp {
 
 UpAxisEstimate estimateUpAxis(const std::map<FrameId, Eigen::Isometry3d>& camera_poses, double min_heading_spread) {
@@ -61,7 +63,7 @@ SharedUpAxes chooseUpAxes(const UpAxisEstimate& source_estimate, const UpAxisEst
   if (z_up(source_estimate) && z_up(target_estimate)) {
     // Each map may be up to the tolerance off gravity, and a turn about gravity doubles a common tilt: searched
     // about z, the two can disagree by twice the tolerance (a map 6 deg off, turned 180 deg: 12 deg).
-    axes.tilt_range_deg = std::min(2.0 * z_tolerance_deg, kMaxZUpTiltRangeDeg);
+    axes.tilt_range_deg = std::min(2.0 * z_tolerance_deg, kMaxTiltRangeDeg);
     return axes;
   }
   axes.source = source_estimate.axis.normalized();

@@ -18,6 +18,10 @@
 
 namespace weighted_icp {
 
+/// @brief The widest tilt range (degrees) GlobalAlignment searches: its settings' and align()'s tilt_range_deg are
+/// refused beyond it, and chooseUpAxes() never asks for more.
+inline constexpr double kMaxTiltRangeDeg = 30.0;
+
 class WorkerPool;
 
 /// @brief Parameters of the global search. Lengths in metres; those left at 0

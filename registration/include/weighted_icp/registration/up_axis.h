@@ -48,7 +48,7 @@ struct SharedUpAxes {
   /// How far the two axes may disagree, for GlobalAlignmentSettings::tilt_range_deg: 0 for axes known to be
   /// shared, 8° for axes estimated from each map's cameras (a hand-held camera's roll drifts: mini-maps of the
   /// paper's real map, a third to two thirds of its frames, estimate their up axis 0.4-7.2° off the truth), and
-  /// for maps that count as z-up twice chooseUpAxes's z tolerance (at most kMaxZUpTiltRangeDeg): either may be
+  /// for maps that count as z-up twice chooseUpAxes's z tolerance (at most kMaxTiltRangeDeg): either may be
   /// that far off gravity, and a turn about gravity doubles a common tilt (since 2026-11-28; a map 6° off gravity:
   /// 70 -> 84 of 100 pairs found, every z-up sweep unchanged case for case, about 1.5 times the time).
   double tilt_range_deg = 0.0;
@@ -61,9 +61,6 @@ struct SharedUpAxes {
     return !also_try_z && source == Eigen::Vector3d::UnitZ() && target == Eigen::Vector3d::UnitZ();
   }
 };
-
-/// The widest tilt range chooseUpAxes gives maps that count as z-up (GlobalAlignment accepts at most 30°).
-inline constexpr double kMaxZUpTiltRangeDeg = 30.0;
 
 /// @brief Chooses the up axes for aligning `source` onto `target`: +z for both when both maps' estimated up
 /// axes are within `z_tolerance_deg` of ±z (maps written gravity-aligned, as the paper's and TUM's: levelling
