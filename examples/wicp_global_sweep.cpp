@@ -181,7 +181,11 @@ po::options_description searchOptions(GlobalAlignmentSettings& g) {
       ("climbed-hypotheses", tools::rangedValue(&g.climbed_hypotheses, 0u, 360u)->default_value(g.climbed_hypotheses),
        "best refined hypotheses searched again from where they ended while their inliers grow (0-360; 0: none)")
       ("climb-rounds", tools::rangedValue(&g.climb_rounds, 0u, 100u)->default_value(g.climb_rounds),
-       "most times each is searched again (0-100)");
+       "most times each is searched again (0-100)")
+      ("final-tilt-range", tools::rangedValue(&g.final_tilt_range_deg, 0.0, 30.0)->default_value(g.final_tilt_range_deg),
+       "the final pass also starts from the winner tilted this far (deg, 0-30; 0: none)")
+      ("final-tilt-step", tools::rangedValue(&g.final_tilt_step_deg, 0.01, 30.0)->default_value(g.final_tilt_step_deg),
+       "its step (deg; at most 10 steps each way)");
   // clang-format on
   return options;
 }

@@ -119,6 +119,16 @@ TEST(GlobalAlignment, BadInputIsRefusedWithAClearMessage) {
   settings = {};
   settings.up_axis = Eigen::Vector3d::Zero();
   EXPECT_THROW(GlobalAlignment{settings}, std::invalid_argument);
+  settings = {};
+  settings.final_tilt_step_deg = 0.1;  // 20 steps each way for the default 2° range
+  try {
+    GlobalAlignment{settings};
+    ADD_FAILURE() << "final tilts of 20 steps each way accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("final_tilt_step_deg"), std::string::npos) << e.what();
+  }
+  settings.final_tilt_range_deg = 0.0;  // no final tilts: the step is not used up
+  EXPECT_NO_THROW(GlobalAlignment{settings});
 
   GlobalLandmarkAligner landmarks;
   EXPECT_THROW(landmarks.setTarget(std::make_shared<LandmarkCloud>()), std::invalid_argument);

@@ -523,6 +523,12 @@ GlobalAlignment::GlobalAlignment(GlobalAlignmentSettings settings)
           "tilt_range_deg must be in [0, 30]");
   require(std::isfinite(s.tilt_step_deg) && s.tilt_step_deg > 0.0 && tiltRangeFits(s.tilt_range_deg, s.tilt_step_deg),
           "tilt_step_deg must be > 0 and at least tilt_range_deg / 20");
+  require(std::isfinite(s.final_tilt_range_deg) && s.final_tilt_range_deg >= 0.0 &&
+              s.final_tilt_range_deg <= kMaxTiltRangeDeg,
+          "final_tilt_range_deg must be in [0, 30]");
+  require(std::isfinite(s.final_tilt_step_deg) && s.final_tilt_step_deg > 0.0 &&
+              s.final_tilt_range_deg / s.final_tilt_step_deg <= 10.0 + 1e-9,
+          "final_tilt_step_deg must be > 0 and at least final_tilt_range_deg / 10");
   require(s.threads <= 1024, "threads must be at most 1024 (0: every hardware thread)");
   require(s.hypothesis_iterations >= 1 && s.final_iterations >= 1, "iteration counts must be >= 1");
   require(std::isfinite(s.shrink_factor) && s.shrink_factor > 0.0, "shrink_factor must be > 0");
@@ -610,8 +616,9 @@ GlobalAlignmentResult GlobalAlignment::align(const Cloud& source_cloud, const Ei
     best = bestTilted(search, results, best, tilt_range_deg, s, *pool_,
                       threadsFor(std::numeric_limits<std::size_t>::max()));
 
-  // 3. The winner refined on every source point.
-  GlobalAlignmentResult result = finish(source, best.transformation, 2.0 * s.fine_cell);
+  // 3. The winner refined on every source point, from where it is and tilted a little.
+  GlobalAlignmentResult result =
+      finishTilted(source, best.transformation, 2.0 * s.fine_cell, axis, centroid.cast<double>());
   Eigen::Matrix4d levelling = Eigen::Matrix4d::Identity();
   levelling.topLeftCorner<3, 3>() = level;
   result.transformation = result.transformation * levelling;  // maps the source as given
@@ -635,6 +642,31 @@ GlobalAlignmentResult GlobalAlignment::refine(const Cloud& source_cloud, const E
       finish(source, guess, settings_.initial_distance > 0.0 ? settings_.initial_distance : 2.0 * settings_.vote_cell);
   result.time_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   return result;
+}
+
+GlobalAlignmentResult GlobalAlignment::finishTilted(const Points& source, const Eigen::Matrix4d& start,
+                                                    double start_distance, const Eigen::Vector3d& axis,
+                                                    const Eigen::Vector3d& centroid) const {
+  const double step = settings_.final_tilt_step_deg;
+  const int steps = static_cast<int>(std::floor(settings_.final_tilt_range_deg / step + 1e-9));
+  const int side = 2 * steps + 1;
+  const Eigen::Vector3d e1 = axis.unitOrthogonal(), e2 = axis.cross(e1);
+  std::vector<GlobalAlignmentResult> finished(static_cast<std::size_t>(side * side));
+  pool_->run(finished.size(), 1, threadsFor(finished.size()), [&](std::size_t begin, std::size_t end, unsigned) {
+    for (std::size_t k = begin; k < end; ++k) {
+      const int i = static_cast<int>(k) / side - steps, j = static_cast<int>(k) % side - steps;
+      const Eigen::Matrix3d tilt =
+          (Eigen::AngleAxisd(i * step * M_PI / 180.0, e1) * Eigen::AngleAxisd(j * step * M_PI / 180.0, e2))
+              .toRotationMatrix();
+      finished[k] = finish(source, start * aboutCentroid(tilt, centroid), start_distance);
+    }
+  });
+  // The untilted start (the grid's centre) wins ties; then the first in grid order, whichever thread finished it.
+  const std::size_t centre = finished.size() / 2;
+  GlobalAlignmentResult best = finished[centre];
+  for (std::size_t k = 0; k < finished.size(); ++k)
+    if (k != centre && finished[k].inlier_score > best.inlier_score) best = finished[k];
+  return best;
 }
 
 GlobalAlignmentResult GlobalAlignment::finish(const Points& source, const Eigen::Matrix4d& start,
