@@ -287,6 +287,18 @@ Inliers countInliers(const Points& source, const GlobalAlignment::Target& target
   return inliers;
 }
 
+/// The centroid of the source points with a target point within `radius` of where `transformation` puts them (in
+/// the source's coordinates): the part of the source that overlaps the target; `fallback` when none does.
+Eigen::Vector3d inlierCentroid(const Points& source, const GlobalAlignment::Target& target,
+                               const Eigen::Matrix4d& transformation, double radius, const Eigen::Vector3d& fallback) {
+  NearestNeighborIndex::Scratch scratch(1);
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  std::size_t count = 0;
+  for (const auto& p : source)
+    if (target.nearest(apply(transformation, p), scratch) <= radius) sum += p.cast<double>(), ++count;
+  return count > 0 ? Eigen::Vector3d(sum / static_cast<double>(count)) : fallback;
+}
+
 /// A hypothesis after the fine search and the trimmed ICP: where its yaw and centroid went, and its inlier score
 /// (countInliers), by which hypotheses are ranked.
 struct Refined {
@@ -616,9 +628,11 @@ GlobalAlignmentResult GlobalAlignment::align(const Cloud& source_cloud, const Ei
     best = bestTilted(search, results, best, tilt_range_deg, s, *pool_,
                       threadsFor(std::numeric_limits<std::size_t>::max()));
 
-  // 3. The winner refined on every source point, from where it is and tilted a little.
-  GlobalAlignmentResult result =
-      finishTilted(source, best.transformation, 2.0 * s.fine_cell, axis, centroid.cast<double>());
+  // 3. The winner refined on every source point, from where it is and tilted a little about the part of the source
+  // that overlaps the target (a tilt about a centre away from it would move that part out of the ICP's reach).
+  const Eigen::Vector3d pivot =
+      inlierCentroid(source, *target_, best.transformation, inlier_distance, centroid.cast<double>());
+  GlobalAlignmentResult result = finishTilted(source, best.transformation, 2.0 * s.fine_cell, axis, pivot);
   Eigen::Matrix4d levelling = Eigen::Matrix4d::Identity();
   levelling.topLeftCorner<3, 3>() = level;
   result.transformation = result.transformation * levelling;  // maps the source as given

@@ -78,11 +78,12 @@ struct GlobalAlignmentSettings {
   unsigned int tilted_hypotheses = 3;
   /// The winner's final pass (the trimmed ICP on every source point) also starts from it tilted within
   /// ±final_tilt_range_deg about the two axes perpendicular to the up axis, in final_tilt_step_deg steps (about the
-  /// sample's centroid), and the finished pose with the highest inlier score is kept (a tie keeps the untilted
-  /// start's). The tilts above are chosen by the fine vote's count in 2 cm cells, which cannot tell the truth from a
-  /// pose 2° off at a fifth of overlap; the trimmed ICP comes back from about 0.5° only, and the score of where it ends
-  /// tells the two apart (docs/global_alignment.md, "The final tilts"). Also about an up axis both maps share: the
-  /// search about z of maps written off gravity needs them as much. 0: none; at most 10 steps each way.
+  /// centroid of its inliers, the part of the source that overlaps the target), and the finished pose with the highest
+  /// inlier score is kept (a tie keeps the untilted start's). The tilts above are chosen by the fine vote's count in 2
+  /// cm cells, which cannot tell the truth from a pose 2° off at a fifth of overlap; the trimmed ICP comes back from
+  /// about 0.5° only, and the score of where it ends tells the two apart (docs/global_alignment.md, "The final tilts").
+  /// Also about an up axis both maps share: the search about z of maps written off gravity needs them as much. 0: none;
+  /// at most 10 steps each way.
   double final_tilt_range_deg = 2.0;
   double final_tilt_step_deg = 2.0;
   /// Threads the rotations' votes, the hypotheses' refinement and the tilts are shared out on (0: every
@@ -182,9 +183,9 @@ class GlobalAlignment {
   /// The trimmed ICP on every source point from `start`, and the result's fields.
   GlobalAlignmentResult finish(const std::vector<Eigen::Vector3f>& source, const Eigen::Matrix4d& start,
                                double start_distance) const;
-  /// finish() from `start` and from `start` tilted about `centroid` (the settings' final tilts, about the two axes
-  /// perpendicular to `axis`), in parallel; the highest inlier score, a tie to the untilted start. A range of 0:
-  /// finish() from `start` alone.
+  /// finish() from `start` and from `start` tilted about `centroid` (source coordinates; the settings' final tilts,
+  /// about the two axes perpendicular to `axis`), in parallel; the highest inlier score, a tie to the untilted start. A
+  /// range of 0: finish() from `start` alone.
   GlobalAlignmentResult finishTilted(const std::vector<Eigen::Vector3f>& source, const Eigen::Matrix4d& start,
                                      double start_distance, const Eigen::Vector3d& axis,
                                      const Eigen::Vector3d& centroid) const;
