@@ -171,6 +171,15 @@ TiltedPair tiltedTurnedPair(double tilt_deg, double turn_deg, FrameId first_end 
   return {std::move(target), std::move(source), moved, std::move(target_cloud), std::move(source_cloud)};
 }
 
+/// A global aligner onto `target` with the given final tilts (0: none, the search before 2026-11-28's final tilts).
+GlobalLandmarkAligner alignerWithFinalTilts(const LandmarkCloud::Ptr& target, double final_tilt_range_deg) {
+  GlobalAlignmentSettings settings;
+  settings.final_tilt_range_deg = final_tilt_range_deg;
+  GlobalLandmarkAligner aligner(settings);
+  aligner.setTarget(target);
+  return aligner;
+}
+
 // Two mini-maps of the real map written in a frame 12° off gravity (as a map whose first camera looked nearly
 // straight down, or one levelled by a poor gravity estimate, is): their estimates, 12-16° off z, are not z-up by
 // the 8° tolerance, so the search levels each map by its own and finds a turn of 90° about the true up; counted as
@@ -188,11 +197,9 @@ TEST(UpAxis, AMapWrittenTwelveDegreesOffGravityIsLevelledNotSearchedAboutZ) {
   EXPECT_LT(translationError(estimate, moved.inverse()), 0.05);
   SharedUpAxes as_z_up = chooseUpAxes(source_up, target_up, 15.0);
   ASSERT_TRUE(as_z_up.zUpOnly());
-  as_z_up.tilt_range_deg = 0.0;            // about z alone, as maps counting as z-up were searched until 2026-11-28
-  GlobalAlignmentSettings no_final_tilts;  // and without the final tilts, which since then undo this pair's tilt too
-  no_final_tilts.final_tilt_range_deg = 0.0;
-  GlobalLandmarkAligner about_z_aligner(no_final_tilts);
-  about_z_aligner.setTarget(target_cloud);
+  as_z_up.tilt_range_deg = 0.0;  // about z alone, as maps counting as z-up were searched until 2026-11-28, and
+  // without the final tilts, which since then undo this pair's tilt too
+  GlobalLandmarkAligner about_z_aligner = alignerWithFinalTilts(target_cloud, 0.0);
   const Eigen::Isometry3d about_z(about_z_aligner.align(source_cloud, as_z_up).alignment.transformation);
   EXPECT_GT(rotationErrorDeg(about_z, moved.inverse()), 2.0);
 }
@@ -212,10 +219,7 @@ TEST(UpAxis, AMapSixDegreesOffGravityCountsAsZUpAndItsTiltIsSearched) {
   EXPECT_LT(rotationErrorDeg(estimate, moved.inverse()), 2.0);
   EXPECT_LT(translationError(estimate, moved.inverse()), 0.05);
   axes.tilt_range_deg = 0.0;  // about z alone, and without the final tilts (which since then undo this tilt too)
-  GlobalAlignmentSettings no_final_tilts;
-  no_final_tilts.final_tilt_range_deg = 0.0;
-  GlobalLandmarkAligner about_z_aligner(no_final_tilts);
-  about_z_aligner.setTarget(target_cloud);
+  GlobalLandmarkAligner about_z_aligner = alignerWithFinalTilts(target_cloud, 0.0);
   const Eigen::Isometry3d about_z(about_z_aligner.align(source_cloud, axes).alignment.transformation);
   EXPECT_GT(rotationErrorDeg(about_z, moved.inverse()), 2.0);
 }
@@ -248,10 +252,7 @@ TEST(UpAxis, TheFinalPassStartedFromTiltsLeavesABasinTwoDegreesOff) {
   const SharedUpAxes axes = chooseUpAxes(estimateUpAxis(source.frames), estimateUpAxis(target.frames));
   const auto errorsWith = [&, &source_cloud = source_cloud, &target_cloud = target_cloud,
                            &moved = moved](double final_tilt_range_deg) {
-    GlobalAlignmentSettings settings;
-    settings.final_tilt_range_deg = final_tilt_range_deg;
-    GlobalLandmarkAligner aligner(settings);
-    aligner.setTarget(target_cloud);
+    GlobalLandmarkAligner aligner = alignerWithFinalTilts(target_cloud, final_tilt_range_deg);
     const Eigen::Isometry3d estimate(aligner.align(source_cloud, axes).alignment.transformation);
     return std::pair{rotationErrorDeg(estimate, moved.inverse()), translationError(estimate, moved.inverse())};
   };
@@ -277,10 +278,8 @@ TEST(UpAxis, MapsTurnedAboutTheirOwnZAreStillRecoveredByTheSearchAboutZ) {
   ASSERT_FALSE(axes.zUpOnly());
   for (const double final_tilt_range_deg : {GlobalAlignmentSettings{}.final_tilt_range_deg, 0.0}) {
     SCOPED_TRACE(final_tilt_range_deg);
-    GlobalAlignmentSettings settings;
-    settings.final_tilt_range_deg = final_tilt_range_deg;
-    GlobalLandmarkAligner aligner(settings);
-    aligner.setTarget(toLandmarkCloud(even, CovarianceWeight{}));
+    GlobalLandmarkAligner aligner =
+        alignerWithFinalTilts(toLandmarkCloud(even, CovarianceWeight{}), final_tilt_range_deg);
     const GlobalLandmarkAlignmentResult result = aligner.align(toLandmarkCloud(source, CovarianceWeight{}), axes);
     const Eigen::Isometry3d estimate(result.alignment.transformation);
     EXPECT_LT(rotationErrorDeg(estimate, d.toIsometry().inverse()), 2.0);

@@ -660,7 +660,7 @@ GlobalAlignmentResult GlobalAlignment::refine(const Cloud& source_cloud, const E
 
 GlobalAlignmentResult GlobalAlignment::finishTilted(const Points& source, const Eigen::Matrix4d& start,
                                                     double start_distance, const Eigen::Vector3d& axis,
-                                                    const Eigen::Vector3d& centroid) const {
+                                                    const Eigen::Vector3d& pivot) const {
   const double step = settings_.final_tilt_step_deg;
   const int steps = static_cast<int>(std::floor(settings_.final_tilt_range_deg / step + 1e-9));
   const int side = 2 * steps + 1;
@@ -672,7 +672,7 @@ GlobalAlignmentResult GlobalAlignment::finishTilted(const Points& source, const 
       const Eigen::Matrix3d tilt =
           (Eigen::AngleAxisd(i * step * M_PI / 180.0, e1) * Eigen::AngleAxisd(j * step * M_PI / 180.0, e2))
               .toRotationMatrix();
-      finished[k] = finish(source, start * aboutCentroid(tilt, centroid), start_distance);
+      finished[k] = finish(source, start * aboutCentroid(tilt, pivot), start_distance);
     }
   });
   // The untilted start (the grid's centre) wins ties; then the first in grid order, whichever thread finished it.

@@ -183,12 +183,12 @@ class GlobalAlignment {
   /// The trimmed ICP on every source point from `start`, and the result's fields.
   GlobalAlignmentResult finish(const std::vector<Eigen::Vector3f>& source, const Eigen::Matrix4d& start,
                                double start_distance) const;
-  /// finish() from `start` and from `start` tilted about `centroid` (source coordinates; the settings' final tilts,
+  /// finish() from `start` and from `start` tilted about `pivot` (source coordinates; the settings' final tilts,
   /// about the two axes perpendicular to `axis`), in parallel; the highest inlier score, a tie to the untilted start. A
   /// range of 0: finish() from `start` alone.
   GlobalAlignmentResult finishTilted(const std::vector<Eigen::Vector3f>& source, const Eigen::Matrix4d& start,
                                      double start_distance, const Eigen::Vector3d& axis,
-                                     const Eigen::Vector3d& centroid) const;
+                                     const Eigen::Vector3d& pivot) const;
   /// Threads for `n` independent jobs: the settings' count (0: every hardware thread), at most n.
   unsigned threadsFor(std::size_t n) const;
 
