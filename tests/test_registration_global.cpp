@@ -120,7 +120,7 @@ TEST(GlobalAlignment, BadInputIsRefusedWithAClearMessage) {
   settings.up_axis = Eigen::Vector3d::Zero();
   EXPECT_THROW(GlobalAlignment{settings}, std::invalid_argument);
   settings = {};
-  settings.final_tilt_step_deg = 0.1;  // 20 steps each way for the default 2° range
+  settings.final_tilt_step_deg = 0.2;  // 20 steps each way for the default 4° range
   try {
     GlobalAlignment{settings};
     ADD_FAILURE() << "final tilts of 20 steps each way accepted";

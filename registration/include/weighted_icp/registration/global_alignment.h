@@ -77,14 +77,14 @@ struct GlobalAlignmentSettings {
   double tilt_step_deg = 2.0;
   unsigned int tilted_hypotheses = 3;
   /// The winner's final pass (the trimmed ICP on every source point) also starts from it tilted within
-  /// ±final_tilt_range_deg about the two axes perpendicular to the up axis, in final_tilt_step_deg steps (about the
-  /// centroid of its inliers, the part of the source that overlaps the target), and the finished pose with the highest
-  /// inlier score is kept (a tie keeps the untilted start's). The tilts above are chosen by the fine vote's count in 2
-  /// cm cells, which cannot tell the truth from a pose 2° off at a fifth of overlap; the trimmed ICP comes back from
-  /// about 0.5° only, and the score of where it ends tells the two apart (docs/global_alignment.md, "The final tilts").
-  /// Also about an up axis both maps share: the search about z of maps written off gravity needs them as much. 0: none;
-  /// at most 10 steps each way.
-  double final_tilt_range_deg = 2.0;
+  /// ±final_tilt_range_deg about the two axes perpendicular to the up axis, in final_tilt_step_deg steps (25 starts by
+  /// default, about the centroid of the winner's inliers: the part of the source that overlaps the target), and the
+  /// finished pose with the highest inlier score is kept (a tie keeps the untilted start's). The tilts above are
+  /// chosen by the fine vote's count in 2 cm cells, which cannot tell the truth from a pose 2° off at a fifth of
+  /// overlap; the trimmed ICP comes back from about 0.5° only, and the score of where it ends tells the two apart
+  /// (docs/global_alignment.md, "The final tilts"). Every search runs them, also the one about z that levelled maps
+  /// try as well. 0: none; at most 10 steps each way.
+  double final_tilt_range_deg = 4.0;
   double final_tilt_step_deg = 2.0;
   /// Threads the rotations' votes, the hypotheses' refinement and the tilts are shared out on (0: every
   /// hardware thread, at most 1024); each writes only its own result, so the result does not depend on it.
