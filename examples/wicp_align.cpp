@@ -84,7 +84,8 @@ bool parseCommand(int argc, char** argv, AlignCommand& c) {
       ("up-axis", po::value(&c.up_axis_text)->default_value(c.up_axis_text),
        "with --global, the axis the search rotates about: auto (both maps' cameras level about z within 8 deg: z, "
        "with tilts up to 16 deg; otherwise each map levelled by its own cameras, as maps written in a first camera's frame need), z, or "
-       "\"X Y Z\" for both maps (no tilts: the fastest, for maps known to share it)")
+       "\"X Y Z\" for both maps (no search tilts, only the final pass's within 4 deg: the fastest, for maps known "
+       "to share it)")
       ("threads", tools::rangedValue(&c.settings.threads, 0u, 1024u)->default_value(c.settings.threads),
        "search threads, 0 = all (at most 1024)")
       ("json", po::bool_switch(&c.json), "print the result as one JSON object on the last line of stdout")
