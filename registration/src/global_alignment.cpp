@@ -268,10 +268,12 @@ std::pair<Eigen::Matrix4d, std::size_t> fineVote(const Points& sample, const Glo
 
 /// The source points with a target point within `radius` of where `transformation` puts them, and their MSAC
 /// score (Torr and Zisserman's): each such point counts 1 - (d / radius)^2, so that of two poses with as many
-/// inliers the tighter fit ranks higher.
+/// inliers the tighter fit ranks higher. Their centroid (in the source's coordinates; zero when none) is the part
+/// of the source that overlaps the target, about which the final pass tilts.
 struct Inliers {
   std::size_t count = 0;
   double score = 0.0;
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
 };
 
 Inliers countInliers(const Points& source, const GlobalAlignment::Target& target, const Eigen::Matrix4d& transformation,
@@ -283,29 +285,19 @@ Inliers countInliers(const Points& source, const GlobalAlignment::Target& target
     if (d > 1.0) continue;
     ++inliers.count;
     inliers.score += 1.0 - d * d;
+    inliers.centroid += p.cast<double>();
   }
+  if (inliers.count > 0) inliers.centroid /= static_cast<double>(inliers.count);
   return inliers;
 }
 
-/// The centroid of the source points with a target point within `radius` of where `transformation` puts them (in
-/// the source's coordinates): the part of the source that overlaps the target; `fallback` when none does.
-Eigen::Vector3d inlierCentroid(const Points& source, const GlobalAlignment::Target& target,
-                               const Eigen::Matrix4d& transformation, double radius, const Eigen::Vector3d& fallback) {
-  NearestNeighborIndex::Scratch scratch(1);
-  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-  std::size_t count = 0;
-  for (const auto& p : source)
-    if (target.nearest(apply(transformation, p), scratch) <= radius) sum += p.cast<double>(), ++count;
-  return count > 0 ? Eigen::Vector3d(sum / static_cast<double>(count)) : fallback;
-}
-
-/// A hypothesis after the fine search and the trimmed ICP: where its yaw and centroid went, and its inlier score
-/// (countInliers), by which hypotheses are ranked.
+/// A hypothesis after the fine search and the trimmed ICP: where its yaw and centroid went, and its inliers
+/// (countInliers), ranked by their score.
 struct Refined {
   Eigen::Matrix4d transformation = Eigen::Matrix4d::Identity();
   double yaw = 0.0;
   Eigen::Vector3d translation = Eigen::Vector3d::Zero();
-  double score = 0.0;
+  Inliers inliers;
 };
 
 /// The trimmed ICP's start distance, floor, shrink factor and iterations.
@@ -334,6 +326,24 @@ struct Search {
   double inlier_distance;
 };
 
+/// The search around hypotheses of `sample` (of the levelled `source`, centred at `centroid`) against `target` about
+/// `axis`, with the settings' vote boxes and the trimmed ICP's limits (`min_distance` its floor).
+Search searchFor(const Points& sample, const Points& source, const GlobalAlignment::Target& target,
+                 const Eigen::Vector3d& axis, const Eigen::Vector3d& centroid, const GlobalAlignmentSettings& s,
+                 double min_distance, double inlier_distance) {
+  return {
+      sample,
+      source,
+      target,
+      {s.fine_yaw_range_deg, s.medium_yaw_step_deg, s.fine_window, s.medium_cell, &target.buckets, target.bucket_size},
+      {s.medium_yaw_step_deg, s.fine_yaw_step_deg, 2.0 * s.medium_cell, s.fine_cell, &target.small_buckets,
+       target.small_bucket_size},
+      axis,
+      centroid,
+      {2.0 * s.fine_cell, min_distance, s.shrink_factor, s.hypothesis_iterations},
+      inlier_distance};
+}
+
 /// One hypothesis (yaw, centroid translation) of the source first moved by `tilt`: the medium then the fine vote
 /// around it, the trimmed ICP from there on every source point, and the inlier score of the result.
 Refined refineHypothesis(const Search& search, const Eigen::Matrix4d& tilt, double yaw, Eigen::Vector3d t) {
@@ -347,7 +357,7 @@ Refined refineHypothesis(const Search& search, const Eigen::Matrix4d& tilt, doub
   const TrimmedFit fit = trimmedIcp(search.source, search.target, pose * tilt, icp.start_distance, icp.min_distance,
                                     icp.shrink_factor, icp.iterations);
   return {fit.transformation, yaw, t,
-          countInliers(search.source, search.target, fit.transformation, search.inlier_distance).score};
+          countInliers(search.source, search.target, fit.transformation, search.inlier_distance)};
 }
 
 /// `refined` searched again from where its trimmed ICP ended (its yaw about the up axis and where it put the
@@ -360,15 +370,33 @@ Refined climb(const Search& search, Refined refined, unsigned int rounds) {
     const double yaw = std::atan2(x.dot(e2), x.dot(e1));  // AngleAxis(yaw, axis) turns e1 towards e2
     const Eigen::Vector3d t = rotation * search.centroid + refined.transformation.topRightCorner<3, 1>();
     Refined again = refineHypothesis(search, Eigen::Matrix4d::Identity(), yaw, t);
-    if (again.score <= refined.score) break;
+    if (again.inliers.score <= refined.inliers.score) break;
     refined = std::move(again);
   }
   return refined;
 }
 
-/// The tilt (a rotation about the sample's centroid within ±range about the two axes perpendicular to the up
-/// axis, in `step` steps) under which the sample, at the refined hypothesis's yaw and translation, fills one fine
-/// vote cell (yaw not searched) most.
+/// The tilts within ±`range_deg` about the two axes perpendicular to `axis` (e1 = axis.unitOrthogonal(), e2 =
+/// axis × e1) in `step_deg` steps, each a rotation about `pivot`: AngleAxis(i step, e1) · AngleAxis(j step, e2) for
+/// i, j in [-steps, steps], i major. The grid's centre (the identity) is at size() / 2.
+std::vector<Eigen::Matrix4d> tiltGrid(const Eigen::Vector3d& axis, double range_deg, double step_deg,
+                                      const Eigen::Vector3d& pivot) {
+  const Eigen::Vector3d e1 = axis.unitOrthogonal(), e2 = axis.cross(e1);
+  const int steps = static_cast<int>(std::floor(range_deg / step_deg + 1e-9));
+  std::vector<Eigen::Matrix4d> tilts;
+  tilts.reserve(static_cast<std::size_t>((2 * steps + 1) * (2 * steps + 1)));
+  for (int i = -steps; i <= steps; ++i)
+    for (int j = -steps; j <= steps; ++j) {
+      const Eigen::Matrix3d rotation =
+          (Eigen::AngleAxisd(i * step_deg * M_PI / 180.0, e1) * Eigen::AngleAxisd(j * step_deg * M_PI / 180.0, e2))
+              .toRotationMatrix();
+      tilts.push_back(aboutCentroid(rotation, pivot));
+    }
+  return tilts;
+}
+
+/// The tilt (tiltGrid about the sample's centroid) under which the sample, at the refined hypothesis's yaw and
+/// translation, fills one fine vote cell (yaw not searched) most.
 Eigen::Matrix4d bestTilt(const Search& search, const Refined& around, double range_deg, double step_deg,
                          WorkerPool& pool, unsigned threads) {
   const VoteBox box{0.0,
@@ -377,19 +405,11 @@ Eigen::Matrix4d bestTilt(const Search& search, const Refined& around, double ran
                     search.fine.cell,
                     search.fine.buckets,
                     search.fine.bucket_size};
-  const Eigen::Vector3d e1 = search.axis.unitOrthogonal(), e2 = search.axis.cross(e1);
-  const int steps = static_cast<int>(std::floor(range_deg / step_deg + 1e-9));
-  const int side = 2 * steps + 1;
-  std::vector<Eigen::Matrix4d> tilts(static_cast<std::size_t>(side * side));
+  const std::vector<Eigen::Matrix4d> tilts = tiltGrid(search.axis, range_deg, step_deg, search.centroid);
   std::vector<std::size_t> votes(tilts.size(), 0);
   pool.run(tilts.size(), 1, threads, [&](std::size_t begin, std::size_t end, unsigned) {
     Points tilted(search.sample.size());
     for (std::size_t t = begin; t < end; ++t) {
-      const int i = static_cast<int>(t) / side - steps, j = static_cast<int>(t) % side - steps;
-      const Eigen::Matrix3d rotation =
-          (Eigen::AngleAxisd(i * step_deg * M_PI / 180.0, e1) * Eigen::AngleAxisd(j * step_deg * M_PI / 180.0, e2))
-              .toRotationMatrix();
-      tilts[t] = aboutCentroid(rotation, search.centroid);
       for (std::size_t k = 0; k < search.sample.size(); ++k) tilted[k] = apply(tilts[t], search.sample[k]);
       votes[t] =
           fineVote(tilted, search.target, box, search.axis, around.yaw, search.centroid, around.translation).second;
@@ -440,7 +460,7 @@ Refined bestTilted(const Search& search, const std::vector<Refined>& results, Re
                tilted[h] = refineHypothesis(search, tilts[h], results[h].yaw, results[h].translation);
            });
   for (const Refined& t : tilted)
-    if (t.score > best.score) best = t;
+    if (t.inliers.score > best.inliers.score) best = t;
   return best;
 }
 
@@ -454,7 +474,7 @@ std::vector<Refined> refineBestVoted(const Search& search, const std::vector<Hyp
       results[h] = refineHypothesis(search, Eigen::Matrix4d::Identity(), hypotheses[h].yaw, hypotheses[h].translation);
   });
   std::stable_sort(results.begin(), results.end(),
-                   [](const Refined& a, const Refined& b) { return a.score > b.score; });
+                   [](const Refined& a, const Refined& b) { return a.inliers.score > b.inliers.score; });
   return results;
 }
 
@@ -472,15 +492,25 @@ Refined bestClimbed(const Search& search, const std::vector<Refined>& results, s
   });
   Refined best = climbed.front();
   for (const Refined& c : climbed)
-    if (c.score > best.score) best = c;
+    if (c.inliers.score > best.inliers.score) best = c;
   return best;
 }
 
-/// Whether a tilt range can be searched: finite, in [0, 30] degrees and at most 20 steps of `tilt_step_deg` (the
-/// settings' check and align's per-call argument share it).
-bool tiltRangeFits(double tilt_range_deg, double tilt_step_deg) {
-  return std::isfinite(tilt_range_deg) && tilt_range_deg >= 0.0 && tilt_range_deg <= kMaxTiltRangeDeg &&
-         tilt_range_deg / tilt_step_deg <= 20.0;
+/// The most tilt steps each way the search's tilts (tilt_range_deg / tilt_step_deg) and the final pass's may take: the
+/// search votes (2 n + 1)^2 tilts per hypothesis, the final pass runs a trimmed ICP from each of its own.
+constexpr double kMaxSearchTiltSteps = 20.0;
+constexpr double kMaxFinalTiltSteps = 10.0;
+
+/// Whether a tilt range is finite and in [0, 30] degrees.
+bool tiltRangeValid(double tilt_range_deg) {
+  return std::isfinite(tilt_range_deg) && tilt_range_deg >= 0.0 && tilt_range_deg <= kMaxTiltRangeDeg;
+}
+
+/// Whether a tilt range can be searched: valid (tiltRangeValid) and at most `max_steps` steps of a finite positive
+/// `tilt_step_deg` each way (the settings' checks and align's per-call argument share it).
+bool tiltRangeFits(double tilt_range_deg, double tilt_step_deg, double max_steps) {
+  return tiltRangeValid(tilt_range_deg) && std::isfinite(tilt_step_deg) && tilt_step_deg > 0.0 &&
+         tilt_range_deg / tilt_step_deg <= max_steps + 1e-9;
 }
 
 /// Refuses what GlobalAlignment::align cannot use, naming it.
@@ -490,7 +520,7 @@ void checkAlignArguments(const Eigen::Vector3d& source_up_axis, const Eigen::Vec
     throw std::invalid_argument("GlobalAlignment::align: the source's up axis must be finite (zero: the target's)");
   if (!up_axis.allFinite() || !(up_axis.norm() > 0.0))
     throw std::invalid_argument("GlobalAlignment::align: the up axis must be a finite non-zero vector");
-  if (!tiltRangeFits(tilt_range_deg, tilt_step_deg))
+  if (!tiltRangeFits(tilt_range_deg, tilt_step_deg, kMaxSearchTiltSteps))
     throw std::invalid_argument(
         "GlobalAlignment::align: the tilt range must be in [0, 30] degrees and at most 20 "
         "tilt steps");
@@ -531,15 +561,11 @@ GlobalAlignment::GlobalAlignment(GlobalAlignmentSettings settings)
   require(s.max_source_samples >= 3 && s.max_target_samples >= 3, "sample caps must be >= 3");
   require(s.peaks_per_rotation >= 1 && s.refined_hypotheses >= 1, "peaks and refined hypotheses must be >= 1");
   require(s.climb_rounds <= 100, "climb_rounds must be at most 100");
-  require(std::isfinite(s.tilt_range_deg) && s.tilt_range_deg >= 0.0 && s.tilt_range_deg <= kMaxTiltRangeDeg,
-          "tilt_range_deg must be in [0, 30]");
-  require(std::isfinite(s.tilt_step_deg) && s.tilt_step_deg > 0.0 && tiltRangeFits(s.tilt_range_deg, s.tilt_step_deg),
+  require(tiltRangeValid(s.tilt_range_deg), "tilt_range_deg must be in [0, 30]");
+  require(tiltRangeFits(s.tilt_range_deg, s.tilt_step_deg, kMaxSearchTiltSteps),
           "tilt_step_deg must be > 0 and at least tilt_range_deg / 20");
-  require(std::isfinite(s.final_tilt_range_deg) && s.final_tilt_range_deg >= 0.0 &&
-              s.final_tilt_range_deg <= kMaxTiltRangeDeg,
-          "final_tilt_range_deg must be in [0, 30]");
-  require(std::isfinite(s.final_tilt_step_deg) && s.final_tilt_step_deg > 0.0 &&
-              s.final_tilt_range_deg / s.final_tilt_step_deg <= 10.0 + 1e-9,
+  require(tiltRangeValid(s.final_tilt_range_deg), "final_tilt_range_deg must be in [0, 30]");
+  require(tiltRangeFits(s.final_tilt_range_deg, s.final_tilt_step_deg, kMaxFinalTiltSteps),
           "final_tilt_step_deg must be > 0 and at least final_tilt_range_deg / 10");
   require(s.threads <= 1024, "threads must be at most 1024 (0: every hardware thread)");
   require(s.hypothesis_iterations >= 1 && s.final_iterations >= 1, "iteration counts must be >= 1");
@@ -605,17 +631,8 @@ GlobalAlignmentResult GlobalAlignment::align(const Cloud& source_cloud, const Ei
 
   // 2. The best-voted hypotheses, each searched finely around, refined with the tight pass on every source
   // point and ranked by inlier score.
-  const Search search{sample,
-                      source,
-                      *target_,
-                      {s.fine_yaw_range_deg, s.medium_yaw_step_deg, s.fine_window, s.medium_cell, &target_->buckets,
-                       target_->bucket_size},
-                      {s.medium_yaw_step_deg, s.fine_yaw_step_deg, 2.0 * s.medium_cell, s.fine_cell,
-                       &target_->small_buckets, target_->small_bucket_size},
-                      axis,
-                      centroid.cast<double>(),
-                      {2.0 * s.fine_cell, min_distance, s.shrink_factor, s.hypothesis_iterations},
-                      inlier_distance};
+  const Search search =
+      searchFor(sample, source, *target_, axis, centroid.cast<double>(), s, min_distance, inlier_distance);
   const std::size_t refined = std::min<std::size_t>(hypotheses.size(), s.refined_hypotheses);
   const std::vector<Refined> results = refineBestVoted(search, hypotheses, refined, *pool_, threadsFor(refined));
   // 2a. The best of them searched again from where they ended while their inlier score grows. The tilts below start
@@ -630,8 +647,7 @@ GlobalAlignmentResult GlobalAlignment::align(const Cloud& source_cloud, const Ei
 
   // 3. The winner refined on every source point, from where it is and tilted a little about the part of the source
   // that overlaps the target (a tilt about a centre away from it would move that part out of the ICP's reach).
-  const Eigen::Vector3d pivot =
-      inlierCentroid(source, *target_, best.transformation, inlier_distance, centroid.cast<double>());
+  const Eigen::Vector3d pivot = best.inliers.count > 0 ? best.inliers.centroid : centroid.cast<double>();
   GlobalAlignmentResult result = finishTilted(source, best.transformation, 2.0 * s.fine_cell, axis, pivot);
   Eigen::Matrix4d levelling = Eigen::Matrix4d::Identity();
   levelling.topLeftCorner<3, 3>() = level;
@@ -661,19 +677,11 @@ GlobalAlignmentResult GlobalAlignment::refine(const Cloud& source_cloud, const E
 GlobalAlignmentResult GlobalAlignment::finishTilted(const Points& source, const Eigen::Matrix4d& start,
                                                     double start_distance, const Eigen::Vector3d& axis,
                                                     const Eigen::Vector3d& pivot) const {
-  const double step = settings_.final_tilt_step_deg;
-  const int steps = static_cast<int>(std::floor(settings_.final_tilt_range_deg / step + 1e-9));
-  const int side = 2 * steps + 1;
-  const Eigen::Vector3d e1 = axis.unitOrthogonal(), e2 = axis.cross(e1);
-  std::vector<GlobalAlignmentResult> finished(static_cast<std::size_t>(side * side));
+  const std::vector<Eigen::Matrix4d> tilts =
+      tiltGrid(axis, settings_.final_tilt_range_deg, settings_.final_tilt_step_deg, pivot);
+  std::vector<GlobalAlignmentResult> finished(tilts.size());
   pool_->run(finished.size(), 1, threadsFor(finished.size()), [&](std::size_t begin, std::size_t end, unsigned) {
-    for (std::size_t k = begin; k < end; ++k) {
-      const int i = static_cast<int>(k) / side - steps, j = static_cast<int>(k) % side - steps;
-      const Eigen::Matrix3d tilt =
-          (Eigen::AngleAxisd(i * step * M_PI / 180.0, e1) * Eigen::AngleAxisd(j * step * M_PI / 180.0, e2))
-              .toRotationMatrix();
-      finished[k] = finish(source, start * aboutCentroid(tilt, pivot), start_distance);
-    }
+    for (std::size_t k = begin; k < end; ++k) finished[k] = finish(source, start * tilts[k], start_distance);
   });
   // The untilted start (the grid's centre) wins ties; then the first in grid order, whichever thread finished it.
   const std::size_t centre = finished.size() / 2;
