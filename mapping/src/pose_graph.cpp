@@ -96,6 +96,22 @@ void PoseGraph::addEdge(const PoseGraphEdge& edge) {
   edges_.push_back(edge);
 }
 
+namespace {
+
+/// Levenberg-Marquardt over a sparse normal Cholesky, silent, with the options' iterations and threads.
+ceres::Solver::Options solverOptions(const PoseGraphOptions& options) {
+  ceres::Solver::Options solver;
+  solver.minimizer_type = ceres::TRUST_REGION;
+  solver.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+  solver.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
+  solver.max_num_iterations = options.max_iterations;
+  solver.num_threads = std::max(1, options.threads);
+  solver.logging_type = ceres::SILENT;
+  return solver;
+}
+
+}  // namespace
+
 PoseGraph::Solve PoseGraph::solve(const std::vector<bool>& use,
                                   std::map<frontend::KeyframeId, Eigen::Isometry3d>& poses,
                                   const PoseGraphOptions& options) const {
@@ -139,15 +155,8 @@ PoseGraph::Solve PoseGraph::solve(const std::vector<bool>& use,
     problem.SetParameterBlockConstant(first.rotation.coeffs().data());
   }
 
-  ceres::Solver::Options solver;
-  solver.minimizer_type = ceres::TRUST_REGION;
-  solver.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
-  solver.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
-  solver.max_num_iterations = options.max_iterations;
-  solver.num_threads = std::max(1, options.threads);
-  solver.logging_type = ceres::SILENT;
   ceres::Solver::Summary summary;
-  ceres::Solve(solver, &problem, &summary);
+  ceres::Solve(solverOptions(options), &problem, &summary);
   if (!summary.IsSolutionUsable()) return {false, summary.message, 0.0};
   for (const frontend::KeyframeId id : in_problem) {
     const NodeState& state = states.at(id);

@@ -54,6 +54,45 @@ std::vector<Projected> projectPrevious(const frontend::Map& map, frontend::Keyfr
   return result;
 }
 
+/// Each of keyframe `id`'s features with a depth as a landmark observation: of the landmark of `previous` within
+/// the association radius with the closest descriptor (at most max_hamming_distance off), else of a new landmark at
+/// its back-projection with the depth noise model's covariance.
+void addLandmarks(frontend::Map& map, frontend::KeyframeId id, const frontend::Keyframe& keyframe,
+                  const std::vector<Projected>& previous, const PinholeCamera& camera,
+                  const PosedKeyframeOptions& options) {
+  const std::vector<BinaryDescriptor> descriptors = toBinaryDescriptors(keyframe.descriptors);
+  const double radius2 = options.association_radius_px * options.association_radius_px;
+  const Eigen::Isometry3d& pose_wc = keyframe.pose_wc;
+  for (std::size_t f = 0; f < descriptors.size(); ++f) {
+    const double z = keyframe.depths[f];
+    if (z <= 0.0) continue;
+    const Eigen::Vector2d& pixel = keyframe.pixels[f];
+    const frontend::MapPointObservation observation{id, pixel, z};
+    const Projected* associated = nullptr;
+    int best = options.max_hamming_distance + 1;
+    for (const Projected& p : previous) {
+      if ((p.pixel - pixel).squaredNorm() > radius2) continue;
+      const int d = hammingDistance(p.descriptor, descriptors[f]);
+      if (d < best) best = d, associated = &p;
+    }
+    const cv::Mat descriptor = keyframe.descriptors.row(static_cast<int>(f)).clone();
+    if (associated) {
+      // The first estimate's position stays: the pose is given, so later ones add nothing but noise.
+      const auto point = map.mapPoint(associated->id);
+      map.addObservation(associated->id, observation, point->position, point->covariance, descriptor);
+    } else {
+      frontend::MapPoint point;
+      point.position = pose_wc * camera.backProject(pixel.x(), pixel.y(), z);
+      point.covariance = pose_wc.linear() *
+                         frontend::pointCovarianceCamera(camera, pixel.x(), pixel.y(), z, options.noise) *
+                         pose_wc.linear().transpose();
+      point.descriptor = descriptor;
+      point.observations.push_back(observation);
+      map.addMapPoint(std::move(point));
+    }
+  }
+}
+
 }  // namespace
 
 PosedKeyframeBuilder::PosedKeyframeBuilder(const PinholeCamera& camera, PosedKeyframeOptions options)
@@ -86,39 +125,7 @@ frontend::KeyframeId PosedKeyframeBuilder::add(const RgbdFrame& input, std::size
   const std::vector<Projected> previous =
       has_previous_ ? projectPrevious(map_, previous_, pose_wc, camera_) : std::vector<Projected>{};
   const frontend::KeyframeId id = map_.addKeyframe(keyframe);
-
-  const std::vector<BinaryDescriptor> descriptors = toBinaryDescriptors(features.descriptors);
-  const double radius2 = options_.association_radius_px * options_.association_radius_px;
-  for (std::size_t f = 0; f < descriptors.size(); ++f) {
-    const double z = keyframe.depths[f];
-    if (z <= 0.0) continue;
-    const Eigen::Vector2d& pixel = keyframe.pixels[f];
-    const frontend::MapPointObservation observation{id, pixel, z};
-    const Projected* associated = nullptr;
-    int best = options_.max_hamming_distance + 1;
-    for (const Projected& p : previous) {
-      if ((p.pixel - pixel).squaredNorm() > radius2) continue;
-      const int d = hammingDistance(p.descriptor, descriptors[f]);
-      if (d < best) best = d, associated = &p;
-    }
-    const Eigen::Vector3d position = pose_wc * camera_.backProject(pixel.x(), pixel.y(), z);
-    const Eigen::Matrix3d covariance =
-        pose_wc.linear() * frontend::pointCovarianceCamera(camera_, pixel.x(), pixel.y(), z, options_.noise) *
-        pose_wc.linear().transpose();
-    const cv::Mat descriptor = features.descriptors.row(static_cast<int>(f)).clone();
-    if (associated) {
-      // The first estimate's position stays: the pose is given, so later ones add nothing but noise.
-      const auto point = map_.mapPoint(associated->id);
-      map_.addObservation(associated->id, observation, point->position, point->covariance, descriptor);
-    } else {
-      frontend::MapPoint point;
-      point.position = position;
-      point.covariance = covariance;
-      point.descriptor = descriptor;
-      point.observations.push_back(observation);
-      map_.addMapPoint(std::move(point));
-    }
-  }
+  addLandmarks(map_, id, keyframe, previous, camera_, options_);
   has_previous_ = true;
   previous_ = id;
   return id;

@@ -148,6 +148,21 @@ Eigen::Isometry3d refinePose(const std::vector<Eigen::Vector3d>& points_world,
   return pose.poseWc();
 }
 
+/// What makes estimatePosePnp's input unusable (mismatched sizes, a bad camera, bad options, a guess that is not
+/// rigid), as its failure message; nothing when it can run.
+std::optional<std::string> pnpInputProblem(const std::vector<Eigen::Vector3d>& points_world,
+                                           const std::vector<Eigen::Vector2d>& pixels, const PinholeCamera& camera,
+                                           const std::optional<Eigen::Isometry3d>& guess_wc,
+                                           const PnpOptions& options) {
+  if (points_world.size() != pixels.size())
+    return "mismatched sizes: " + std::to_string(points_world.size()) + " points, " + std::to_string(pixels.size()) +
+           " pixels";
+  if (auto problem = detail::cameraProblem(camera)) return problem;
+  if (const auto problem = pnpOptionsProblem(options)) return "invalid options: " + *problem;
+  if (guess_wc && !detail::isRigid(*guess_wc)) return std::string("the guess is not a rigid transform");
+  return std::nullopt;
+}
+
 }  // namespace
 
 Eigen::Isometry3d refinePoseHuber(const std::vector<Eigen::Vector3d>& points_world,
@@ -171,21 +186,8 @@ PoseEstimate estimatePosePnp(const std::vector<Eigen::Vector3d>& points_world,
                              const std::vector<Eigen::Vector2d>& pixels, const PinholeCamera& camera,
                              const std::optional<Eigen::Isometry3d>& guess_wc, const PnpOptions& options) {
   PoseEstimate estimate;
-  if (points_world.size() != pixels.size()) {
-    estimate.failure = "mismatched sizes: " + std::to_string(points_world.size()) + " points, " +
-                       std::to_string(pixels.size()) + " pixels";
-    return estimate;
-  }
-  if (const auto problem = detail::cameraProblem(camera)) {
-    estimate.failure = *problem;
-    return estimate;
-  }
-  if (const auto problem = pnpOptionsProblem(options)) {
-    estimate.failure = "invalid options: " + *problem;
-    return estimate;
-  }
-  if (guess_wc && !detail::isRigid(*guess_wc)) {
-    estimate.failure = "the guess is not a rigid transform";
+  if (auto problem = pnpInputProblem(points_world, pixels, camera, guess_wc, options)) {
+    estimate.failure = std::move(*problem);
     return estimate;
   }
   std::vector<int> valid;
