@@ -185,7 +185,9 @@ po::options_description searchOptions(GlobalAlignmentSettings& g) {
       ("final-tilt-range", tools::rangedValue(&g.final_tilt_range_deg, 0.0, 30.0)->default_value(g.final_tilt_range_deg),
        "the final pass also starts from the winner tilted this far (deg, 0-30; 0: none)")
       ("final-tilt-step", tools::rangedValue(&g.final_tilt_step_deg, 0.01, 30.0)->default_value(g.final_tilt_step_deg),
-       "its step (deg; at most 10 steps each way)");
+       "its step (deg; at most 10 steps each way)")
+      ("final-tilt-rounds", tools::rangedValue(&g.final_tilt_rounds, 1u, 10u)->default_value(g.final_tilt_rounds),
+       "rounds of final tilts, each about the last's winner while it lands in another basin and scores higher (1-10)");
   // clang-format on
   return options;
 }

@@ -129,6 +129,16 @@ TEST(GlobalAlignment, BadInputIsRefusedWithAClearMessage) {
   }
   settings.final_tilt_range_deg = 0.0;  // no final tilts: the step is not used up
   EXPECT_NO_THROW(GlobalAlignment{settings});
+  for (const unsigned int rounds : {0u, 11u}) {
+    settings = {};
+    settings.final_tilt_rounds = rounds;
+    try {
+      GlobalAlignment{settings};
+      ADD_FAILURE() << rounds << " rounds of final tilts accepted";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("final_tilt_rounds"), std::string::npos) << e.what();
+    }
+  }
 
   GlobalLandmarkAligner landmarks;
   EXPECT_THROW(landmarks.setTarget(std::make_shared<LandmarkCloud>()), std::invalid_argument);

@@ -376,6 +376,12 @@ Refined climb(const Search& search, Refined refined, unsigned int rounds) {
   return refined;
 }
 
+/// The angle (degrees) of the rotation between two poses' rotations.
+double rotationBetweenDeg(const Eigen::Matrix4d& a, const Eigen::Matrix4d& b) {
+  const Eigen::Matrix3d d = b.topLeftCorner<3, 3>() * a.topLeftCorner<3, 3>().transpose();
+  return std::acos(std::clamp((d.trace() - 1.0) / 2.0, -1.0, 1.0)) * 180.0 / M_PI;
+}
+
 /// The tilts within ±`range_deg` about the two axes perpendicular to `axis` (e1 = axis.unitOrthogonal(), e2 =
 /// axis × e1) in `step_deg` steps, each a rotation about `pivot`: AngleAxis(i step, e1) · AngleAxis(j step, e2) for
 /// i, j in [-steps, steps], i major. The grid's centre (the identity) is at size() / 2.
@@ -567,6 +573,7 @@ GlobalAlignment::GlobalAlignment(GlobalAlignmentSettings settings)
   require(tiltRangeValid(s.final_tilt_range_deg), "final_tilt_range_deg must be in [0, 30]");
   require(tiltRangeFits(s.final_tilt_range_deg, s.final_tilt_step_deg, kMaxFinalTiltSteps),
           "final_tilt_step_deg must be > 0 and at least final_tilt_range_deg / 10");
+  require(s.final_tilt_rounds >= 1 && s.final_tilt_rounds <= 10, "final_tilt_rounds must be in 1-10");
   require(s.threads <= 1024, "threads must be at most 1024 (0: every hardware thread)");
   require(s.hypothesis_iterations >= 1 && s.final_iterations >= 1, "iteration counts must be >= 1");
   require(std::isfinite(s.shrink_factor) && s.shrink_factor > 0.0, "shrink_factor must be > 0");
@@ -677,22 +684,41 @@ GlobalAlignmentResult GlobalAlignment::refine(const Cloud& source_cloud, const E
 GlobalAlignmentResult GlobalAlignment::finishTilted(const Points& source, const Eigen::Matrix4d& start,
                                                     double start_distance, const Eigen::Vector3d& axis,
                                                     const Eigen::Vector3d& pivot) const {
+  TiltedFinish best = finishTiltedOnce(source, start, start_distance, axis, pivot);
+  // A winner in another basin than the untilted start's (turned from where that one ended by a quarter of a step or
+  // more): the tilts about it reach further on (the truth's basin, a few degrees on at a fifth of overlap, is narrow).
+  for (unsigned int round = 1; round < settings_.final_tilt_rounds && best.other_basin; ++round) {
+    TiltedFinish again = finishTiltedOnce(source, best.result.transformation, start_distance, axis,
+                                          best.result.inliers > 0 ? best.inlier_centroid : pivot);
+    if (!(again.result.inlier_score > best.result.inlier_score)) break;
+    best = std::move(again);
+  }
+  return best.result;
+}
+
+GlobalAlignment::TiltedFinish GlobalAlignment::finishTiltedOnce(const Points& source, const Eigen::Matrix4d& start,
+                                                                double start_distance, const Eigen::Vector3d& axis,
+                                                                const Eigen::Vector3d& pivot) const {
   const std::vector<Eigen::Matrix4d> tilts =
       tiltGrid(axis, settings_.final_tilt_range_deg, settings_.final_tilt_step_deg, pivot);
   std::vector<GlobalAlignmentResult> finished(tilts.size());
+  std::vector<Eigen::Vector3d> centroids(tilts.size());
   pool_->run(finished.size(), 1, threadsFor(finished.size()), [&](std::size_t begin, std::size_t end, unsigned) {
-    for (std::size_t k = begin; k < end; ++k) finished[k] = finish(source, start * tilts[k], start_distance);
+    for (std::size_t k = begin; k < end; ++k)
+      finished[k] = finish(source, start * tilts[k], start_distance, &centroids[k]);
   });
   // The untilted start (the grid's centre) wins ties; then the first in grid order, whichever thread finished it.
   const std::size_t centre = finished.size() / 2;
-  GlobalAlignmentResult best = finished[centre];
+  std::size_t best = centre;
   for (std::size_t k = 0; k < finished.size(); ++k)
-    if (k != centre && finished[k].inlier_score > best.inlier_score) best = finished[k];
-  return best;
+    if (k != centre && finished[k].inlier_score > finished[best].inlier_score) best = k;
+  const bool other_basin = rotationBetweenDeg(finished[centre].transformation, finished[best].transformation) >=
+                           settings_.final_tilt_step_deg / 4.0;
+  return {std::move(finished[best]), centroids[best], other_basin};
 }
 
-GlobalAlignmentResult GlobalAlignment::finish(const Points& source, const Eigen::Matrix4d& start,
-                                              double start_distance) const {
+GlobalAlignmentResult GlobalAlignment::finish(const Points& source, const Eigen::Matrix4d& start, double start_distance,
+                                              Eigen::Vector3d* inlier_centroid) const {
   const GlobalAlignmentSettings& s = settings_;
   const double spacing = target_->spacing;
   const double min_distance = s.min_distance > 0.0 ? s.min_distance : 2.0 * spacing;
@@ -704,6 +730,7 @@ GlobalAlignmentResult GlobalAlignment::finish(const Points& source, const Eigen:
   const Inliers inliers = countInliers(source, *target_, fit.transformation, inlier_distance);
   result.inliers = inliers.count;
   result.inlier_score = inliers.score;
+  if (inlier_centroid) *inlier_centroid = inliers.centroid;
   result.inlier_fraction = static_cast<double>(result.inliers) / static_cast<double>(source.size());
   result.distance_limit = fit.distance_limit;
   result.median_residual = fit.median_residual;

@@ -86,6 +86,11 @@ struct GlobalAlignmentSettings {
   /// try as well. 0: none; at most 10 steps each way.
   double final_tilt_range_deg = 4.0;
   double final_tilt_step_deg = 2.0;
+  /// Rounds of the final tilts (1-10): while a round's winner is a tilted start that ended in another basin than the
+  /// untilted start's (turned from it by a quarter of a tilt step or more), at most this many in all, the tilts are
+  /// tried again about the winner and kept while its inlier score grows. A pose 6° off comes within 2° in one round, to
+  /// the truth in the next (docs/global_alignment.md, "Rounds of final tilts"). 1: one round.
+  unsigned int final_tilt_rounds = 3;
   /// Threads the rotations' votes, the hypotheses' refinement and the tilts are shared out on (0: every
   /// hardware thread, at most 1024); each writes only its own result, so the result does not depend on it.
   unsigned int threads = 0;
@@ -180,15 +185,25 @@ class GlobalAlignment {
   struct Target;
 
  private:
-  /// The trimmed ICP on every source point from `start`, and the result's fields.
+  /// The trimmed ICP on every source point from `start`, and the result's fields; the centroid of its inliers (source
+  /// coordinates; zero when none) in `inlier_centroid` when given.
   GlobalAlignmentResult finish(const std::vector<Eigen::Vector3f>& source, const Eigen::Matrix4d& start,
-                               double start_distance) const;
+                               double start_distance, Eigen::Vector3d* inlier_centroid = nullptr) const;
   /// finish() from `start` and from `start` tilted about `pivot` (source coordinates; the settings' final tilts,
   /// about the two axes perpendicular to `axis`), in parallel; the highest inlier score, a tie to the untilted start. A
-  /// range of 0: finish() from `start` alone.
+  /// range of 0: finish() from `start` alone. Then the settings' further rounds (final_tilt_rounds) about the winner.
   GlobalAlignmentResult finishTilted(const std::vector<Eigen::Vector3f>& source, const Eigen::Matrix4d& start,
                                      double start_distance, const Eigen::Vector3d& axis,
                                      const Eigen::Vector3d& pivot) const;
+  /// One round of finishTilted: the winner, its inliers' centroid (source coordinates), and whether it ended in
+  /// another basin than the untilted start (turned from it by a quarter of a tilt step or more).
+  struct TiltedFinish {
+    GlobalAlignmentResult result;
+    Eigen::Vector3d inlier_centroid;
+    bool other_basin = false;
+  };
+  TiltedFinish finishTiltedOnce(const std::vector<Eigen::Vector3f>& source, const Eigen::Matrix4d& start,
+                                double start_distance, const Eigen::Vector3d& axis, const Eigen::Vector3d& pivot) const;
   /// Threads for `n` independent jobs: the settings' count (0: every hardware thread), at most n.
   unsigned threadsFor(std::size_t n) const;
 
