@@ -69,6 +69,42 @@ void printDistribution(const std::string& label, std::vector<double> values) {
   std::cout << '\n';
 }
 
+/// The histogram of observations per landmark, in buckets 0, 1, 2, 3, 4, 5-9, 10+.
+void printObservationHistogram(const LandmarkMap& map) {
+  std::array<std::size_t, 7> histogram{};
+  for (const auto& landmark : map.landmarks) {
+    const std::size_t n = landmark.observations.size();
+    ++histogram[n < 5 ? n : n < 10 ? 5 : 6];
+  }
+  const std::array<const char*, 7> bucket_names{"0", "1", "2", "3", "4", "5-9", "10+"};
+  std::cout << "observations per landmark:";
+  for (std::size_t i = 0; i < histogram.size(); ++i) std::cout << "  " << bucket_names[i] << ": " << histogram[i];
+  std::cout << '\n';
+}
+
+/// The bounding box of `selected` (not empty) and the distributions of its covariance norms, mean observation
+/// distances and each strategy's weights.
+void printSelectedLandmarks(const LandmarkMap& selected) {
+  Eigen::Vector3d low = selected.landmarks.front().position, high = low;
+  std::vector<double> covariance_norms, mean_distances;
+  for (const auto& landmark : selected.landmarks) {
+    low = low.cwiseMin(landmark.position);
+    high = high.cwiseMax(landmark.position);
+    covariance_norms.push_back(landmark.covariance.norm());
+    mean_distances.push_back(selected.meanObservationDistance(landmark));
+  }
+  const Eigen::IOFormat row(Eigen::StreamPrecision, Eigen::DontAlignCols, " ", " ", "", "", "(", ")");
+  std::cout << "over these " << selected.landmarks.size() << " landmarks:\n"
+            << "  bounding box  min " << low.transpose().format(row) << "  max " << high.transpose().format(row)
+            << "  size " << (high - low).transpose().format(row) << " m\n"
+            << "  " << std::setw(30) << "" << std::setw(13) << "min" << std::setw(13) << "median" << std::setw(13)
+            << "p90" << std::setw(13) << "max" << '\n';
+  printDistribution("covariance norm (Frobenius)", covariance_norms);
+  printDistribution("mean observation distance (m)", mean_distances);
+  for (const WeightStrategy strategy : allWeightStrategies())
+    printDistribution("weight " + toString(strategy), computeWeights(selected, weightFunction(strategy)));
+}
+
 int stats(int argc, char** argv) {
   std::string map_path;
   std::size_t min_count = 2;
@@ -95,39 +131,13 @@ int stats(int argc, char** argv) {
     std::cout << " (ids " << map.frames.begin()->first << '-' << map.frames.rbegin()->first << ')';
   std::cout << '\n' << "landmarks   " << map.landmarks.size() << '\n';
 
-  // Buckets 0, 1, 2, 3, 4, 5-9, 10+.
-  std::array<std::size_t, 7> histogram{};
-  for (const auto& landmark : map.landmarks) {
-    const std::size_t n = landmark.observations.size();
-    ++histogram[n < 5 ? n : n < 10 ? 5 : 6];
-  }
-  const std::array<const char*, 7> bucket_names{"0", "1", "2", "3", "4", "5-9", "10+"};
-  std::cout << "observations per landmark:";
-  for (std::size_t i = 0; i < histogram.size(); ++i) std::cout << "  " << bucket_names[i] << ": " << histogram[i];
-  std::cout << '\n';
+  printObservationHistogram(map);
 
   const LandmarkMap selected = map.withMinObservations(min_count);
   std::cout << "landmarks with >= " << min_count << " observations: " << selected.landmarks.size() << '\n';
   if (selected.landmarks.empty()) return 0;
 
-  Eigen::Vector3d low = selected.landmarks.front().position, high = low;
-  std::vector<double> covariance_norms, mean_distances;
-  for (const auto& landmark : selected.landmarks) {
-    low = low.cwiseMin(landmark.position);
-    high = high.cwiseMax(landmark.position);
-    covariance_norms.push_back(landmark.covariance.norm());
-    mean_distances.push_back(selected.meanObservationDistance(landmark));
-  }
-  const Eigen::IOFormat row(Eigen::StreamPrecision, Eigen::DontAlignCols, " ", " ", "", "", "(", ")");
-  std::cout << "over these " << selected.landmarks.size() << " landmarks:\n"
-            << "  bounding box  min " << low.transpose().format(row) << "  max " << high.transpose().format(row)
-            << "  size " << (high - low).transpose().format(row) << " m\n"
-            << "  " << std::setw(30) << "" << std::setw(13) << "min" << std::setw(13) << "median" << std::setw(13)
-            << "p90" << std::setw(13) << "max" << '\n';
-  printDistribution("covariance norm (Frobenius)", covariance_norms);
-  printDistribution("mean observation distance (m)", mean_distances);
-  for (const WeightStrategy strategy : allWeightStrategies())
-    printDistribution("weight " + toString(strategy), computeWeights(selected, weightFunction(strategy)));
+  printSelectedLandmarks(selected);
   return 0;
 }
 
