@@ -131,13 +131,8 @@ void BM_RegisterDepth(benchmark::State& state, cv::Mat depth, PinholeCamera came
   state.counters["valid_pixels"] = cv::countNonZero(registered > 0.0f);
 }
 
-void registerBenchmarks() {
-  static std::vector<Pair> pairs;  // outlive the registered benchmarks
-  // fr3's ground truth starts after its first frames.
-  pairs.push_back(loadPair(kSequences[0], 0, 5));
-  pairs.push_back(loadPair(kSequences[0], 10, 15));
-  pairs.push_back(loadPair(kSequences[1], 10, 15));
-  pairs.push_back(loadPair(kSequences[1], 20, 25));
+/// Each matcher on each pair, with and without building its index.
+void registerMatching(const std::vector<Pair>& pairs) {
   for (const Pair& p : pairs) {
     const std::string pair_name = std::string(p.sequence->name) + "/" + std::to_string(p.reference_frame) + "_to_" +
                                   std::to_string(p.query_frame);
@@ -156,44 +151,64 @@ void registerBenchmarks() {
           ->MeasureProcessCPUTime();
     }
   }
+}
+
+/// Feature extraction on a frame of `s`, and on a dark, low-contrast copy of it.
+void registerExtraction(const Sequence& s) {
+  const cv::Mat gray = openSequence(s).frame(s.freiburg == 1 ? 0 : 10).gray();
+  benchmark::RegisterBenchmark((std::string("BM_Extract/") + s.name).c_str(), BM_Extract, gray)
+      ->Unit(benchmark::kMillisecond)
+      ->MeasureProcessCPUTime();
+  // A dark, low-contrast copy (gray * 0.2 + 20): too few corners, so the
+  // extractor equalises (CLAHE) and detects a second time.
+  cv::Mat dark;
+  gray.convertTo(dark, CV_8U, 0.2, 20.0);
+  benchmark::RegisterBenchmark((std::string("BM_Extract/") + s.name + "_dark").c_str(), BM_Extract, dark)
+      ->Unit(benchmark::kMillisecond)
+      ->MeasureProcessCPUTime();
+}
+
+/// Depth registration, ours and OpenCV's, of a frame of `s` from a depth camera 2.5 cm aside and turned 0.5°, at the
+/// colour camera's resolution and at half of it.
+void registerDepthRegistration(const Sequence& s) {
+  PinholeCamera camera = tumCamera(s.freiburg);
+  camera.unregistered_depth =
+      DepthCamera{camera.fx, camera.fy, camera.cx, camera.cy, {0.025, 0.0, 0.0}, {0.0, 0.5 * M_PI / 180.0, 0.0}};
+  const cv::Mat depth = openSequence(s).frame(s.freiburg == 1 ? 0 : 10).depth;
+  benchmark::RegisterBenchmark((std::string("BM_RegisterDepth/ours/") + s.name).c_str(), BM_RegisterDepth, depth,
+                               camera, &frontend::registerDepthToColor)
+      ->Unit(benchmark::kMillisecond)
+      ->MeasureProcessCPUTime();
+  benchmark::RegisterBenchmark((std::string("BM_RegisterDepth/opencv/") + s.name).c_str(), BM_RegisterDepth, depth,
+                               camera, &frontend::registerDepthWithOpenCv)
+      ->Unit(benchmark::kMillisecond)
+      ->MeasureProcessCPUTime();
+  // A depth camera of half the colour camera's resolution (each depth pixel drawn over 3 x 3 colour pixels).
+  PinholeCamera half = camera;
+  half.unregistered_depth = half.unregistered_depth->resampled(0.5, 0.5);
+  half.unregistered_depth->width = camera.width / 2;
+  half.unregistered_depth->height = camera.height / 2;
+  cv::Mat half_depth;
+  cv::resize(depth, half_depth, half.depthImageSize(), 0.0, 0.0, cv::INTER_NEAREST);
+  for (const auto& [name, function] :
+       {std::pair{"ours", &frontend::registerDepthToColor}, std::pair{"opencv", &frontend::registerDepthWithOpenCv}})
+    benchmark::RegisterBenchmark((std::string("BM_RegisterDepth/") + name + "/half_resolution_depth/" + s.name).c_str(),
+                                 BM_RegisterDepth, half_depth, half, function)
+        ->Unit(benchmark::kMillisecond)
+        ->MeasureProcessCPUTime();
+}
+
+void registerBenchmarks() {
+  static std::vector<Pair> pairs;  // outlive the registered benchmarks
+  // fr3's ground truth starts after its first frames.
+  pairs.push_back(loadPair(kSequences[0], 0, 5));
+  pairs.push_back(loadPair(kSequences[0], 10, 15));
+  pairs.push_back(loadPair(kSequences[1], 10, 15));
+  pairs.push_back(loadPair(kSequences[1], 20, 25));
+  registerMatching(pairs);
   for (const Sequence& s : kSequences) {
-    const cv::Mat gray = openSequence(s).frame(s.freiburg == 1 ? 0 : 10).gray();
-    benchmark::RegisterBenchmark((std::string("BM_Extract/") + s.name).c_str(), BM_Extract, gray)
-        ->Unit(benchmark::kMillisecond)
-        ->MeasureProcessCPUTime();
-    // A dark, low-contrast copy (gray * 0.2 + 20): too few corners, so the
-    // extractor equalises (CLAHE) and detects a second time.
-    cv::Mat dark;
-    gray.convertTo(dark, CV_8U, 0.2, 20.0);
-    benchmark::RegisterBenchmark((std::string("BM_Extract/") + s.name + "_dark").c_str(), BM_Extract, dark)
-        ->Unit(benchmark::kMillisecond)
-        ->MeasureProcessCPUTime();
-    PinholeCamera camera = tumCamera(s.freiburg);
-    camera.unregistered_depth =
-        DepthCamera{camera.fx, camera.fy, camera.cx, camera.cy, {0.025, 0.0, 0.0}, {0.0, 0.5 * M_PI / 180.0, 0.0}};
-    const cv::Mat depth = openSequence(s).frame(s.freiburg == 1 ? 0 : 10).depth;
-    benchmark::RegisterBenchmark((std::string("BM_RegisterDepth/ours/") + s.name).c_str(), BM_RegisterDepth, depth,
-                                 camera, &frontend::registerDepthToColor)
-        ->Unit(benchmark::kMillisecond)
-        ->MeasureProcessCPUTime();
-    benchmark::RegisterBenchmark((std::string("BM_RegisterDepth/opencv/") + s.name).c_str(), BM_RegisterDepth, depth,
-                                 camera, &frontend::registerDepthWithOpenCv)
-        ->Unit(benchmark::kMillisecond)
-        ->MeasureProcessCPUTime();
-    // A depth camera of half the colour camera's resolution (each depth pixel drawn over 3 x 3 colour pixels).
-    PinholeCamera half = camera;
-    half.unregistered_depth = half.unregistered_depth->resampled(0.5, 0.5);
-    half.unregistered_depth->width = camera.width / 2;
-    half.unregistered_depth->height = camera.height / 2;
-    cv::Mat half_depth;
-    cv::resize(depth, half_depth, half.depthImageSize(), 0.0, 0.0, cv::INTER_NEAREST);
-    for (const auto& [name, function] :
-         {std::pair{"ours", &frontend::registerDepthToColor}, std::pair{"opencv", &frontend::registerDepthWithOpenCv}})
-      benchmark::RegisterBenchmark(
-          (std::string("BM_RegisterDepth/") + name + "/half_resolution_depth/" + s.name).c_str(), BM_RegisterDepth,
-          half_depth, half, function)
-          ->Unit(benchmark::kMillisecond)
-          ->MeasureProcessCPUTime();
+    registerExtraction(s);
+    registerDepthRegistration(s);
   }
 }
 
