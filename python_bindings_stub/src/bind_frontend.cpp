@@ -198,6 +198,16 @@ std::unique_ptr<PythonSlam> makeSlam(const py::object& camera, std::size_t minim
   return std::make_unique<PythonSlam>(toCamera(camera), options);
 }
 
+/// RgbdSlam.landmarks: the session map's landmark positions (N, 3) and their weights by `strategy` (N,).
+py::tuple landmarkCloud(const PythonSlam& slam, const std::string& strategy) {
+  const WeightFunction weight = weightFunction(parseWeightStrategy(strategy));
+  const LandmarkMap map = slam.locked([](const frontend::RgbdSlam& r) { return r.sessionMap(); });
+  Eigen::MatrixXd positions(static_cast<Eigen::Index>(map.landmarks.size()), 3);
+  for (std::size_t i = 0; i < map.landmarks.size(); ++i)
+    positions.row(static_cast<Eigen::Index>(i)) = map.landmarks[i].position.transpose();
+  return py::make_tuple(toArray(positions), toArray(computeWeights(map, weight)));
+}
+
 py::tuple keyframes(const PythonSlam& slam) {
   const auto all = slam.locked([](const frontend::RgbdSlam& s) { return s.map().keyframes(); });
   std::vector<std::uint64_t> ids;
@@ -330,19 +340,8 @@ void bindSlam(py::module_& m) {
           "mini_maps",
           [](const PythonSlam& s) { return s.locked([](const frontend::RgbdSlam& r) { return r.miniMaps(); }); },
           "The mini-maps (as wicp_rgbd_slam writes them) as LandmarkMaps.")
-      .def(
-          "landmarks",
-          [](const PythonSlam& s, const std::string& strategy) {
-            const WeightFunction weight = weightFunction(parseWeightStrategy(strategy));
-            const LandmarkMap map = s.locked([](const frontend::RgbdSlam& r) { return r.sessionMap(); });
-            std::vector<Eigen::Vector3d> xyz;
-            for (const auto& l : map.landmarks) xyz.push_back(l.position);
-            Eigen::MatrixXd positions(static_cast<Eigen::Index>(xyz.size()), 3);
-            for (std::size_t i = 0; i < xyz.size(); ++i)
-              positions.row(static_cast<Eigen::Index>(i)) = xyz[i].transpose();
-            return py::make_tuple(toArray(positions), toArray(computeWeights(map, weight)));
-          },
-          py::arg("strategy") = "covariance", "The landmark cloud with weights: ((N, 3) positions, (N,) weights).");
+      .def("landmarks", &landmarkCloud, py::arg("strategy") = "covariance",
+           "The landmark cloud with weights: ((N, 3) positions, (N,) weights).");
 }
 
 /// tum_frames and run_tum: a TUM folder as the front end reads it, and a run over it.
