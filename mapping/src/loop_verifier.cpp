@@ -304,6 +304,37 @@ std::optional<IcpCheck> checkLocalClouds(const LandmarkMap& query_local, const L
                            : checkAtPnpPose(query_cloud, match_cloud, guess, options);
 }
 
+/// Where the query camera is in the candidate's map: the query keyframe's descriptor matches to the candidate's
+/// local landmarks and the RANSAC PnP pose they give (any rotation); the check that refuses them, if one does, and why.
+struct Located {
+  Matches matches;
+  frontend::PoseEstimate pnp;
+  std::string refused_by, reason;
+};
+
+Located locateQuery(const frontend::Keyframe& query_keyframe, const KeyframeSnapshot& match_map,
+                    const LandmarkMap& match_local, const PinholeCamera& camera,
+                    const LoopVerificationOptions& options) {
+  Located located;
+  located.matches = matchToLandmarks(query_keyframe, match_map, match_local, options);
+  const std::size_t matched = located.matches.points.size();
+  if (matched < options.min_inliers) {
+    located.refused_by = "descriptor_matches";
+    located.reason = "too few descriptor matches (" + std::to_string(matched) + ")";
+    return located;
+  }
+  located.pnp =
+      frontend::estimatePosePnp(located.matches.points, located.matches.pixels, camera, std::nullopt, options.pnp);
+  if (!located.pnp.ok) {
+    located.refused_by = "pnp";
+    located.reason = "PnP failed: " + located.pnp.failure;
+  } else if (located.pnp.inliers.size() < options.min_inliers) {
+    located.refused_by = "pnp_inliers";
+    located.reason = "too few PnP inliers (" + std::to_string(located.pnp.inliers.size()) + ")";
+  }
+  return located;
+}
+
 }  // namespace
 
 LoopVerifier::LoopVerifier(const PinholeCamera& camera, LoopVerificationOptions options)
@@ -357,16 +388,12 @@ LoopVerification LoopVerifier::verify(const KeyframeSnapshot& query_map, fronten
   // 1. Where is the query camera in the match map? Descriptor matches, then RANSAC PnP (any rotation).
   const LandmarkMap match_local =
       match_map.localLandmarks(match_map.neighbourhood(match, options_.neighbour_keyframes));
-  const Matches matches = matchToLandmarks(query_keyframe, match_map, match_local, options_);
-  result.matches = matches.points.size();
-  if (matches.points.size() < options_.min_inliers)
-    return refuse("descriptor_matches", "too few descriptor matches (" + std::to_string(matches.points.size()) + ")");
-  const frontend::PoseEstimate pnp =
-      frontend::estimatePosePnp(matches.points, matches.pixels, camera_, std::nullopt, options_.pnp);
-  result.constraint.inliers = pnp.inliers.size();
-  if (!pnp.ok) return refuse("pnp", "PnP failed: " + pnp.failure);
-  if (pnp.inliers.size() < options_.min_inliers)
-    return refuse("pnp_inliers", "too few PnP inliers (" + std::to_string(pnp.inliers.size()) + ")");
+  const Located located = locateQuery(query_keyframe, match_map, match_local, camera_, options_);
+  result.matches = located.matches.points.size();
+  result.constraint.inliers = located.pnp.inliers.size();
+  if (!located.refused_by.empty()) return refuse(located.refused_by, located.reason);
+  const Matches& matches = located.matches;
+  const frontend::PoseEstimate& pnp = located.pnp;
 
   // 2. ICP between the local landmark clouds, started where PnP put the query (checkWithIcp).
   const LandmarkMap query_local =
