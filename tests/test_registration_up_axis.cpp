@@ -173,13 +173,17 @@ TiltedPair tiltedTurnedPair(double tilt_deg, double turn_deg, FrameId first_end 
   return {std::move(target), std::move(source), moved, std::move(target_cloud), std::move(source_cloud)};
 }
 
+/// A global aligner onto `target` with `settings`.
+GlobalLandmarkAligner alignerWith(const LandmarkCloud::Ptr& target, const GlobalAlignmentSettings& settings) {
+  GlobalLandmarkAligner aligner(settings);
+  aligner.setTarget(target);
+  return aligner;
+}
 /// A global aligner onto `target` with the given final tilts (0: none, the search before 2026-11-28's final tilts).
 GlobalLandmarkAligner alignerWithFinalTilts(const LandmarkCloud::Ptr& target, double final_tilt_range_deg) {
   GlobalAlignmentSettings settings;
   settings.final_tilt_range_deg = final_tilt_range_deg;
-  GlobalLandmarkAligner aligner(settings);
-  aligner.setTarget(target);
-  return aligner;
+  return alignerWith(target, settings);
 }
 
 // Two mini-maps of the real map written in a frame 12° off gravity (as a map whose first camera looked nearly
@@ -275,8 +279,7 @@ TEST(UpAxis, ASecondRoundOfFinalTiltsReachesTheTruthFromTwoDegreesOff) {
                                   &moved = moved](unsigned int rounds) {
     GlobalAlignmentSettings settings;
     settings.final_tilt_rounds = rounds;
-    GlobalLandmarkAligner aligner(settings);
-    aligner.setTarget(target_cloud);
+    GlobalLandmarkAligner aligner = alignerWith(target_cloud, settings);
     const Eigen::Isometry3d estimate(aligner.align(source_cloud, axes).alignment.transformation);
     EXPECT_LT(translationError(estimate, moved.inverse()), 0.05) << rounds << " rounds";
     return rotationErrorDeg(estimate, moved.inverse());

@@ -16,6 +16,7 @@
 
 #include "weighted_icp/core/statistics.h"
 #include "weighted_icp/registration/nearest_neighbor_index.h"
+#include "weighted_icp/registration/rigid_motion.h"
 #include "weighted_icp/registration/worker_pool.h"
 
 namespace weighted_icp {
@@ -376,12 +377,6 @@ Refined climb(const Search& search, Refined refined, unsigned int rounds) {
   return refined;
 }
 
-/// The angle (degrees) of the rotation between two poses' rotations.
-double rotationBetweenDeg(const Eigen::Matrix4d& a, const Eigen::Matrix4d& b) {
-  const Eigen::Matrix3d d = b.topLeftCorner<3, 3>() * a.topLeftCorner<3, 3>().transpose();
-  return std::acos(std::clamp((d.trace() - 1.0) / 2.0, -1.0, 1.0)) * 180.0 / M_PI;
-}
-
 /// The tilts within ±`range_deg` about the two axes perpendicular to `axis` (e1 = axis.unitOrthogonal(), e2 =
 /// axis × e1) in `step_deg` steps, each a rotation about `pivot`: AngleAxis(i step, e1) · AngleAxis(j step, e2) for
 /// i, j in [-steps, steps], i major. The grid's centre (the identity) is at size() / 2.
@@ -712,8 +707,9 @@ GlobalAlignment::TiltedFinish GlobalAlignment::finishTiltedOnce(const Points& so
   std::size_t best = centre;
   for (std::size_t k = 0; k < finished.size(); ++k)
     if (k != centre && finished[k].inlier_score > finished[best].inlier_score) best = k;
-  const bool other_basin = rotationBetweenDeg(finished[centre].transformation, finished[best].transformation) >=
-                           settings_.final_tilt_step_deg / 4.0;
+  const bool other_basin =
+      rotationErrorDeg(Eigen::Isometry3d(finished[best].transformation),
+                       Eigen::Isometry3d(finished[centre].transformation)) >= settings_.final_tilt_step_deg / 4.0;
   return {std::move(finished[best]), centroids[best], other_basin};
 }
 
