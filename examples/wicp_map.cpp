@@ -8,7 +8,6 @@
 
 #include <algorithm>
 #include <array>
-#include <charconv>
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
@@ -20,6 +19,7 @@
 
 #include <boost/program_options.hpp>
 
+#include "frame_ranges.h"
 #include "tool_support.h"
 #include "weighted_icp/core/statistics.h"
 #include "weighted_icp/io/cloud_io.h"
@@ -141,37 +141,6 @@ int stats(int argc, char** argv) {
   return 0;
 }
 
-struct FrameRange {
-  FrameId first = 0;
-  FrameId last = 0;
-};
-
-FrameId parseFrameId(const std::string& text, const std::string& range) {
-  FrameId id = 0;
-  const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), id);
-  if (text.empty() || error != std::errc() || end != text.data() + text.size())
-    throw po::error("--ranges: '" + range + "' is not FIRST-LAST with frame ids FIRST <= LAST");
-  return id;
-}
-
-/// "0-119,120-239" -> {0, 119}, {120, 239}; ranges may overlap.
-std::vector<FrameRange> parseRanges(const std::string& text) {
-  std::vector<FrameRange> ranges;
-  std::size_t start = 0;
-  while (start <= text.size()) {
-    const std::size_t comma = std::min(text.find(',', start), text.size());
-    const std::string range = text.substr(start, comma - start);
-    const std::size_t dash = range.find('-');
-    const FrameRange parsed{parseFrameId(range.substr(0, dash), range),
-                            parseFrameId(dash == std::string::npos ? "" : range.substr(dash + 1), range)};
-    if (parsed.first > parsed.last)
-      throw po::error("--ranges: '" + range + "' is not FIRST-LAST with frame ids FIRST <= LAST");
-    ranges.push_back(parsed);
-    start = comma + 1;
-  }
-  return ranges;
-}
-
 std::string miniMapName(std::size_t index) {
   std::ostringstream name;
   name << "minimap_" << std::setw(3) << std::setfill('0') << index << ".txt";
@@ -181,7 +150,7 @@ std::string miniMapName(std::size_t index) {
 /// @brief The mini-maps of `map`: consecutive runs of `frames_per_minimap` frames, or one per range of `ranges`
 /// when it is not empty (a range without a frame of the map is an error naming `map_path`).
 std::vector<LandmarkMap> cutMiniMaps(const LandmarkMap& map, const std::string& map_path,
-                                     std::size_t frames_per_minimap, const std::vector<FrameRange>& ranges) {
+                                     std::size_t frames_per_minimap, const std::vector<tools::FrameRange>& ranges) {
   if (ranges.empty()) return map.splitIntoMiniMaps(frames_per_minimap);
   std::vector<LandmarkMap> minis;
   for (const auto& range : ranges) {
@@ -226,7 +195,8 @@ int cut(int argc, char** argv) {
   if (!parseArguments(argc, argv, usage, visible, positional_options, positional, vm)) return 0;
   if (vm.count("frames-per-minimap") == vm.count("ranges"))
     throw po::error("give either --frames-per-minimap or --ranges");
-  const std::vector<FrameRange> ranges = vm.count("ranges") ? parseRanges(ranges_text) : std::vector<FrameRange>{};
+  const std::vector<tools::FrameRange> ranges =
+      vm.count("ranges") ? tools::parseFrameRanges(ranges_text, "--ranges") : std::vector<tools::FrameRange>{};
 
   const LandmarkMap map = io::readLandmarkMap(map_path);
   const std::vector<LandmarkMap> minis = cutMiniMaps(map, map_path, frames_per_minimap, ranges);
