@@ -4,7 +4,9 @@
 // Contract other tools rely on: with --json the last line of stdout is one
 // JSON object with transformation (4x4, as 4 rows), fitness_score,
 // iterations, converged, stopped_at_iteration_limit, degenerate (+ reason),
-// correspondences and time_ms (alignment only). Exit codes: 0 converged, 1
+// correspondences and time_ms (alignment only); with --global also up_axis_source, up_axis_target and reversed
+// (the search and the weighted ICP ran the target onto a source much larger than it: fitness_score
+// and correspondences are then the target's). Exit codes: 0 converged, 1
 // error, 2 bad command line, 3 not converged (or stopped at the iteration
 // limit before its criteria were met), 4 degenerate problem (ICP not run).
 
@@ -139,10 +141,17 @@ AlignInputs readInputs(const AlignCommand& c) {
   return in;
 }
 
+/// @brief What the global search reports beside the alignment: the up axes of the search kept, and whether it ran
+/// the other way (the target onto a source much larger than it).
+struct GlobalSearchFacts {
+  SharedUpAxes up_axes;
+  bool reversed = false;
+};
+
 /// @brief Runs the weighted ICP, after the global search when --global asks for it (about the up axes
-/// --up-axis resolves to; those of the search kept returned in `up_axes`).
+/// --up-axis resolves to; what the search kept returned in `facts`).
 AlignmentResult runAlignment(const AlignCommand& c, const AlignInputs& in, const WeightFunction& weight,
-                             SharedUpAxes& up_axes) {
+                             GlobalSearchFacts& facts) {
   if (!c.global) {
     LandmarkAligner aligner(c.settings);
     aligner.setTarget(toLandmarkCloud(in.target, weight));
@@ -155,11 +164,16 @@ AlignmentResult runAlignment(const AlignCommand& c, const AlignInputs& in, const
   GlobalLandmarkAligner aligner(global, c.settings);
   aligner.setTarget(toLandmarkCloud(in.target, weight));
   const GlobalLandmarkAlignmentResult both = aligner.align(toLandmarkCloud(in.source, weight), resolved.axes);
-  up_axes.source = both.source_up_axis, up_axes.target = both.target_up_axis;
+  facts.up_axes.source = both.source_up_axis, facts.up_axes.target = both.target_up_axis;
+  facts.reversed = both.global.reversed;
   std::cout << "global search: " << both.global.hypotheses_refined << " hypotheses refined, inlier fraction "
             << both.global.inlier_fraction << ", distance limit " << both.global.distance_limit
-            << " m, up axes kept: source " << tools::vectorText(up_axes.source) << ", target "
-            << tools::vectorText(up_axes.target) << '\n';
+            << " m, up axes kept: source " << tools::vectorText(facts.up_axes.source) << ", target "
+            << tools::vectorText(facts.up_axes.target) << '\n';
+  if (facts.reversed)
+    std::cout << "global search: the source is much larger than the target: the search and the weighted "
+                 "ICP ran the other way, the target onto the source (the fitness score and correspondences below are "
+                 "the target's landmarks'), the transformation inverted\n";
   return both.alignment;
 }
 
@@ -182,7 +196,7 @@ void printSummary(const AlignCommand& c, const AlignInputs& in, const AlignmentR
 
 /// @brief The JSON contract (see the top of this file): one object on the last line of stdout.
 void printJson(const AlignCommand& c, const AlignInputs& in, const AlignmentResult& result,
-               const SharedUpAxes& up_axes) {
+               const GlobalSearchFacts& facts) {
   tools::JsonObject json;
   json.add("transformation", Eigen::MatrixXd(result.transformation))
       .add("fitness_score", result.fitness_score)
@@ -198,7 +212,10 @@ void printJson(const AlignCommand& c, const AlignInputs& in, const AlignmentResu
       .add("k", static_cast<std::size_t>(c.settings.k))
       .add("source_landmarks", in.source.landmarks.size())
       .add("target_landmarks", in.target.landmarks.size());
-  if (c.global) json.add("up_axis_source", up_axes.source).add("up_axis_target", up_axes.target);
+  if (c.global)
+    json.add("up_axis_source", facts.up_axes.source)
+        .add("up_axis_target", facts.up_axes.target)
+        .add("reversed", facts.reversed);
   std::cout << json.str() << std::endl;
 }
 
@@ -210,10 +227,10 @@ int main(int argc, char** argv) {
     if (!parseCommand(argc, argv, command)) return 0;
     const AlignInputs inputs = readInputs(command);
     const WeightFunction weight = weightFunction(command.strategy);
-    SharedUpAxes up_axes;
-    const AlignmentResult result = runAlignment(command, inputs, weight, up_axes);
+    GlobalSearchFacts facts;
+    const AlignmentResult result = runAlignment(command, inputs, weight, facts);
     printSummary(command, inputs, result);
-    if (command.json) printJson(command, inputs, result, up_axes);
+    if (command.json) printJson(command, inputs, result, facts);
     if (!command.plot_path.empty())
       tools::plotAlignment("wicp_align", inputs.source, inputs.target, weight, result.transformation, command.plot_path,
                            command.source_path + " onto " + command.target_path + " (" + toString(command.strategy) +

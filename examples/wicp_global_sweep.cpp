@@ -7,6 +7,9 @@
 // of each one's frames is shared; with --disjoint the landmarks both saw are
 // dealt out by id parity, so no landmark is in both. --halves adds the
 // alternate-landmark halves of the whole map. B is displaced and aligned onto A.
+// --inside F-L,... pairs instead each mini-map of frames F-L (B) with the whole
+// map (A), the mini-map's landmarks dealt out by id parity with --disjoint;
+// --swap displaces and aligns A onto B instead (the whole map onto a mini-map).
 //
 // Displacements are rotations about the world's z axis and translations in its
 // xy plane. The world is the map's own frame unless --camera-frame (the map
@@ -33,6 +36,7 @@
 #include <pcl/filters/voxel_grid.h>
 #include <pcl/registration/sample_consensus_prerejective.h>
 
+#include "frame_ranges.h"
 #include "tool_support.h"
 #include "up_axis_option.h"
 #include "weighted_icp/core/statistics.h"
@@ -104,12 +108,32 @@ void makeDisjoint(LandmarkMap& a, LandmarkMap& b) {
   drop(b, in_a, 1);
 }
 
-std::vector<Pair> makePairs(const LandmarkMap& map, const std::vector<double>& overlaps, bool disjoint, bool halves,
-                            std::size_t min_observations) {
+/// Each mini-map of `ranges` (the source) paired with the whole map (the target); with `disjoint` the landmarks both
+/// hold dealt out by id parity (the mini-map keeps the even ones).
+std::vector<Pair> makeInsidePairs(const LandmarkMap& map, const std::vector<tools::FrameRange>& ranges, bool disjoint,
+                                  std::size_t min_observations) {
   std::vector<Pair> pairs;
+  for (const auto& range : ranges) {
+    LandmarkMap mini = map.miniMap(range.first, range.last), whole = map;
+    if (disjoint) makeDisjoint(mini, whole);
+    std::ostringstream name;
+    name << "frames [" << range.first << "-" << range.last << "] in the whole map" << (disjoint ? " disjoint" : "");
+    pairs.push_back(
+        {name.str(), mini.withMinObservations(min_observations), whole.withMinObservations(min_observations)});
+  }
+  return pairs;
+}
+
+/// The overlap pairs (or, given `inside`, the mini-maps of those frames each with the whole map), the halves when
+/// asked for.
+std::vector<Pair> makePairs(const LandmarkMap& map, const std::vector<double>& overlaps,
+                            const std::vector<tools::FrameRange>& inside, bool disjoint, bool halves,
+                            std::size_t min_observations) {
+  std::vector<Pair> pairs = makeInsidePairs(map, inside, disjoint, min_observations);
   const FrameId first = map.frames.begin()->first, last = map.frames.rbegin()->first;
   const double frames = static_cast<double>(last - first + 1);
   for (double o : overlaps) {
+    if (!inside.empty()) break;  // --inside pairs instead
     const auto length = static_cast<FrameId>(std::llround(frames / (2.0 - o)));
     LandmarkMap a = map.miniMap(first, first + length - 1), b = map.miniMap(last - length + 1, last);
     if (disjoint) makeDisjoint(a, b);
@@ -151,7 +175,8 @@ struct GlobalSweepCommand {
   /// The map's frame in the z-up world displacements are made in (--camera-frame, --map-pose).
   Eigen::Isometry3d world_from_map = Eigen::Isometry3d::Identity();
   double fpfh_radius_scale = 1.0;
-  bool synthetic = false, disjoint = false, halves = false, verbose = false;
+  bool synthetic = false, disjoint = false, halves = false, swap = false, verbose = false;
+  std::vector<tools::FrameRange> inside;  // --inside: mini-maps of these frames, each with the whole map
   std::uint64_t seed = 1;
   std::size_t landmarks = 8000, min_observations = 2;
   std::vector<double> overlaps, yaws;
@@ -187,15 +212,21 @@ po::options_description searchOptions(GlobalAlignmentSettings& g) {
       ("final-tilt-step", tools::rangedValue(&g.final_tilt_step_deg, 0.01, 30.0)->default_value(g.final_tilt_step_deg),
        "its step (deg; at most 10 steps each way)")
       ("final-tilt-rounds", tools::rangedValue(&g.final_tilt_rounds, 1u, 10u)->default_value(g.final_tilt_rounds),
-       "rounds of final tilts, each about the last's winner while it lands in another basin and scores higher (1-10)");
+       "rounds of final tilts, each about the last's winner while it lands in another basin and scores higher (1-10)")
+      ("no-reverse", po::bool_switch()->notifier([&g](bool set) { g.reverse_larger_source = !set; }),
+       "search a source much larger than the target as given, not the other way (GlobalAlignmentSettings::"
+       "reverse_larger_source)");
   // clang-format on
   return options;
 }
 
-/// @brief Parses and checks the command line; false when only --help was asked for.
-bool parseCommand(int argc, char** argv, GlobalSweepCommand& c) {
-  std::string overlaps_text = "0.33,0.5,0.67", yaws_text = "0,30,60,90,120,150,180";
-  std::string xy_text = "0:0,2:2,-2:1,1:-2,-2:-2";
+/// @brief The list options as given, parsed after the command line is read.
+struct ListTexts {
+  std::string overlaps = "0.33,0.5,0.67", yaws = "0,30,60,90,120,150,180", xy = "0:0,2:2,-2:1,1:-2,-2:-2", inside;
+};
+
+/// @brief The sweep's own options (the map, its pairs, the grid, the method), writing into `c` and `t`.
+po::options_description sweepOptions(GlobalSweepCommand& c, ListTexts& t) {
   po::options_description options("wicp_global_sweep (--map FILE | --synthetic) [options]\nOptions");
   // One option per line reads as a table: not reflowed.
   // clang-format off
@@ -206,11 +237,16 @@ bool parseCommand(int argc, char** argv, GlobalSweepCommand& c) {
       ("seed", tools::rangedValue(&c.seed, std::uint64_t{0})->default_value(c.seed), "synthetic session seed")
       ("landmarks", tools::rangedValue(&c.landmarks, std::size_t{1}, std::size_t{10000000})->default_value(c.landmarks),
        "synthetic landmarks placed (1-10000000)")
-      ("overlaps", po::value(&overlaps_text)->default_value(overlaps_text), "overlap fractions, each in (0, 1]")
+      ("overlaps", po::value(&t.overlaps)->default_value(t.overlaps), "overlap fractions, each in (0, 1]")
       ("disjoint", po::bool_switch(&c.disjoint), "deal out landmarks both mini-maps saw")
       ("halves", po::bool_switch(&c.halves), "add the alternate-landmark halves of the whole map")
-      ("yaws", po::value(&yaws_text)->default_value(yaws_text), "yaw displacements, degrees")
-      ("xy", po::value(&xy_text)->default_value(xy_text), "XY displacements x:y, comma separated")
+      ("inside", po::value(&t.inside),
+       "instead of the overlap pairs: mini-maps of these frame ranges FIRST-LAST (comma separated), each aligned "
+       "onto the whole map")
+      ("swap", po::bool_switch(&c.swap), "swap each pair's roles: the other map displaced and aligned (with --inside: "
+       "the whole map onto each mini-map)")
+      ("yaws", po::value(&t.yaws)->default_value(t.yaws), "yaw displacements, degrees")
+      ("xy", po::value(&t.xy)->default_value(t.xy), "XY displacements x:y, comma separated")
       ("method", po::value(&c.method)->default_value(c.method),
        "global | coarse (the global search alone) | icp (today's, from the identity) | truth (trimmed ICP from the truth) "
        "| fpfh (PCL's FPFH + SampleConsensusPrerejective alone) | fpfh-trimmed (then the trimmed ICP)")
@@ -231,6 +267,13 @@ bool parseCommand(int argc, char** argv, GlobalSweepCommand& c) {
        "truth of the map's first frame): displacements are rotations about that world's z axis")
       ("verbose,v", po::bool_switch(&c.verbose), "one line per case");
   // clang-format on
+  return options;
+}
+
+/// @brief Parses and checks the command line; false when only --help was asked for.
+bool parseCommand(int argc, char** argv, GlobalSweepCommand& c) {
+  ListTexts texts;
+  po::options_description options = sweepOptions(c, texts);
   options.add(searchOptions(c.settings));
   po::variables_map vm;
   if (!tools::parseCommandLine(argc, argv, options, vm)) return false;
@@ -238,11 +281,12 @@ bool parseCommand(int argc, char** argv, GlobalSweepCommand& c) {
   if (c.method != "global" && c.method != "coarse" && c.method != "icp" && c.method != "truth" && c.method != "fpfh" &&
       c.method != "fpfh-trimmed")
     throw po::error("--method must be global, coarse, icp, truth, fpfh or fpfh-trimmed (got " + c.method + ")");
-  c.overlaps = parseList(overlaps_text, "overlaps");
+  c.overlaps = parseList(texts.overlaps, "overlaps");
   for (const double o : c.overlaps)
     if (!(o > 0.0 && o <= 1.0)) throw po::error("--overlaps: each must be in (0, 1] (got " + std::to_string(o) + ")");
-  c.yaws = parseList(yaws_text, "yaws");
-  c.xys = parseXyList(xy_text);
+  if (!texts.inside.empty()) c.inside = tools::parseFrameRanges(texts.inside, "--inside");
+  c.yaws = parseList(texts.yaws, "yaws");
+  c.xys = parseXyList(texts.xy);
   if (!c.perturb_text.empty()) Displacement::parse(c.perturb_text);  // refused now, not after the first pair
   try {
     c.up_axis = tools::parseUpAxisOption(c.up_axis_text);
@@ -490,7 +534,10 @@ int main(int argc, char** argv) {
       const auto [even, odd] = map.alternateHalves();  // every frame: the whole map's cameras
       std::cout << tools::resolveUpAxes(command.up_axis, odd, even).description << '\n';
     }
-    const auto pairs = makePairs(map, command.overlaps, command.disjoint, command.halves, command.min_observations);
+    auto pairs =
+        makePairs(map, command.overlaps, command.inside, command.disjoint, command.halves, command.min_observations);
+    if (command.swap)
+      for (auto& pair : pairs) std::swap(pair.source, pair.target), pair.name += ", swapped";
     std::size_t total = 0, passed = 0, in_window = 0;
     std::vector<double> all_times;
     for (const auto& pair : pairs) {

@@ -3,6 +3,7 @@
 // shared landmarks are dealt out between the maps, and bad input.
 
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <set>
 #include <stdexcept>
@@ -21,8 +22,9 @@ namespace {
 
 using namespace weighted_icp;
 
-/// Aligns `source`, displaced by `d`, onto `target` and checks the result undoes the displacement.
-void expectRecovered(const LandmarkMap& source, const LandmarkMap& target, const Displacement& d) {
+/// Aligns `source`, displaced by `d`, onto `target`, checks the result undoes the displacement and returns it.
+GlobalLandmarkAlignmentResult expectRecovered(const LandmarkMap& source, const LandmarkMap& target,
+                                              const Displacement& d) {
   LandmarkMap moved = source;
   moved.transform(d.toIsometry());
   GlobalLandmarkAligner aligner;
@@ -33,6 +35,7 @@ void expectRecovered(const LandmarkMap& source, const LandmarkMap& target, const
   EXPECT_LT(translationError(estimate, truth), 0.05) << d.toString();
   EXPECT_GT(result.global.inlier_fraction, 0.0);
   EXPECT_FALSE(result.alignment.degenerate);
+  return result;
 }
 
 /// Mini-maps of frames [0, first_last] and [second_first, ...] of the real map with the landmarks both saw dealt out
@@ -51,6 +54,23 @@ std::pair<LandmarkMap, LandmarkMap> disjointPair(const LandmarkMap& map, FrameId
   keep(a, in_b, 0);
   keep(b, in_a, 1);
   return {a.withMinObservations(2), b.withMinObservations(2)};
+}
+
+/// The whole map and its mini-map of frames [first, last], the mini-map's landmarks dealt out by id parity (the
+/// mini-map keeps the even ones); at least 2 observations.
+std::pair<LandmarkMap, LandmarkMap> mapAndMiniMap(const LandmarkMap& map, FrameId first, FrameId last) {
+  LandmarkMap whole = map, mini = map.miniMap(first, last);
+  std::set<LandmarkId> in_mini;
+  for (const auto& l : mini.landmarks) in_mini.insert(l.id);
+  const auto keep = [](LandmarkMap& m, const std::function<bool(LandmarkId)>& kept) {
+    std::vector<Landmark> left;
+    for (const auto& l : m.landmarks)
+      if (kept(l.id)) left.push_back(l);
+    m.landmarks = left;
+  };
+  keep(whole, [&](LandmarkId id) { return !in_mini.count(id) || id % 2 == 1; });
+  keep(mini, [](LandmarkId id) { return id % 2 == 0; });
+  return {whole.withMinObservations(2), mini.withMinObservations(2)};
 }
 
 TEST(GlobalAlignment, RecoversYaw180OnDisjointHalvesOfTheRealMap) {
@@ -89,6 +109,36 @@ TEST(GlobalAlignment, ClimbsToTheTruthWhenItsBestVoteEndsBeyondTheFineWindow) {
   global.setTarget(target_xyz);
   const Eigen::Isometry3d estimate(global.align(source_xyz).transformation);
   EXPECT_GT(rotationErrorDeg(estimate, d.toIsometry().inverse()), 6.0);
+}
+
+TEST(GlobalAlignment, AlignsAWholeMapOntoOneOfItsMiniMapsByTheSearchTheOtherWay) {
+  WEIGHTED_ICP_REQUIRE_FILE(weighted_icp::testing::realMapPath());
+  // The whole map (about 1,200 sample voxels) onto ten of its frames (about 75): of the source's 400 vote samples a
+  // few lie where the mini-map is, and the search once ended 160-180 degrees off. It now runs the mini-map onto the
+  // whole map and inverts the result.
+  const auto [whole, mini] = mapAndMiniMap(io::readLandmarkMap(weighted_icp::testing::realMapPath().string()), 60, 69);
+  ASSERT_GT(whole.landmarks.size(), 10 * mini.landmarks.size());
+  const Displacement d{2.0, -2.0, 0.0, 0.0, 0.0, 90.0};
+  const GlobalLandmarkAlignmentResult reversed = expectRecovered(whole, mini, d);
+  EXPECT_TRUE(reversed.global.reversed);
+  // The inlier figures are the caller's way: of the whole map's landmarks (more than the mini-map's could be), most
+  // of which lie where the mini-map has nothing.
+  EXPECT_GT(reversed.global.inliers, mini.landmarks.size());
+  EXPECT_LT(reversed.global.inlier_fraction, 0.5);
+  EXPECT_DOUBLE_EQ(reversed.global.inlier_fraction,
+                   static_cast<double>(reversed.global.inliers) / static_cast<double>(whole.landmarks.size()));
+  // The mini-map onto the whole map is searched as given.
+  EXPECT_FALSE(expectRecovered(mini, whole, d).global.reversed);
+  // The whole map searched as given (the search before) ends far off: the case above exercises the reversal.
+  GlobalAlignmentSettings as_given;
+  as_given.reverse_larger_source = false;
+  GlobalLandmarkAligner aligner(as_given);
+  aligner.setTarget(toLandmarkCloud(mini, CovarianceWeight{}));
+  LandmarkMap moved = whole;
+  moved.transform(d.toIsometry());
+  const GlobalLandmarkAlignmentResult before = aligner.align(toLandmarkCloud(moved, CovarianceWeight{}));
+  EXPECT_FALSE(before.global.reversed);
+  EXPECT_GT(rotationErrorDeg(Eigen::Isometry3d(before.alignment.transformation), d.toIsometry().inverse()), 10.0);
 }
 
 TEST(GlobalAlignment, BadInputIsRefusedWithAClearMessage) {

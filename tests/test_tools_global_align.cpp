@@ -26,7 +26,7 @@ TEST(WicpAlignGlobal, RecoversYaw180AndKeepsTheJsonContract) {
   ASSERT_EQ(r.status, 0) << r.err;
   const std::string json = weighted_icp::testing::lastLine(r.out);
   for (const char* key : {"\"transformation\":[[", "\"fitness_score\":", "\"iterations\":", "\"converged\":true",
-                          "\"correspondences\":", "\"time_ms\":"})
+                          "\"correspondences\":", "\"time_ms\":", "\"reversed\":false"})
     EXPECT_NE(json.find(key), std::string::npos) << key << " missing from " << json;
   const Eigen::Matrix4d t = weighted_icp::testing::alignTransformation(json);
   const Eigen::Isometry3d truth = weighted_icp::Displacement{1, -1.5, 0, 0, 0, 180}.toIsometry().inverse();

@@ -100,6 +100,8 @@ TEST(ToolOptions, OutOfRangeNumbersAreCommandLineErrorsNamingTheOption) {
       {"wicp_global_sweep", "--synthetic --tilt 12 --camera-frame",
        "--tilt re-expresses the map itself: not with --camera-frame or --map-pose"},
       {"wicp_global_sweep", "--synthetic --tilt 91", "--tilt must be between -90 and 90 (got 91)"},
+      {"wicp_global_sweep", "--synthetic --inside 60-9", "--inside: '60-9' is not FIRST-LAST"},
+      {"wicp_global_sweep", "--synthetic --inside 60-", "--inside: '60-' is not FIRST-LAST"},
       {"wicp_make_variant", "--variant frame-step --frame-step 0 --out x",
        "--frame-step must be between 1 and 30 (got 0)"},
       {"wicp_make_variant", "--variant exposure --exposure-stops 5 --out x",

@@ -119,12 +119,20 @@ AlignmentResult alignGlobal(const py::object& source, const py::object& target, 
   const SharedUpAxes axes = upAxesFor(up_axis, source, target);
   const AlignProblem problem = alignProblem(source, target, target_weights, k, strategy_name, max_iterations, threads);
 
+  // A source much larger than the target is aligned the other way, weighted by its own weights: the
+  // strategy's for a LandmarkMap source, else 1 each (GlobalLandmarkAligner::align).
+  std::optional<WeightStrategy> strategy;
+  if (strategy_name) strategy = parseWeightStrategy(*strategy_name);
+  const std::vector<double> source_weights = py::isinstance<LandmarkMap>(source)
+                                                 ? targetWeights(source, py::none(), strategy, problem.source.size())
+                                                 : std::vector<double>{};
+
   py::gil_scoped_release unlocked;
   GlobalAlignmentSettings global;
   global.threads = problem.settings.threads;
   GlobalLandmarkAligner aligner(global, problem.settings);
   aligner.setTarget(toCloud(problem.target, problem.weights));
-  return aligner.align(toCloud(problem.source, {}), axes).alignment;
+  return aligner.align(toCloud(problem.source, source_weights), axes).alignment;
 }
 
 py::tuple weightedCorrespondences(const py::object& source, const py::object& target, const py::object& weights, int k,
@@ -199,7 +207,10 @@ void bindRegistration(py::module_& m) {
         py::arg("up_axis") = "auto", py::arg("threads") = 0,
         "Aligns source onto target from any start, as wicp_align --global: a search over rotations about the up "
         "axis and every translation, partial overlap allowed, then the weighted ICP with its refinement stage.\n\n"
-        "source, target, target_weights, k, strategy: as align().\n"
+        "source, target, target_weights, k, strategy: as align(). A source much larger than the target (its vote "
+        "sample would meet few of the target's) "
+        "is aligned the other way (the target onto it, the result inverted), weighted by the strategy's weights of "
+        "a LandmarkMap source, else 1 each.\n"
         "up_axis: 'auto' (two LandmarkMaps: z, with tilts up to 16 degrees, when both maps' "
         "cameras are level about it within 8 degrees, else "
         "each map levelled by its own cameras, with tilts, and z tried as well; arrays: z), 'z', or three numbers "

@@ -187,6 +187,31 @@ def test_align_global_recovers_a_half_turn_and_levels_camera_frame_maps(real_map
     assert not np.allclose(about_z.transformation, np.linalg.inv(turn), atol=5e-2)
 
 
+def test_align_global_aligns_a_whole_map_onto_a_mini_map_the_other_way_as_the_tool_does(
+        real_map_path: Path, tmp_path: Path) -> None:
+    # Half of the whole map onto the other half's ten frames 60-69: the source has many times the target's landmarks,
+    # so the search and the weighted ICP run the target onto the source, weighted by the source's covariances.
+    even, odd = wi.LandmarkMap.load(real_map_path, min_observations=2).alternate_halves()
+    mini = even.mini_map(60, 69).with_min_observations(2)
+    assert len(odd) > 10 * len(mini)
+    moved = displacement(2.0, -2.0, 90.0)
+    odd.transform(moved)
+    odd.save(tmp_path / "whole.txt")
+    mini.save(tmp_path / "mini.txt")
+    tool = run_tool("wicp_align", "--global", "--source", str(tmp_path / "whole.txt"), "--target",
+                    str(tmp_path / "mini.txt"), "--strategy", "covariance")
+    assert tool["reversed"] is True
+    r = wi.align_global(wi.LandmarkMap.load(tmp_path / "whole.txt", min_observations=2),
+                        wi.LandmarkMap.load(tmp_path / "mini.txt", min_observations=2), strategy="covariance")
+    # The source's weights are the strategy's, as the tool's: the same numbers.
+    assert np.array_equal(r.transformation, np.array(tool["transformation"]))
+    assert r.correspondences == tool["correspondences"]
+    truth = np.linalg.inv(moved)
+    assert np.linalg.norm(r.transformation[:3, 3] - truth[:3, 3]) < 0.05
+    turn = r.transformation[:3, :3] @ truth[:3, :3].T
+    assert np.degrees(np.arccos(np.clip((np.trace(turn) - 1) / 2, -1, 1))) < 2.0
+
+
 def test_align_global_refuses_a_bad_up_axis() -> None:
     points = np.random.default_rng(1).uniform(-1, 1, (50, 3))
     with pytest.raises(ValueError, match="up_axis"):

@@ -115,7 +115,8 @@ def align_global(
     up_axis: Union[str, Sequence[float]] = "auto",
     threads: int = 0,
 ) -> AlignmentResult:
-    """Aligns source onto target from any start (wicp_align --global)."""
+    """Aligns source onto target from any start (wicp_align --global); a source much larger than the
+    target is aligned the other way, weighted by its own weights, the result inverted."""
 
 def weighted_correspondences(
     source: _Points,

@@ -42,18 +42,47 @@ Points finitePoints(const GlobalAlignment::Cloud& cloud, const char* what) {
 
 /// One point (the first seen, a real point: its residuals are those of the
 /// cloud) per occupied voxel, in input order so the sample does not depend on
-/// hashing; then every n-th to stay within `max_points`.
-Points voxelSample(const Points& points, double cell, std::size_t max_points) {
+/// hashing.
+Points voxelFirsts(const Points& points, double cell) {
   std::unordered_set<std::int64_t> occupied;
   Points firsts;
   for (const auto& p : points) {
     const auto key = [&](int axis) { return static_cast<std::int64_t>(std::floor(p[axis] / cell)) & 0x1fffff; };
     if (occupied.insert(key(0) | (key(1) << 21) | (key(2) << 42)).second) firsts.push_back(p);
   }
+  return firsts;
+}
+
+/// voxelFirsts, then every n-th to stay within `max_points`.
+Points voxelSample(const Points& points, double cell, std::size_t max_points) {
+  const Points firsts = voxelFirsts(points, cell);
   const std::size_t stride = (firsts.size() + max_points - 1) / max_points;
   Points sample;
   for (std::size_t i = 0; i < firsts.size(); i += stride) sample.push_back(firsts[i]);
   return sample;
+}
+
+/// The vote's sample cell (GlobalAlignmentSettings::sample_cell, 0: a third of the vote cell).
+double sampleCell(const GlobalAlignmentSettings& s) { return s.sample_cell > 0.0 ? s.sample_cell : s.vote_cell / 3.0; }
+
+/// Whether the search runs the other way, the target onto the source, its result inverted. The vote's evidence is the
+/// pairs of sample points that both lie where the maps overlap; the source's sample is capped lower than the target's
+/// (the vote costs their product), so a source with many more sample voxels than the target (a whole map aligned
+/// onto one of its mini-maps) has few of its samples where the target is, and the vote starves. Reversed when that
+/// at least doubles the sample pairs: below, the two ways are close and the caller's way is kept (mini-maps of a like
+/// size are searched as before). Reversing whenever the source has twice the target's points was measured and not
+/// kept: it lost maps in their first camera's frame (docs/global_alignment.md).
+bool searchesReversed(std::size_t source_voxels, std::size_t target_voxels, const GlobalAlignmentSettings& s) {
+  const auto pairs = [&](std::size_t from, std::size_t onto) {
+    return static_cast<double>(std::min(from, s.max_source_samples)) *
+           static_cast<double>(std::min(onto, s.max_target_samples));
+  };
+  return pairs(target_voxels, source_voxels) >= 2.0 * pairs(source_voxels, target_voxels);
+}
+
+/// The inlier radius: the settings' (GlobalAlignmentSettings::inlier_distance), or 2 target spacings.
+double inlierDistance(const GlobalAlignmentSettings& s, double spacing) {
+  return s.inlier_distance > 0.0 ? s.inlier_distance : 2.0 * spacing;
 }
 
 pcl::PointCloud<pcl::PointXYZ> toCloud(const Points& points) {
@@ -85,6 +114,8 @@ struct TrimmedFit {
 struct GlobalAlignment::Target {
   Points points;
   Points sample;
+  /// Voxels of the sample cell the points occupy (the sample's size before its cap).
+  std::size_t voxels = 0;
   NearestNeighborIndex index;
   double spacing = 0.0;
   /// Target point indices by bucket of bucket_size (the fine window): the
@@ -598,8 +629,8 @@ void GlobalAlignment::setTarget(const Cloud& target) {
     fresh->small_buckets[Target::bucketKey(Target::bucketOf(fresh->points[i], fresh->small_bucket_size))].push_back(
         index);
   }
-  const double sample_cell = settings_.sample_cell > 0.0 ? settings_.sample_cell : settings_.vote_cell / 3.0;
-  fresh->sample = voxelSample(fresh->points, sample_cell, settings_.max_target_samples);
+  fresh->voxels = voxelFirsts(fresh->points, sampleCell(settings_)).size();
+  fresh->sample = voxelSample(fresh->points, sampleCell(settings_), settings_.max_target_samples);
   target_ = std::move(fresh);
 }
 
@@ -612,17 +643,47 @@ GlobalAlignmentResult GlobalAlignment::align(const Cloud& source_cloud, const Ei
   if (target_->points.empty()) throw std::invalid_argument("GlobalAlignment::align: no target set");
   checkAlignArguments(source_up_axis, up_axis, tilt_range_deg, settings_.tilt_step_deg);
   const auto start = std::chrono::steady_clock::now();
+  Points source = finitePoints(source_cloud, "source");
+  GlobalAlignmentResult result =
+      settings_.reverse_larger_source &&
+              searchesReversed(voxelFirsts(source, sampleCell(settings_)).size(), target_->voxels, settings_)
+          ? alignReversed(source, source_up_axis, up_axis, tilt_range_deg)
+          : alignAsGiven(std::move(source), source_up_axis, up_axis, tilt_range_deg);
+  result.time_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  return result;
+}
+
+GlobalAlignmentResult GlobalAlignment::alignReversed(const std::vector<Eigen::Vector3f>& source,
+                                                     const Eigen::Vector3d& source_up_axis,
+                                                     const Eigen::Vector3d& up_axis, double tilt_range_deg) const {
+  GlobalAlignment reversed(settings_);
+  reversed.setTarget(toCloud(source));
+  const Eigen::Vector3d source_up = source_up_axis.norm() > 0.0 ? source_up_axis : up_axis;
+  GlobalAlignmentResult result = reversed.align(toCloud(target_->points), up_axis, source_up, tilt_range_deg);
+  result.transformation = Eigen::Isometry3d(result.transformation).inverse().matrix();
+  // The inlier figures the caller's way: of the source's points, against this target.
+  result.target_spacing = target_->spacing;
+  result.inlier_distance = inlierDistance(settings_, target_->spacing);
+  const Inliers inliers = countInliers(source, *target_, result.transformation, result.inlier_distance);
+  result.inliers = inliers.count;
+  result.inlier_score = inliers.score;
+  result.inlier_fraction = static_cast<double>(inliers.count) / static_cast<double>(source.size());
+  result.reversed = true;
+  return result;
+}
+
+GlobalAlignmentResult GlobalAlignment::alignAsGiven(std::vector<Eigen::Vector3f> source,
+                                                    const Eigen::Vector3d& source_up_axis,
+                                                    const Eigen::Vector3d& up_axis, double tilt_range_deg) const {
   const GlobalAlignmentSettings& s = settings_;
   // The source levelled: its own up axis turned onto the target's, so one axis serves both.
   const Eigen::Vector3d axis = up_axis.normalized();
   const Eigen::Matrix3d level = levellingRotation(source_up_axis, axis);
-  Points source = finitePoints(source_cloud, "source");
   for (auto& p : source) p = (level * p.cast<double>()).cast<float>();
   const double spacing = target_->spacing;
   const double min_distance = s.min_distance > 0.0 ? s.min_distance : 2.0 * spacing;
-  const double inlier_distance = s.inlier_distance > 0.0 ? s.inlier_distance : 2.0 * spacing;
-  const Points sample =
-      voxelSample(source, s.sample_cell > 0.0 ? s.sample_cell : s.vote_cell / 3.0, s.max_source_samples);
+  const double inlier_distance = inlierDistance(s, spacing);
+  const Points sample = voxelSample(source, sampleCell(s), s.max_source_samples);
 
   // 1. Rotations about the up axis, each with its voted translations.
   Eigen::Vector3f centroid = Eigen::Vector3f::Zero();
@@ -656,7 +717,6 @@ GlobalAlignmentResult GlobalAlignment::align(const Cloud& source_cloud, const Ei
   result.transformation = result.transformation * levelling;  // maps the source as given
   result.hypotheses_voted = hypotheses.size();
   result.hypotheses_refined = refined;
-  result.time_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   return result;
 }
 
@@ -718,7 +778,7 @@ GlobalAlignmentResult GlobalAlignment::finish(const Points& source, const Eigen:
   const GlobalAlignmentSettings& s = settings_;
   const double spacing = target_->spacing;
   const double min_distance = s.min_distance > 0.0 ? s.min_distance : 2.0 * spacing;
-  const double inlier_distance = s.inlier_distance > 0.0 ? s.inlier_distance : 2.0 * spacing;
+  const double inlier_distance = inlierDistance(s, spacing);
   const TrimmedFit fit =
       trimmedIcp(source, *target_, start, start_distance, min_distance, s.shrink_factor, s.final_iterations);
   GlobalAlignmentResult result;

@@ -1,4 +1,5 @@
-// GlobalLandmarkAligner: the global search, then the weighted ICP within its distance limit.
+// GlobalLandmarkAligner: the global search, then the weighted ICP within its distance limit (both the other way for a
+// source much larger than the target).
 #include "weighted_icp/registration/global_landmark_alignment.h"
 
 #include <algorithm>
@@ -7,8 +8,17 @@
 #include <utility>
 
 #include <pcl/common/io.h>
+#include <Eigen/Geometry>
 
 namespace weighted_icp {
+
+namespace {
+
+Eigen::Matrix4d inverse(const Eigen::Matrix4d& transformation) {
+  return Eigen::Isometry3d(transformation).inverse().matrix();
+}
+
+}  // namespace
 
 GlobalLandmarkAligner::GlobalLandmarkAligner(GlobalAlignmentSettings global, AlignmentSettings icp)
     : global_(std::move(global)), icp_settings_(icp) {
@@ -66,8 +76,15 @@ GlobalLandmarkAlignmentResult GlobalLandmarkAligner::finish(const LandmarkCloud:
   AlignmentSettings icp = icp_settings_;
   icp.max_correspondence_distance = std::min(icp.max_correspondence_distance, result.global.distance_limit);
   LandmarkAligner aligner(icp);
-  aligner.setTarget(target_);
-  result.alignment = aligner.align(source, result.global.transformation);
+  if (result.global.reversed) {
+    // As the search did: the target onto the source (its points the better ones to seek counterparts), inverted.
+    aligner.setTarget(source);
+    result.alignment = aligner.align(target_, inverse(result.global.transformation));
+    result.alignment.transformation = inverse(result.alignment.transformation);
+  } else {
+    aligner.setTarget(target_);
+    result.alignment = aligner.align(source, result.global.transformation);
+  }
   result.alignment.time_ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   return result;

@@ -91,6 +91,11 @@ struct GlobalAlignmentSettings {
   /// tried again about the winner and kept while its inlier score grows. A pose 6° off comes within 2° in one round, to
   /// the truth in the next (docs/global_alignment.md, "Rounds of final tilts"). 1: one round.
   unsigned int final_tilt_rounds = 3;
+  /// A source much larger than the target is searched the other way, the target onto it, the result inverted
+  /// (GlobalAlignmentResult::reversed): when that at least doubles the vote's sample pairs, the source's sample being
+  /// capped lower (max_source_samples) than the target's (a whole map aligned onto one of its mini-maps: few of the
+  /// whole map's samples lie where the mini-map is). false: always the caller's way.
+  bool reverse_larger_source = true;
   /// Threads the rotations' votes, the hypotheses' refinement and the tilts are shared out on (0: every
   /// hardware thread, at most 1024); each writes only its own result, so the result does not depend on it.
   unsigned int threads = 0;
@@ -133,6 +138,11 @@ struct GlobalAlignmentResult {
   double inlier_distance = 0.0;
   std::size_t hypotheses_voted = 0;
   std::size_t hypotheses_refined = 0;
+  /// Whether the search ran the other way, the target onto the source, its transformation inverted
+  /// (GlobalAlignmentSettings::reverse_larger_source: a source much larger than the target). The inlier figures and
+  /// the spacing are the caller's way (of the source's points, against the target); the distance limit and the median
+  /// residual are the reversed trimmed ICP's.
+  bool reversed = false;
   double time_ms = 0.0;
 };
 
@@ -160,7 +170,8 @@ class GlobalAlignment {
   /// @param target  at least 3 finite points, not all identical (else std::invalid_argument)
   void setTarget(const Cloud& target);
   /// @brief Finds the transformation taking `source` onto the target, from any rotation about the up axis
-  /// and any translation.
+  /// and any translation; a source much larger than the target is searched the other way
+  /// (GlobalAlignmentSettings::reverse_larger_source).
   /// @param source  at least 3 finite points (else std::invalid_argument); throws when no target is set
   /// @param source_up_axis  the source's own up axis when it differs from the settings' `up_axis` (a map
   ///        written in its first camera's frame): the source is first turned so that it becomes `up_axis`.
@@ -204,6 +215,14 @@ class GlobalAlignment {
   };
   TiltedFinish finishTiltedOnce(const std::vector<Eigen::Vector3f>& source, const Eigen::Matrix4d& start,
                                 double start_distance, const Eigen::Vector3d& axis, const Eigen::Vector3d& pivot) const;
+  /// The search of align() on the finite `source` as given: levelled onto `up_axis`, the vote, the refined
+  /// hypotheses, the climb, the tilts and the final pass (time_ms left to align()).
+  GlobalAlignmentResult alignAsGiven(std::vector<Eigen::Vector3f> source, const Eigen::Vector3d& source_up_axis,
+                                     const Eigen::Vector3d& up_axis, double tilt_range_deg) const;
+  /// align() the other way: this target searched onto a GlobalAlignment whose target is `source`, the result
+  /// inverted and its inlier figures counted the caller's way.
+  GlobalAlignmentResult alignReversed(const std::vector<Eigen::Vector3f>& source, const Eigen::Vector3d& source_up_axis,
+                                      const Eigen::Vector3d& up_axis, double tilt_range_deg) const;
   /// Threads for `n` independent jobs: the settings' count (0: every hardware thread), at most n.
   unsigned threadsFor(std::size_t n) const;
 

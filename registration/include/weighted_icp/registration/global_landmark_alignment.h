@@ -21,7 +21,11 @@ namespace weighted_icp {
 /// @brief Both stages' results.
 struct GlobalLandmarkAlignmentResult {
   /// The final (weighted ICP) stage: its transformation maps the source as
-  /// given onto the target; time_ms covers both stages.
+  /// given onto the target; time_ms covers both stages. When the search ran
+  /// the other way (global.reversed: a source much larger than the target) so
+  /// did this stage, the target onto the source weighted by the source's
+  /// weights, its transformation inverted: its fitness score, correspondences
+  /// and degeneracy are then of the target's points.
   AlignmentResult alignment;
   /// The global stage alone.
   GlobalAlignmentResult global;
@@ -48,7 +52,9 @@ class GlobalLandmarkAligner {
   /// @param target  as LandmarkAligner::setTarget() and GlobalAlignment::setTarget() require
   void setTarget(LandmarkCloud::ConstPtr target);
   /// @brief Aligns `source` onto the target from any rotation about the up axis and any translation.
-  /// @param source  as LandmarkAligner::align() requires; a degenerate problem is reported in the result
+  /// @param source  as LandmarkAligner::align() requires; a degenerate problem is reported in the result. Its
+  ///                weights serve when it is much larger than the target: both stages then run the other way, the
+  ///                target onto it (GlobalAlignmentSettings::reverse_larger_source)
   GlobalLandmarkAlignmentResult align(const LandmarkCloud::ConstPtr& source);
   /// @brief As align(source), the search about the given up axes (chooseUpAxes(): each map levelled by its own,
   /// with tilts, and z tried as well when `axes.also_try_z`; the search with the higher inlier score kept).
