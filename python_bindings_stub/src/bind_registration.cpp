@@ -42,18 +42,20 @@ std::vector<double> targetWeights(const py::handle& target, const py::handle& ta
   return computeWeights(target.cast<const LandmarkMap&>(), weightFunction(*strategy));
 }
 
-/// What align() and align_global() share: the ICP's settings and both clouds, checked.
+/// What align() and align_global() share: the ICP's settings, both clouds, the target's weights and the strategy,
+/// checked.
 struct AlignProblem {
   AlignmentSettings settings;
   std::vector<Eigen::Vector3d> source, target;
   std::vector<double> weights;
+  std::optional<WeightStrategy> strategy;
 };
 
 AlignProblem alignProblem(const py::object& source, const py::object& target, const py::object& target_weights, int k,
                           const std::optional<std::string>& strategy_name, int max_iterations, int threads) {
-  std::optional<WeightStrategy> strategy;
-  if (strategy_name) strategy = parseWeightStrategy(*strategy_name);
   AlignProblem problem;
+  std::optional<WeightStrategy>& strategy = problem.strategy;
+  if (strategy_name) strategy = parseWeightStrategy(*strategy_name);
   problem.settings.k = strategy ? neighboursFor(*strategy, checkedK(k)) : checkedK(k);
   if (max_iterations < 1)
     throw py::value_error("max_iterations must be >= 1 (got " + std::to_string(max_iterations) + ")");
@@ -121,11 +123,9 @@ AlignmentResult alignGlobal(const py::object& source, const py::object& target, 
 
   // A source much larger than the target is aligned the other way, weighted by its own weights: the
   // strategy's for a LandmarkMap source, else 1 each (GlobalLandmarkAligner::align).
-  std::optional<WeightStrategy> strategy;
-  if (strategy_name) strategy = parseWeightStrategy(*strategy_name);
-  const std::vector<double> source_weights = py::isinstance<LandmarkMap>(source)
-                                                 ? targetWeights(source, py::none(), strategy, problem.source.size())
-                                                 : std::vector<double>{};
+  const std::vector<double> source_weights =
+      py::isinstance<LandmarkMap>(source) ? targetWeights(source, py::none(), problem.strategy, problem.source.size())
+                                          : std::vector<double>{};
 
   py::gil_scoped_release unlocked;
   GlobalAlignmentSettings global;
