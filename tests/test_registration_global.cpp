@@ -3,7 +3,6 @@
 // shared landmarks are dealt out between the maps, and bad input.
 
 #include <cmath>
-#include <functional>
 #include <limits>
 #include <set>
 #include <stdexcept>
@@ -38,10 +37,9 @@ GlobalLandmarkAlignmentResult expectRecovered(const LandmarkMap& source, const L
   return result;
 }
 
-/// Mini-maps of frames [0, first_last] and [second_first, ...] of the real map with the landmarks both saw dealt out
-/// by id parity (the first keeps the even ones), as wicp_global_sweep --disjoint makes them; at least 2 observations.
-std::pair<LandmarkMap, LandmarkMap> disjointPair(const LandmarkMap& map, FrameId first_last, FrameId second_first) {
-  LandmarkMap a = map.miniMap(0, first_last), b = map.miniMap(second_first, map.frames.rbegin()->first);
+/// The landmarks `a` and `b` both hold dealt out by id parity (`a` keeps the even ones), as wicp_global_sweep
+/// --disjoint does; then at least 2 observations each.
+std::pair<LandmarkMap, LandmarkMap> dealtOut(LandmarkMap a, LandmarkMap b) {
   std::set<LandmarkId> in_a, in_b;
   for (const auto& l : a.landmarks) in_a.insert(l.id);
   for (const auto& l : b.landmarks) in_b.insert(l.id);
@@ -56,21 +54,15 @@ std::pair<LandmarkMap, LandmarkMap> disjointPair(const LandmarkMap& map, FrameId
   return {a.withMinObservations(2), b.withMinObservations(2)};
 }
 
-/// The whole map and its mini-map of frames [first, last], the mini-map's landmarks dealt out by id parity (the
-/// mini-map keeps the even ones); at least 2 observations.
+/// Mini-maps of frames [0, first_last] and [second_first, ...] of the real map, dealt out (dealtOut).
+std::pair<LandmarkMap, LandmarkMap> disjointPair(const LandmarkMap& map, FrameId first_last, FrameId second_first) {
+  return dealtOut(map.miniMap(0, first_last), map.miniMap(second_first, map.frames.rbegin()->first));
+}
+
+/// The whole map and its mini-map of frames [first, last], dealt out (the mini-map keeps the even ids).
 std::pair<LandmarkMap, LandmarkMap> mapAndMiniMap(const LandmarkMap& map, FrameId first, FrameId last) {
-  LandmarkMap whole = map, mini = map.miniMap(first, last);
-  std::set<LandmarkId> in_mini;
-  for (const auto& l : mini.landmarks) in_mini.insert(l.id);
-  const auto keep = [](LandmarkMap& m, const std::function<bool(LandmarkId)>& kept) {
-    std::vector<Landmark> left;
-    for (const auto& l : m.landmarks)
-      if (kept(l.id)) left.push_back(l);
-    m.landmarks = left;
-  };
-  keep(whole, [&](LandmarkId id) { return !in_mini.count(id) || id % 2 == 1; });
-  keep(mini, [](LandmarkId id) { return id % 2 == 0; });
-  return {whole.withMinObservations(2), mini.withMinObservations(2)};
+  auto [mini, whole] = dealtOut(map.miniMap(first, last), map);
+  return {std::move(whole), std::move(mini)};
 }
 
 TEST(GlobalAlignment, RecoversYaw180OnDisjointHalvesOfTheRealMap) {

@@ -53,13 +53,17 @@ Points voxelFirsts(const Points& points, double cell) {
   return firsts;
 }
 
-/// voxelFirsts, then every n-th to stay within `max_points`.
-Points voxelSample(const Points& points, double cell, std::size_t max_points) {
-  const Points firsts = voxelFirsts(points, cell);
+/// Every n-th of `firsts` (voxelFirsts) to stay within `max_points`.
+Points strided(const Points& firsts, std::size_t max_points) {
   const std::size_t stride = (firsts.size() + max_points - 1) / max_points;
   Points sample;
   for (std::size_t i = 0; i < firsts.size(); i += stride) sample.push_back(firsts[i]);
   return sample;
+}
+
+/// voxelFirsts, then every n-th to stay within `max_points`.
+Points voxelSample(const Points& points, double cell, std::size_t max_points) {
+  return strided(voxelFirsts(points, cell), max_points);
 }
 
 /// The vote's sample cell (GlobalAlignmentSettings::sample_cell, 0: a third of the vote cell).
@@ -83,6 +87,11 @@ bool searchesReversed(std::size_t source_voxels, std::size_t target_voxels, cons
 /// The inlier radius: the settings' (GlobalAlignmentSettings::inlier_distance), or 2 target spacings.
 double inlierDistance(const GlobalAlignmentSettings& s, double spacing) {
   return s.inlier_distance > 0.0 ? s.inlier_distance : 2.0 * spacing;
+}
+
+/// The trimmed ICP's floor: the settings' (GlobalAlignmentSettings::min_distance), or 2 target spacings.
+double minDistance(const GlobalAlignmentSettings& s, double spacing) {
+  return s.min_distance > 0.0 ? s.min_distance : 2.0 * spacing;
 }
 
 pcl::PointCloud<pcl::PointXYZ> toCloud(const Points& points) {
@@ -629,8 +638,9 @@ void GlobalAlignment::setTarget(const Cloud& target) {
     fresh->small_buckets[Target::bucketKey(Target::bucketOf(fresh->points[i], fresh->small_bucket_size))].push_back(
         index);
   }
-  fresh->voxels = voxelFirsts(fresh->points, sampleCell(settings_)).size();
-  fresh->sample = voxelSample(fresh->points, sampleCell(settings_), settings_.max_target_samples);
+  const Points firsts = voxelFirsts(fresh->points, sampleCell(settings_));
+  fresh->voxels = firsts.size();
+  fresh->sample = strided(firsts, settings_.max_target_samples);
   target_ = std::move(fresh);
 }
 
@@ -660,7 +670,7 @@ GlobalAlignmentResult GlobalAlignment::alignReversed(const std::vector<Eigen::Ve
   reversed.setTarget(toCloud(source));
   const Eigen::Vector3d source_up = source_up_axis.norm() > 0.0 ? source_up_axis : up_axis;
   GlobalAlignmentResult result = reversed.align(toCloud(target_->points), up_axis, source_up, tilt_range_deg);
-  result.transformation = Eigen::Isometry3d(result.transformation).inverse().matrix();
+  result.transformation = inverseRigid(result.transformation);
   // The inlier figures the caller's way: of the source's points, against this target.
   result.target_spacing = target_->spacing;
   result.inlier_distance = inlierDistance(settings_, target_->spacing);
@@ -681,7 +691,7 @@ GlobalAlignmentResult GlobalAlignment::alignAsGiven(std::vector<Eigen::Vector3f>
   const Eigen::Matrix3d level = levellingRotation(source_up_axis, axis);
   for (auto& p : source) p = (level * p.cast<double>()).cast<float>();
   const double spacing = target_->spacing;
-  const double min_distance = s.min_distance > 0.0 ? s.min_distance : 2.0 * spacing;
+  const double min_distance = minDistance(s, spacing);
   const double inlier_distance = inlierDistance(s, spacing);
   const Points sample = voxelSample(source, sampleCell(s), s.max_source_samples);
 
@@ -777,7 +787,7 @@ GlobalAlignmentResult GlobalAlignment::finish(const Points& source, const Eigen:
                                               Eigen::Vector3d* inlier_centroid) const {
   const GlobalAlignmentSettings& s = settings_;
   const double spacing = target_->spacing;
-  const double min_distance = s.min_distance > 0.0 ? s.min_distance : 2.0 * spacing;
+  const double min_distance = minDistance(s, spacing);
   const double inlier_distance = inlierDistance(s, spacing);
   const TrimmedFit fit =
       trimmedIcp(source, *target_, start, start_distance, min_distance, s.shrink_factor, s.final_iterations);

@@ -8,17 +8,10 @@
 #include <utility>
 
 #include <pcl/common/io.h>
-#include <Eigen/Geometry>
+
+#include "weighted_icp/registration/rigid_motion.h"
 
 namespace weighted_icp {
-
-namespace {
-
-Eigen::Matrix4d inverse(const Eigen::Matrix4d& transformation) {
-  return Eigen::Isometry3d(transformation).inverse().matrix();
-}
-
-}  // namespace
 
 GlobalLandmarkAligner::GlobalLandmarkAligner(GlobalAlignmentSettings global, AlignmentSettings icp)
     : global_(std::move(global)), icp_settings_(icp) {
@@ -79,8 +72,8 @@ GlobalLandmarkAlignmentResult GlobalLandmarkAligner::finish(const LandmarkCloud:
   if (result.global.reversed) {
     // As the search did: the target onto the source (its points the better ones to seek counterparts), inverted.
     aligner.setTarget(source);
-    result.alignment = aligner.align(target_, inverse(result.global.transformation));
-    result.alignment.transformation = inverse(result.alignment.transformation);
+    result.alignment = aligner.align(target_, inverseRigid(result.global.transformation));
+    result.alignment.transformation = inverseRigid(result.alignment.transformation);
   } else {
     aligner.setTarget(target_);
     result.alignment = aligner.align(source, result.global.transformation);

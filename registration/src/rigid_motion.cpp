@@ -55,6 +55,10 @@ double rotationErrorDeg(const Eigen::Isometry3d& estimate, const Eigen::Isometry
   return Eigen::AngleAxisd(delta).angle() * 180.0 / M_PI;
 }
 
+Eigen::Matrix4d inverseRigid(const Eigen::Matrix4d& transformation) {
+  return Eigen::Isometry3d(transformation).inverse().matrix();
+}
+
 double translationError(const Eigen::Isometry3d& estimate, const Eigen::Isometry3d& truth) {
   return (estimate.translation() - truth.translation()).norm();
 }

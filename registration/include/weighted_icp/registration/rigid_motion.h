@@ -18,6 +18,8 @@ struct Displacement {
   std::string toString() const;
 };
 
+/// The inverse of a rigid transformation (rotation and translation) as a 4x4 matrix.
+Eigen::Matrix4d inverseRigid(const Eigen::Matrix4d& transformation);
 /// Angle of the rotation that takes `estimate` to `truth`, in degrees.
 double rotationErrorDeg(const Eigen::Isometry3d& estimate, const Eigen::Isometry3d& truth);
 /// Distance between the translations of `estimate` and `truth`, in metres.
