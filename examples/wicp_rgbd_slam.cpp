@@ -478,23 +478,26 @@ std::map<std::string, std::string> defaultChoiceWords(const frontend::FrontendOp
   return words;
 }
 
-/// The usage text and the general options: input, range, output, matcher, gate, loop closing.
+/// The usage text above the general options.
+constexpr const char* kUsage =
+    "wicp_rgbd_slam [--dataset DIR] [--camera fr1|fr2|fr3|FILE.yaml] [--first-frame N] [--max-frames N]\n"
+    "               [--minimap-keyframes N] [--no-loop-closure | --vocabulary FILE] --out DIR [--overwrite]\n"
+    "Feature-based RGB-D SLAM producing weighted landmark maps, closing loops (place recognition with\n"
+    "the default vocabulary built with the tools, geometric verification, pose graph) unless\n"
+    "--no-loop-closure. DIR gets trajectory.txt, session.txt, minimaps/, map.ply, graph.txt, session/\n"
+    "(for wicp_merge) and report.json (docs/mapping.md). The outputs are built beside DIR\n"
+    "and published in one rename: DIR holds a whole run or is left as it was.\n"
+    "Exit 0: done (no ATE when the ground truth shares too few timestamps: a warning, and\n"
+    "report.json says why under \"ate_unavailable\"). Exit 1, with an error line and nothing\n"
+    "written: no frame tracked or no landmark mapped (black images, no depth, a wrong camera),\n"
+    "or any other error. Exit 2: bad command line. Exit 130/143: stopped by SIGINT/SIGTERM,\n"
+    "nothing written. Options";
+
+/// The general options: input, range, output, matcher, gate, loop closing.
 po::options_description generalOptions(SlamCommand& c) {
   frontend::FrontendOptions& frontend = c.closing.slam.frontend;
   mapping::LoopClosingOptions& loop_closing = c.closing.loop_closing;
-  po::options_description description(
-      "wicp_rgbd_slam [--dataset DIR] [--camera fr1|fr2|fr3|FILE.yaml] [--first-frame N] [--max-frames N]\n"
-      "               [--minimap-keyframes N] [--no-loop-closure | --vocabulary FILE] --out DIR [--overwrite]\n"
-      "Feature-based RGB-D SLAM producing weighted landmark maps, closing loops (place recognition with\n"
-      "the default vocabulary built with the tools, geometric verification, pose graph) unless\n"
-      "--no-loop-closure. DIR gets trajectory.txt, session.txt, minimaps/, map.ply, graph.txt, session/\n"
-      "(for wicp_merge) and report.json (docs/mapping.md). The outputs are built beside DIR\n"
-      "and published in one rename: DIR holds a whole run or is left as it was.\n"
-      "Exit 0: done (no ATE when the ground truth shares too few timestamps: a warning, and\n"
-      "report.json says why under \"ate_unavailable\"). Exit 1, with an error line and nothing\n"
-      "written: no frame tracked or no landmark mapped (black images, no depth, a wrong camera),\n"
-      "or any other error. Exit 2: bad command line. Exit 130/143: stopped by SIGINT/SIGTERM,\n"
-      "nothing written. Options");
+  po::options_description description(kUsage);
   // One option per line reads as a table: not reflowed.
   // clang-format off
   description.add_options()

@@ -47,6 +47,15 @@ bool propertyLine(const std::vector<std::string>& w) {
   return list || (w.size() == 3 && knownType(w[1]));
 }
 
+/// Why "element NAME COUNT" (split into words) is refused in a file of file_size bytes; empty when it is not.
+std::string elementLineError(const std::vector<std::string>& w, std::uint64_t file_size) {
+  if (w.size() != 3 || !plainDigits(w[2])) return "expected 'element NAME COUNT' with COUNT a number of 0 or more";
+  if (std::stoull(w[2]) <= file_size) return {};
+  return "the header declares more points than the file holds (" + w[2] +
+         (w[1] == "vertex" ? " vertices" : " instances of element " + w[1].substr(0, 32)) + " in a file of " +
+         std::to_string(file_size) + " bytes)";
+}
+
 }  // namespace
 
 void requireWellFormedPlyHeader(std::istream& in, const std::string& path, std::uint64_t file_size) {
@@ -89,12 +98,8 @@ void requireWellFormedPlyHeader(std::istream& in, const std::string& path, std::
     }
     if (w[0] == "element") {
       closeElement();
-      if (w.size() != 3 || !plainDigits(w[2])) fail("expected 'element NAME COUNT' with COUNT a number of 0 or more");
+      if (const std::string why = elementLineError(w, file_size); !why.empty()) fail(why);
       count = std::stoull(w[2]);
-      if (count > file_size)
-        fail("the header declares more points than the file holds (" + w[2] +
-             (w[1] == "vertex" ? " vertices" : " instances of element " + w[1].substr(0, 32)) + " in a file of " +
-             std::to_string(file_size) + " bytes)");
       instances += count;
       properties = 0;
       in_element = true;

@@ -306,6 +306,17 @@ std::optional<IcpCheck> checkLocalClouds(const LandmarkMap& query_local, const L
 
 /// Where the query camera is in the candidate's map: the query keyframe's descriptor matches to the candidate's
 /// local landmarks and the RANSAC PnP pose they give (any rotation); the check that refuses them, if one does, and why.
+/// How far the landmark ICP moved PnP's pose of the query camera (pose_wc in the match map: pnp_query_wc, then
+/// icp_query_wc), and how many of PnP's inliers the moved pose still explains within reprojection_px.
+void measureAgreement(LoopVerification& result, const Eigen::Isometry3d& pnp_query_wc,
+                      const Eigen::Isometry3d& icp_query_wc, const Matches& matches, const std::vector<int>& inliers,
+                      const PinholeCamera& camera, double reprojection_px) {
+  const Eigen::Isometry3d change = pnp_query_wc.inverse() * icp_query_wc;
+  result.icp_correction_m = change.translation().norm();
+  result.icp_correction_deg = Eigen::AngleAxisd(change.linear()).angle() * kRadiansToDegrees;
+  result.icp_explained_inliers = inliersExplained(matches, inliers, icp_query_wc, camera, reprojection_px);
+}
+
 struct Located {
   Matches matches;
   frontend::PoseEstimate pnp;
@@ -410,11 +421,8 @@ LoopVerification LoopVerifier::verify(const KeyframeSnapshot& query_map, fronten
   result.icp_weighted = icp.weighted;
 
   // 3. Do PnP and the landmark geometry agree, and do the clouds overlap closely?
-  const Eigen::Isometry3d change = (guess * query_wc).inverse() * (correction * query_wc);
-  result.icp_correction_m = change.translation().norm();
-  result.icp_correction_deg = Eigen::AngleAxisd(change.linear()).angle() * kRadiansToDegrees;
-  result.icp_explained_inliers =
-      inliersExplained(matches, pnp.inliers, correction * query_wc, camera_, options_.pnp.ransac_reprojection_px);
+  measureAgreement(result, guess * query_wc, correction * query_wc, matches, pnp.inliers, camera_,
+                   options_.pnp.ransac_reprojection_px);
   result.overlap = overlap.fraction;
   result.constraint.fitness = overlap.fitness;
   const bool pnp_edge = options_.edge == LoopEdgeSource::Pnp;
@@ -422,12 +430,12 @@ LoopVerification LoopVerifier::verify(const KeyframeSnapshot& query_map, fronten
       pnp_edge ? result.pnp_query_in_match : Eigen::Isometry3d(match_wc.inverse() * correction * query_wc);
   if (const auto [check, why] = disagreement(result, options_, prior); !check.empty()) return refuse(check, why);
 
-  result.constraint.information = pnp_edge ? pnpInformation(matches, pnp.inliers, pnp.pose_wc, match_wc, camera_,
-                                                            pnp.rms_reprojection_px, options_.min_pixel_sigma_px) /
-                                                 options_.covariance_inflation
-                                           : icpInformation(query_local, match_local, overlap, query_wc, match_wc,
-                                                            correction, result.constraint.query_in_match) /
-                                                 options_.covariance_inflation;
+  const Eigen::Matrix<double, 6, 6> information =
+      pnp_edge ? pnpInformation(matches, pnp.inliers, pnp.pose_wc, match_wc, camera_, pnp.rms_reprojection_px,
+                                options_.min_pixel_sigma_px)
+               : icpInformation(query_local, match_local, overlap, query_wc, match_wc, correction,
+                                result.constraint.query_in_match);
+  result.constraint.information = information / options_.covariance_inflation;
   result.accepted = true;
   return result;
 }
