@@ -4,7 +4,6 @@
 
 #include <cmath>
 #include <limits>
-#include <set>
 #include <stdexcept>
 #include <string>
 
@@ -12,6 +11,7 @@
 
 #include <pcl/common/io.h>
 
+#include "test_landmark_pairs.h"
 #include "test_support.h"
 #include "weighted_icp/io/map_format.h"
 #include "weighted_icp/registration/global_landmark_alignment.h"
@@ -20,6 +20,8 @@
 namespace {
 
 using namespace weighted_icp;
+using weighted_icp::testing::disjointPair;
+using weighted_icp::testing::mapAndMiniMap;
 
 /// Aligns `source`, displaced by `d`, onto `target`, checks the result undoes the displacement and returns it.
 GlobalLandmarkAlignmentResult expectRecovered(const LandmarkMap& source, const LandmarkMap& target,
@@ -35,34 +37,6 @@ GlobalLandmarkAlignmentResult expectRecovered(const LandmarkMap& source, const L
   EXPECT_GT(result.global.inlier_fraction, 0.0);
   EXPECT_FALSE(result.alignment.degenerate);
   return result;
-}
-
-/// The landmarks `a` and `b` both hold dealt out by id parity (`a` keeps the even ones), as wicp_global_sweep
-/// --disjoint does; then at least 2 observations each.
-std::pair<LandmarkMap, LandmarkMap> dealtOut(LandmarkMap a, LandmarkMap b) {
-  std::set<LandmarkId> in_a, in_b;
-  for (const auto& l : a.landmarks) in_a.insert(l.id);
-  for (const auto& l : b.landmarks) in_b.insert(l.id);
-  const auto keep = [](LandmarkMap& m, const std::set<LandmarkId>& other, LandmarkId parity) {
-    std::vector<Landmark> kept;
-    for (const auto& l : m.landmarks)
-      if (!other.count(l.id) || l.id % 2 == parity) kept.push_back(l);
-    m.landmarks = kept;
-  };
-  keep(a, in_b, 0);
-  keep(b, in_a, 1);
-  return {a.withMinObservations(2), b.withMinObservations(2)};
-}
-
-/// Mini-maps of frames [0, first_last] and [second_first, ...] of the real map, dealt out (dealtOut).
-std::pair<LandmarkMap, LandmarkMap> disjointPair(const LandmarkMap& map, FrameId first_last, FrameId second_first) {
-  return dealtOut(map.miniMap(0, first_last), map.miniMap(second_first, map.frames.rbegin()->first));
-}
-
-/// The whole map and its mini-map of frames [first, last], dealt out (the mini-map keeps the even ids).
-std::pair<LandmarkMap, LandmarkMap> mapAndMiniMap(const LandmarkMap& map, FrameId first, FrameId last) {
-  auto [mini, whole] = dealtOut(map.miniMap(first, last), map);
-  return {std::move(whole), std::move(mini)};
 }
 
 TEST(GlobalAlignment, RecoversYaw180OnDisjointHalvesOfTheRealMap) {

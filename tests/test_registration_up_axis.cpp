@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include "test_landmark_pairs.h"
 #include "test_support.h"
 #include "weighted_icp/io/map_format.h"
 #include "weighted_icp/registration/global_landmark_alignment.h"
@@ -67,6 +68,37 @@ TEST(UpAxis, CamerasOfOneHeadingFallBackToTheirMeanUpPerpendicularToTheirRows) {
   EXPECT_FALSE(e.from_rows);
   EXPECT_LT(angleDeg(e.axis, up), 1e-6) << e.axis.transpose();
   EXPECT_LT(e.row_tilt_deg, 1e-6);
+}
+
+// Cameras of one heading all pitched 25° down: their mean down direction is 25° off the world's up, about their rows.
+// The estimate says how little the headings vary, and the levellings searched beside it, turned about the rows,
+// come within 5° of the truth; cameras of many headings get none.
+TEST(UpAxis, CamerasOfOneHeadingAreAlsoSearchedPitchedAboutTheirRows) {
+  const Eigen::Vector3d up = Eigen::Vector3d(0.1, -0.8, -0.5).normalized();
+  const UpAxisEstimate one = estimateUpAxis(uprightCameras(up, {30}, {-27, -25, -23}, 2.0));
+  EXPECT_FALSE(one.from_rows);
+  EXPECT_LT(one.heading_spread, 0.01);
+  EXPECT_NEAR(angleDeg(one.axis, up), 25.0, 2.0);
+  EXPECT_LT(std::abs(one.rows.dot(up)), 0.05);  // the rows are level
+  const std::vector<Eigen::Vector3d> pitched = pitchedUpAxes(one, 0.1, {-15.0, 15.0, -30.0, 30.0});
+  ASSERT_EQ(pitched.size(), 4u);
+  double nearest = 180.0;
+  for (const Eigen::Vector3d& axis : pitched) {
+    EXPECT_NEAR(angleDeg(axis, one.axis), 22.5, 7.6);  // 15° or 30° from the estimate
+    nearest = std::min(nearest, angleDeg(axis, up));
+  }
+  EXPECT_LT(nearest, 5.0);
+
+  const UpAxisEstimate many = estimateUpAxis(uprightCameras(up, {0, 40, 75, 130}, {-25}, 2.0));
+  EXPECT_GT(many.heading_spread, 0.1);
+  EXPECT_TRUE(pitchedUpAxes(many, 0.1, {-15.0, 15.0}).empty());
+  const SharedUpAxes axes = chooseUpAxes(one, many);
+  ASSERT_EQ(axes.alternatives.size(), kPitchedLevellingsDeg.size());  // the source pitched, the target its own
+  for (const auto& [source, target] : axes.alternatives) {
+    EXPECT_GT(angleDeg(source, one.axis), 14.0);
+    EXPECT_LT(angleDeg(target, many.axis), 1e-9);
+  }
+  EXPECT_TRUE(chooseUpAxes(many, many).alternatives.empty());
 }
 
 TEST(UpAxis, NoCameraMeansZAndBadSettingsAreRefused) {
@@ -314,6 +346,38 @@ TEST(UpAxis, MapsTurnedAboutTheirOwnZAreStillRecoveredByTheSearchAboutZ) {
       EXPECT_EQ(result.target_up_axis, Eigen::Vector3d::UnitZ());
     }
   }
+}
+
+// The real map in its first camera's frame, and its mini-map of frames 150-189 (the landmarks both hold dealt out),
+// turned 90° about the true up: the mini-map's 40 cameras face within 31° of one another (heading spread 0.07), and
+// their up estimate is 37° off, turned about their rows. Searched about its estimate (tilts of 8°) and about z, the
+// search ends over 10° off; the levellings pitched about the rows, searched as well, find the truth.
+TEST(UpAxis, AMiniMapWhoseCamerasFaceOneWayIsFoundByALevellingPitchedAboutItsRows) {
+  WEIGHTED_ICP_REQUIRE_FILE(weighted_icp::testing::realMapPath());
+  LandmarkMap map = io::readLandmarkMap(weighted_icp::testing::realMapPath().string());
+  const Eigen::Isometry3d first = map.frames.begin()->second;
+  map.transform(first.inverse());
+  auto [whole, mini] = weighted_icp::testing::mapAndMiniMap(map, 150, 189);
+  const Eigen::Vector3d up = first.linear().transpose() * Eigen::Vector3d::UnitZ();
+  Eigen::Isometry3d moved = Eigen::Isometry3d::Identity();
+  moved.linear() = Eigen::AngleAxisd(M_PI / 2.0, up).toRotationMatrix();
+  mini.transform(moved);
+  const UpAxisEstimate estimate = estimateUpAxis(mini.frames);
+  ASSERT_GT(angleDeg(estimate.axis, up), 30.0);
+
+  GlobalLandmarkAligner aligner;
+  aligner.setTarget(toLandmarkCloud(whole, CovarianceWeight{}));
+  const LandmarkCloud::Ptr source = toLandmarkCloud(mini, CovarianceWeight{});
+  SharedUpAxes axes = chooseUpAxes(estimate, estimateUpAxis(whole.frames));
+  ASSERT_FALSE(axes.alternatives.empty());
+  const GlobalLandmarkAlignmentResult found = aligner.align(source, axes);
+  const Eigen::Isometry3d result(found.alignment.transformation);
+  EXPECT_LT(rotationErrorDeg(result, moved.inverse()), 2.0);
+  EXPECT_LT(translationError(result, moved.inverse()), 0.05);
+  EXPECT_GT(angleDeg(found.source_up_axis, estimate.axis), 10.0);  // a pitched levelling won
+  axes.alternatives.clear();
+  const Eigen::Isometry3d without(aligner.align(source, axes).alignment.transformation);
+  EXPECT_GT(rotationErrorDeg(without, moved.inverse()), 10.0);
 }
 
 // The rotations' votes, the hypotheses' refinement and the tilts are shared out on threads: one thread or two,

@@ -39,6 +39,21 @@ std::string estimateText(const char* which, const UpAxisEstimate& e) {
   return out.str();
 }
 
+/// ", the source's estimate also turned about its cameras' rows ..." when chooseUpAxes added such levellings.
+std::string pitchedText(const SharedUpAxes& axes) {
+  bool source = false, target = false;
+  for (const auto& [source_axis, target_axis] : axes.alternatives) {
+    source = source || !source_axis.isApprox(axes.source);
+    target = target || !target_axis.isApprox(axes.target);
+  }
+  if (!source && !target) return "";
+  return std::string(", ") +
+         (source && target ? "each map's estimate"
+          : source         ? "the source's"
+                           : "the target's") +
+         " also turned 15 and 30 deg each way about its cameras' rows (they face about one way)";
+}
+
 }  // namespace
 
 ResolvedUpAxes resolveUpAxes(const UpAxisOption& option, const LandmarkMap& source, const LandmarkMap& target) {
@@ -58,7 +73,8 @@ ResolvedUpAxes resolveUpAxes(const UpAxisOption& option, const LandmarkMap& sour
         " deg (their cameras are level about z: " + estimateText("source", s) + ", " + estimateText("target", t) + ")";
   else
     resolved.description = "each map levelled by its cameras (" + estimateText("source", s) + ", " +
-                           estimateText("target", t) + "), with tilts, and the search about z tried as well";
+                           estimateText("target", t) + "), with tilts" + pitchedText(resolved.axes) +
+                           ", and the search about z tried as well";
   return resolved;
 }
 

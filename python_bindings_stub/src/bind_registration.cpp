@@ -213,7 +213,9 @@ void bindRegistration(py::module_& m) {
         "a LandmarkMap source, else 1 each.\n"
         "up_axis: 'auto' (two LandmarkMaps: z, with tilts up to 16 degrees, when both maps' "
         "cameras are level about it within 8 degrees, else "
-        "each map levelled by its own cameras, with tilts, and z tried as well; arrays: z), 'z', or three numbers "
+        "each map levelled by its own cameras, with tilts, a map whose cameras face about one way also with its "
+        "estimate turned 15 and 30 degrees each way about their rows, and z tried as well; arrays: z), 'z', or three "
+        "numbers "
         "for both maps.\n"
         "The GIL is released while it runs.");
   m.def("weighted_correspondences", &weightedCorrespondences, py::arg("source"), py::arg("target"),

@@ -45,6 +45,15 @@ GlobalLandmarkAlignmentResult GlobalLandmarkAligner::align(const LandmarkCloud::
   pcl::copyPointCloud(*source, xyz);
   GlobalAlignmentResult best = global_.align(xyz, axes.source, axes.target, axes.tilt_range_deg);
   Eigen::Vector3d source_up = axes.source, target_up = axes.target;
+  for (const auto& [source_alternative, target_alternative] : axes.alternatives) {
+    GlobalAlignmentResult other = global_.align(xyz, source_alternative, target_alternative, axes.tilt_range_deg);
+    other.time_ms += best.time_ms;
+    if (other.inlier_score > best.inlier_score) {
+      best = std::move(other), source_up = source_alternative, target_up = target_alternative;
+    } else {
+      best.time_ms = other.time_ms;
+    }
+  }
   if (axes.also_try_z) {
     GlobalAlignmentResult z = global_.align(xyz, Eigen::Vector3d::UnitZ(), Eigen::Vector3d::UnitZ(), 0.0);
     // A tie keeps the maps' own z, as before the axes were estimated. No margin in its favour: on a sparse map

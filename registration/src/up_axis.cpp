@@ -28,6 +28,8 @@ UpAxisEstimate estimateUpAxis(const std::map<FrameId, Eigen::Isometry3d>& camera
   rows /= static_cast<double>(estimate.cameras);
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(rows);
   const Eigen::Vector3d spread = solver.eigenvalues();  // ascending
+  estimate.rows = solver.eigenvectors().col(2);
+  estimate.heading_spread = spread(1);
   Eigen::Vector3d axis;
   estimate.from_rows = spread(1) >= min_heading_spread;
   if (estimate.from_rows) {
@@ -51,10 +53,21 @@ UpAxisEstimate estimateUpAxis(const std::map<FrameId, Eigen::Isometry3d>& camera
   return estimate;
 }
 
+std::vector<Eigen::Vector3d> pitchedUpAxes(const UpAxisEstimate& estimate, double max_spread,
+                                           const std::vector<double>& pitches_deg) {
+  std::vector<Eigen::Vector3d> axes;
+  if (estimate.cameras == 0 || !(estimate.heading_spread < max_spread)) return axes;
+  for (const double pitch : pitches_deg)
+    axes.push_back((Eigen::AngleAxisd(pitch * M_PI / 180.0, estimate.rows.normalized()) * estimate.axis).normalized());
+  return axes;
+}
+
 SharedUpAxes chooseUpAxes(const UpAxisEstimate& source_estimate, const UpAxisEstimate& target_estimate,
-                          double z_tolerance_deg) {
+                          double z_tolerance_deg, double pitch_search_spread) {
   if (!(z_tolerance_deg >= 0.0 && z_tolerance_deg <= 90.0))
     throw std::invalid_argument("chooseUpAxes: z_tolerance_deg must be in [0, 90]");
+  if (!(pitch_search_spread >= 0.0 && pitch_search_spread <= 0.5))
+    throw std::invalid_argument("chooseUpAxes: pitch_search_spread must be in [0, 0.5]");
   const auto z_up = [&](const UpAxisEstimate& e) {
     return std::abs(e.axis.normalized().z()) >= std::cos(z_tolerance_deg * M_PI / 180.0);
   };
@@ -70,6 +83,13 @@ SharedUpAxes chooseUpAxes(const UpAxisEstimate& source_estimate, const UpAxisEst
   axes.target = target_estimate.axis.normalized();
   axes.tilt_range_deg = 8.0;
   axes.also_try_z = true;
+  // A map whose cameras face about one way fixes its up axis only to within a turn about their rows (their pitch,
+  // or their roll over few headings: 22-37 deg off on mini-maps of fr3 and of the real map in its first camera's
+  // frame); the search's tilts reach 8 deg, so the estimate is also searched turned about the rows.
+  for (const Eigen::Vector3d& pitched : pitchedUpAxes(source_estimate, pitch_search_spread, kPitchedLevellingsDeg))
+    axes.alternatives.emplace_back(pitched, axes.target);
+  for (const Eigen::Vector3d& pitched : pitchedUpAxes(target_estimate, pitch_search_spread, kPitchedLevellingsDeg))
+    axes.alternatives.emplace_back(axes.source, pitched);
   return axes;
 }
 

@@ -57,7 +57,8 @@ class GlobalLandmarkAligner {
   ///                target onto it (GlobalAlignmentSettings::reverse_larger_source)
   GlobalLandmarkAlignmentResult align(const LandmarkCloud::ConstPtr& source);
   /// @brief As align(source), the search about the given up axes (chooseUpAxes(): each map levelled by its own,
-  /// with tilts, and z tried as well when `axes.also_try_z`; the search with the higher inlier score kept).
+  /// with tilts, then each of `axes.alternatives`, and z tried as well when `axes.also_try_z`; the search with the
+  /// highest inlier score kept, ties to the earlier but z's; the time reported is all the searches').
   /// @param source  as align(source)
   /// @param axes    the source's and the target's up axes; the settings' up_axis and tilt_range_deg give way
   GlobalLandmarkAlignmentResult align(const LandmarkCloud::ConstPtr& source, const SharedUpAxes& axes);

@@ -10,6 +10,7 @@
 #include <cstddef>
 #include <map>
 #include <utility>
+#include <vector>
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -30,6 +31,12 @@ struct UpAxisEstimate {
   /// True when the rows' headings varied enough to fix the axis by themselves; false when it is the cameras'
   /// mean down direction (-y) made perpendicular to their common rows (one heading, or a single camera).
   bool from_rows = false;
+  /// The cameras' main row direction (unit; the outer products' largest eigenvector): the axis about which the
+  /// estimate is least sure when the headings vary little (a camera's pitch, or its roll over few headings).
+  Eigen::Vector3d rows = Eigen::Vector3d::UnitX();
+  /// How much the headings vary: the outer products' second eigenvalue (0 for one heading; sin^2 of half the angle
+  /// between two headings; 0.5 for headings all round).
+  double heading_spread = 0.0;
 };
 
 /// @brief Estimates the up axis from camera-to-world poses: the eigenvector of the smallest eigenvalue of the
@@ -56,24 +63,46 @@ struct SharedUpAxes {
   /// (the higher GlobalAlignmentResult::inlier_score): the estimates are a guess, and two maps of one frame displaced
   /// about its z axis (as a test of a map written in a camera's frame would) share z exactly.
   bool also_try_z = false;
+  /// Further levellings searched, each as (source axis, target axis) with tilt_range_deg, the one whose search has
+  /// the highest inlier score kept (ties to the earlier, the estimates' own first): a map whose cameras face about
+  /// one way fixes its up axis only to within a turn about their rows (chooseUpAxes).
+  std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> alternatives;
   /// True when both are +z and nothing else is tried.
   bool zUpOnly() const {
-    return !also_try_z && source == Eigen::Vector3d::UnitZ() && target == Eigen::Vector3d::UnitZ();
+    return !also_try_z && alternatives.empty() && source == Eigen::Vector3d::UnitZ() &&
+           target == Eigen::Vector3d::UnitZ();
   }
 };
+
+/// @brief The turns about a map's rows direction (degrees) at which chooseUpAxes also levels a map whose cameras face
+/// about one way: 15° apart, so that with the search's tilts of 8° each way they cover 38° each way of the estimate.
+inline const std::vector<double> kPitchedLevellingsDeg = {-15.0, 15.0, -30.0, 30.0};
+
+/// @brief Up axes a map's estimate may be turned to when its cameras face about one way: the estimate turned about
+/// its rows direction (UpAxisEstimate::rows) by each of `pitches_deg`, when its heading spread is below `max_spread`;
+/// none otherwise.
+/// @param estimate  estimateUpAxis() of the map
+/// @param max_spread  heading spread below which the estimate is searched pitched
+/// @param pitches_deg  turns about the rows direction, in degrees
+std::vector<Eigen::Vector3d> pitchedUpAxes(const UpAxisEstimate& estimate, double max_spread,
+                                           const std::vector<double>& pitches_deg);
 
 /// @brief Chooses the up axes for aligning `source` onto `target`: +z for both when both maps' estimated up
 /// axes are within `z_tolerance_deg` of ±z (maps written gravity-aligned, as the paper's and TUM's: levelling
 /// such maps by their estimates would only add the estimates' own errors), searched with tilts of up to twice
 /// the tolerance; +z without tilts when either map has no camera; otherwise each map's own estimate with tilts,
-/// and z tried as well.
+/// and z tried as well, and for a map whose cameras face about one way its estimate turned about their rows.
 /// @param source_estimate  estimateUpAxis() of the source map
 /// @param target_estimate  estimateUpAxis() of the target map
 /// @param z_tolerance_deg  largest angle to ±z for a map to count as z-up: 8° by default, just above the
 ///        estimates' own error on a z-up map (the paper's real map: 3.4° whole, 0.4-7.2° for its mini-maps), so
 ///        that a map written 10-15° off gravity is levelled rather than searched about a wrong axis (15° until
 ///        2026-11-27: 53-58 of 100 such pairs found, 90 since; docs/global_alignment.md)
+/// @param pitch_search_spread  for maps levelled by their own estimates: a map whose heading spread
+///        (UpAxisEstimate::heading_spread) is below this is also searched levelled by its estimate turned about its
+///        rows by each of kPitchedLevellingsDeg (SharedUpAxes::alternatives, the other map by its own estimate). 0.1
+///        is two headings 37° apart; 0 for none (docs/global_alignment.md, "Cameras that face one way")
 SharedUpAxes chooseUpAxes(const UpAxisEstimate& source_estimate, const UpAxisEstimate& target_estimate,
-                          double z_tolerance_deg = 8.0);
+                          double z_tolerance_deg = 8.0, double pitch_search_spread = 0.1);
 
 }  // namespace weighted_icp
