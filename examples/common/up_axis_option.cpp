@@ -51,7 +51,7 @@ std::string pitchedText(const SharedUpAxes& axes) {
          (source && target ? "each map's estimate"
           : source         ? "the source's"
                            : "the target's") +
-         " also turned 15 and 30 deg each way about its cameras' rows (they face about one way)";
+         " also turned 15, 30 and 45 deg each way about its cameras' rows (they face about one way)";
 }
 
 }  // namespace

@@ -202,22 +202,23 @@ void bindRegistration(py::module_& m) {
         "else 1 each.\n"
         "strategy: 'base' (plain ICP, k = 1), 'covariance', 'observations', 'mean-distance', or None.\n"
         "The GIL is released while ICP runs.");
-  m.def("align_global", &alignGlobal, py::arg("source"), py::arg("target"), py::arg("target_weights") = py::none(),
-        py::arg("k") = 5, py::arg("strategy") = py::none(), py::arg("max_iterations") = 150,
-        py::arg("up_axis") = "auto", py::arg("threads") = 0,
-        "Aligns source onto target from any start, as wicp_align --global: a search over rotations about the up "
-        "axis and every translation, partial overlap allowed, then the weighted ICP with its refinement stage.\n\n"
-        "source, target, target_weights, k, strategy: as align(). A source much larger than the target (its vote "
-        "sample would meet few of the target's) "
-        "is aligned the other way (the target onto it, the result inverted), weighted by the strategy's weights of "
-        "a LandmarkMap source, else 1 each.\n"
-        "up_axis: 'auto' (two LandmarkMaps: z, with tilts up to 16 degrees, when both maps' "
-        "cameras are level about it within 8 degrees, else "
-        "each map levelled by its own cameras, with tilts, a map whose cameras face about one way also with its "
-        "estimate turned 15 and 30 degrees each way about their rows, and z tried as well; arrays: z), 'z', or three "
-        "numbers "
-        "for both maps.\n"
-        "The GIL is released while it runs.");
+  m.def(
+      "align_global", &alignGlobal, py::arg("source"), py::arg("target"), py::arg("target_weights") = py::none(),
+      py::arg("k") = 5, py::arg("strategy") = py::none(), py::arg("max_iterations") = 150, py::arg("up_axis") = "auto",
+      py::arg("threads") = 0,
+      "Aligns source onto target from any start, as wicp_align --global: a search over rotations about the up "
+      "axis and every translation, partial overlap allowed, then the weighted ICP with its refinement stage.\n\n"
+      "source, target, target_weights, k, strategy: as align(). A source much larger than the target (its vote "
+      "sample would meet few of the target's) "
+      "is aligned the other way (the target onto it, the result inverted), weighted by the strategy's weights of "
+      "a LandmarkMap source, else 1 each.\n"
+      "up_axis: 'auto' (two LandmarkMaps: z, with tilts up to 16 degrees, when both maps' "
+      "cameras are level about it within 8 degrees, else "
+      "each map levelled by its own cameras, with tilts, a map whose cameras face about one way also with its "
+      "estimate turned 15, 30 and 45 degrees each way about their rows, and z tried as well; arrays: z), 'z', or three "
+      "numbers "
+      "for both maps.\n"
+      "The GIL is released while it runs.");
   m.def("weighted_correspondences", &weightedCorrespondences, py::arg("source"), py::arg("target"),
         py::arg("weights") = py::none(), py::arg("k") = 5, py::arg("max_distance") = py::none(), py::arg("threads") = 0,
         "The weighted correspondence rule: for each source point, among its k nearest target points within "

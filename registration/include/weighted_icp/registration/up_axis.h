@@ -75,8 +75,9 @@ struct SharedUpAxes {
 };
 
 /// @brief The turns about a map's rows direction (degrees) at which chooseUpAxes also levels a map whose cameras face
-/// about one way: 15° apart, so that with the search's tilts of 8° each way they cover 38° each way of the estimate.
-inline const std::vector<double> kPitchedLevellingsDeg = {-15.0, 15.0, -30.0, 30.0};
+/// about one way: 15° apart, so that with the search's tilts of 8° each way they cover 53° each way of the estimate
+/// (a camera looking down at a desk: fr1 xyz's 42°; fr3 teddy's mini-maps 22-24°, the real map's 26-37° off).
+inline const std::vector<double> kPitchedLevellingsDeg = {-15.0, 15.0, -30.0, 30.0, -45.0, 45.0};
 
 /// @brief Up axes a map's estimate may be turned to when its cameras face about one way: the estimate turned about
 /// its rows direction (UpAxisEstimate::rows) by each of `pitches_deg`, when its heading spread is below `max_spread`;
@@ -100,9 +101,10 @@ std::vector<Eigen::Vector3d> pitchedUpAxes(const UpAxisEstimate& estimate, doubl
 ///        2026-11-27: 53-58 of 100 such pairs found, 90 since; docs/global_alignment.md)
 /// @param pitch_search_spread  for maps levelled by their own estimates: a map whose heading spread
 ///        (UpAxisEstimate::heading_spread) is below this is also searched levelled by its estimate turned about its
-///        rows by each of kPitchedLevellingsDeg (SharedUpAxes::alternatives, the other map by its own estimate). 0.1
-///        is two headings 37° apart; 0 for none (docs/global_alignment.md, "Cameras that face one way")
+///        rows by each of kPitchedLevellingsDeg (SharedUpAxes::alternatives, the other map by its own estimate). 0.2
+///        is two headings 53° apart (a mini-map of the real map with a spread of 0.17 estimates 12° off); 0 for none
+///        (docs/global_alignment.md, "Cameras that face one way")
 SharedUpAxes chooseUpAxes(const UpAxisEstimate& source_estimate, const UpAxisEstimate& target_estimate,
-                          double z_tolerance_deg = 8.0, double pitch_search_spread = 0.1);
+                          double z_tolerance_deg = 8.0, double pitch_search_spread = 0.2);
 
 }  // namespace weighted_icp
