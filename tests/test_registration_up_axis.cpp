@@ -100,6 +100,20 @@ TEST(UpAxis, CamerasOfOneHeadingAreAlsoSearchedPitchedAboutTheirRows) {
     EXPECT_LT(angleDeg(target, many.axis), 1e-9);
   }
   EXPECT_TRUE(chooseUpAxes(many, many).alternatives.empty());
+  // Both facing one way: both turned by the same angle about their own rows, each map once per angle.
+  const UpAxisEstimate other = estimateUpAxis(uprightCameras(up, {-60}, {-27, -25, -23}, 2.0));
+  const SharedUpAxes both = chooseUpAxes(one, other);
+  ASSERT_EQ(both.alternatives.size(), kPitchedLevellingsDeg.size());
+  for (std::size_t k = 0; k < kPitchedLevellingsDeg.size(); ++k) {
+    EXPECT_NEAR(angleDeg(both.alternatives[k].first, one.axis), std::abs(kPitchedLevellingsDeg[k]), 1e-6);
+    EXPECT_NEAR(angleDeg(both.alternatives[k].second, other.axis), std::abs(kPitchedLevellingsDeg[k]), 1e-6);
+  }
+  // The same pitch puts both estimates off alike: the same turn brings both back (25 deg down: the -30 or +30 turn,
+  // whichever it is, within 5 deg of the truth for both at once).
+  double both_nearest = 180.0;
+  for (const auto& [source_axis, target_axis] : both.alternatives)
+    both_nearest = std::min(both_nearest, std::max(angleDeg(source_axis, up), angleDeg(target_axis, up)));
+  EXPECT_LT(both_nearest, 5.0);
 }
 
 TEST(UpAxis, NoCameraMeansZAndBadSettingsAreRefused) {

@@ -16,12 +16,13 @@ UpAxisEstimate estimateUpAxis(const std::map<FrameId, Eigen::Isometry3d>& camera
     throw std::invalid_argument("estimateUpAxis: min_heading_spread must be in [0, 0.5]");
   UpAxisEstimate estimate;
   Eigen::Matrix3d rows = Eigen::Matrix3d::Zero();
-  Eigen::Vector3d down = Eigen::Vector3d::Zero();
+  Eigen::Vector3d down = Eigen::Vector3d::Zero(), right = Eigen::Vector3d::Zero();
   for (const auto& [id, pose] : camera_poses) {
     const Eigen::Matrix3d r = pose.linear();
     if (!r.allFinite()) continue;
     rows += r.col(0) * r.col(0).transpose();
     down += r.col(1);
+    right += r.col(0);
     ++estimate.cameras;
   }
   if (estimate.cameras == 0) return estimate;
@@ -29,6 +30,7 @@ UpAxisEstimate estimateUpAxis(const std::map<FrameId, Eigen::Isometry3d>& camera
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(rows);
   const Eigen::Vector3d spread = solver.eigenvalues();  // ascending
   estimate.rows = solver.eigenvectors().col(2);
+  if (estimate.rows.dot(right) < 0.0) estimate.rows = -estimate.rows;  // along the cameras' x: a pitch has one sign
   estimate.heading_spread = spread(1);
   Eigen::Vector3d axis;
   estimate.from_rows = spread(1) >= min_heading_spread;
@@ -86,10 +88,16 @@ SharedUpAxes chooseUpAxes(const UpAxisEstimate& source_estimate, const UpAxisEst
   // A map whose cameras face about one way fixes its up axis only to within a turn about their rows (their pitch,
   // or their roll over few headings: 22-37 deg off on mini-maps of fr3 and of the real map in its first camera's
   // frame); the search's tilts reach 8 deg, so the estimate is also searched turned about the rows.
-  for (const Eigen::Vector3d& pitched : pitchedUpAxes(source_estimate, pitch_search_spread, kPitchedLevellingsDeg))
-    axes.alternatives.emplace_back(pitched, axes.target);
-  for (const Eigen::Vector3d& pitched : pitchedUpAxes(target_estimate, pitch_search_spread, kPitchedLevellingsDeg))
-    axes.alternatives.emplace_back(axes.source, pitched);
+  // When both maps' cameras face one way, both are turned by the same angle about their own rows: one camera's pitch
+  // (the same robot, or the same hand-held habit) puts both estimates off alike.
+  const std::vector<Eigen::Vector3d> source_pitched =
+      pitchedUpAxes(source_estimate, pitch_search_spread, kPitchedLevellingsDeg);
+  const std::vector<Eigen::Vector3d> target_pitched =
+      pitchedUpAxes(target_estimate, pitch_search_spread, kPitchedLevellingsDeg);
+  if (source_pitched.empty() && target_pitched.empty()) return axes;
+  for (std::size_t k = 0; k < kPitchedLevellingsDeg.size(); ++k)
+    axes.alternatives.emplace_back(source_pitched.empty() ? axes.source : source_pitched[k],
+                                   target_pitched.empty() ? axes.target : target_pitched[k]);
   return axes;
 }
 

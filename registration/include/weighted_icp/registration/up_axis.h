@@ -31,8 +31,9 @@ struct UpAxisEstimate {
   /// True when the rows' headings varied enough to fix the axis by themselves; false when it is the cameras'
   /// mean down direction (-y) made perpendicular to their common rows (one heading, or a single camera).
   bool from_rows = false;
-  /// The cameras' main row direction (unit; the outer products' largest eigenvector): the axis about which the
-  /// estimate is least sure when the headings vary little (a camera's pitch, or its roll over few headings).
+  /// The cameras' main row direction (unit; the outer products' largest eigenvector, signed along the cameras' mean
+  /// x axis): the axis about which the estimate is least sure when the headings vary little (a camera's pitch, or its
+  /// roll over few headings).
   Eigen::Vector3d rows = Eigen::Vector3d::UnitX();
   /// How much the headings vary: the outer products' second eigenvalue (0 for one heading; sin^2 of half the angle
   /// between two headings; 0.5 for headings all round).
@@ -101,7 +102,9 @@ std::vector<Eigen::Vector3d> pitchedUpAxes(const UpAxisEstimate& estimate, doubl
 ///        2026-11-27: 53-58 of 100 such pairs found, 90 since; docs/global_alignment.md)
 /// @param pitch_search_spread  for maps levelled by their own estimates: a map whose heading spread
 ///        (UpAxisEstimate::heading_spread) is below this is also searched levelled by its estimate turned about its
-///        rows by each of kPitchedLevellingsDeg (SharedUpAxes::alternatives, the other map by its own estimate). 0.2
+///        rows by each of kPitchedLevellingsDeg (SharedUpAxes::alternatives: the other map by its own estimate, or,
+///        when its spread is below this too, turned by the same angle about its own rows, as one camera's pitch
+///        would put both off). 0.2
 ///        is two headings 53° apart (a mini-map of the real map with a spread of 0.17 estimates 12° off); 0 for none
 ///        (docs/global_alignment.md, "Cameras that face one way")
 SharedUpAxes chooseUpAxes(const UpAxisEstimate& source_estimate, const UpAxisEstimate& target_estimate,
