@@ -85,7 +85,8 @@ bool parseCommand(int argc, char** argv, AlignCommand& c) {
                                               "overlap allowed (docs/global_alignment.md); implies --refine")
       ("up-axis", po::value(&c.up_axis_text)->default_value(c.up_axis_text),
        "with --global, the axis the search rotates about: auto (both maps' cameras level about z within 8 deg: z, "
-       "with tilts up to 16 deg; otherwise each map levelled by its own cameras, as maps written in a first camera's frame need), z, or "
+       "with tilts up to 16 deg; otherwise each map levelled by its own cameras, as maps written in a first camera's frame need, "
+       "a map whose cameras face about one way also by its estimate turned up to 45 deg about their rows), z, or "
        "\"X Y Z\" for both maps (no search tilts, only the final pass's within 4 deg: the fastest, for maps known "
        "to share it)")
       ("threads", tools::rangedValue(&c.settings.threads, 0u, 1024u)->default_value(c.settings.threads),

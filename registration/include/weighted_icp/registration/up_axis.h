@@ -77,7 +77,7 @@ struct SharedUpAxes {
 
 /// @brief The turns about a map's rows direction (degrees) at which chooseUpAxes also levels a map whose cameras face
 /// about one way: 15° apart, so that with the search's tilts of 8° each way they cover 53° each way of the estimate
-/// (a camera looking down at a desk: fr1 xyz's 42°; fr3 teddy's mini-maps 22-24°, the real map's 26-37° off).
+/// (a camera looking down at a desk: fr1 xyz's 42°; fr3 teddy's mini-maps 22-24°, the real map's 12-37° off).
 inline const std::vector<double> kPitchedLevellingsDeg = {-15.0, 15.0, -30.0, 30.0, -45.0, 45.0};
 
 /// @brief Up axes a map's estimate may be turned to when its cameras face about one way: the estimate turned about
@@ -104,9 +104,8 @@ std::vector<Eigen::Vector3d> pitchedUpAxes(const UpAxisEstimate& estimate, doubl
 ///        (UpAxisEstimate::heading_spread) is below this is also searched levelled by its estimate turned about its
 ///        rows by each of kPitchedLevellingsDeg (SharedUpAxes::alternatives: the other map by its own estimate, or,
 ///        when its spread is below this too, turned by the same angle about its own rows, as one camera's pitch
-///        would put both off). 0.2
-///        is two headings 53° apart (a mini-map of the real map with a spread of 0.17 estimates 12° off); 0 for none
-///        (docs/global_alignment.md, "Cameras that face one way")
+///        would put both off). 0.2 is two headings 53° apart (a mini-map of the real map with a spread of 0.17
+///        estimates 12° off); 0 for none (docs/global_alignment.md, "Cameras that face one way")
 SharedUpAxes chooseUpAxes(const UpAxisEstimate& source_estimate, const UpAxisEstimate& target_estimate,
                           double z_tolerance_deg = 8.0, double pitch_search_spread = 0.2);
 
