@@ -3,6 +3,8 @@
 
 #include <cmath>
 #include <iomanip>
+#include <iterator>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -47,11 +49,16 @@ std::string pitchedText(const SharedUpAxes& axes) {
     target = target || !target_axis.isApprox(axes.target);
   }
   if (!source && !target) return "";
+  std::set<long> turns;  // "15, 30 and 45" from kPitchedLevellingsDeg
+  for (const double pitch : kPitchedLevellingsDeg) turns.insert(std::lround(std::abs(pitch)));
+  std::string listed;
+  for (auto it = turns.begin(); it != turns.end(); ++it)
+    listed += (it == turns.begin() ? "" : std::next(it) == turns.end() ? " and " : ", ") + std::to_string(*it);
   return std::string(", ") +
          (source && target ? "each map's estimate"
           : source         ? "the source's"
                            : "the target's") +
-         " also turned 15, 30 and 45 deg each way about its cameras' rows (they face about one way)";
+         " also turned " + listed + " deg each way about its cameras' rows (they face about one way)";
 }
 
 }  // namespace

@@ -216,8 +216,7 @@ void bindRegistration(py::module_& m) {
       "cameras are level about it within 8 degrees, else "
       "each map levelled by its own cameras, with tilts, a map whose cameras face about one way also with its "
       "estimate turned 15, 30 and 45 degrees each way about their rows, and z tried as well; arrays: z), 'z', or three "
-      "numbers "
-      "for both maps.\n"
+      "numbers for both maps.\n"
       "The GIL is released while it runs.");
   m.def("weighted_correspondences", &weightedCorrespondences, py::arg("source"), py::arg("target"),
         py::arg("weights") = py::none(), py::arg("k") = 5, py::arg("max_distance") = py::none(), py::arg("threads") = 0,
