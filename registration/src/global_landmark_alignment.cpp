@@ -45,26 +45,20 @@ GlobalLandmarkAlignmentResult GlobalLandmarkAligner::align(const LandmarkCloud::
   pcl::copyPointCloud(*source, xyz);
   GlobalAlignmentResult best = global_.align(xyz, axes.source, axes.target, axes.tilt_range_deg);
   Eigen::Vector3d source_up = axes.source, target_up = axes.target;
-  for (const auto& [source_alternative, target_alternative] : axes.alternatives) {
-    GlobalAlignmentResult other = global_.align(xyz, source_alternative, target_alternative, axes.tilt_range_deg);
-    other.time_ms += best.time_ms;
-    if (other.inlier_score > best.inlier_score) {
-      best = std::move(other), source_up = source_alternative, target_up = target_alternative;
-    } else {
-      best.time_ms = other.time_ms;
-    }
-  }
-  if (axes.also_try_z) {
-    GlobalAlignmentResult z = global_.align(xyz, Eigen::Vector3d::UnitZ(), Eigen::Vector3d::UnitZ(), 0.0);
-    // A tie keeps the maps' own z, as before the axes were estimated. No margin in its favour: on a sparse map
-    // a pose tens of degrees off can leave nearly as many inliers as the truth (fr3's, overlap 0.2).
-    if (z.inlier_score >= best.inlier_score) {
-      z.time_ms += best.time_ms;
-      best = z, source_up = target_up = Eigen::Vector3d::UnitZ();
-    } else {
-      best.time_ms += z.time_ms;
-    }
-  }
+  // One more search, kept when it scores higher (or as high, given `wins_ties`); the time is all the searches'.
+  const auto tryAxes = [&](const Eigen::Vector3d& source_axis, const Eigen::Vector3d& target_axis,
+                           double tilt_range_deg, bool wins_ties) {
+    GlobalAlignmentResult other = global_.align(xyz, source_axis, target_axis, tilt_range_deg);
+    const double time_ms = best.time_ms + other.time_ms;
+    if (other.inlier_score > best.inlier_score || (wins_ties && other.inlier_score == best.inlier_score))
+      best = std::move(other), source_up = source_axis, target_up = target_axis;
+    best.time_ms = time_ms;
+  };
+  for (const auto& [source_axis, target_axis] : axes.alternatives)
+    tryAxes(source_axis, target_axis, axes.tilt_range_deg, false);
+  // A tie keeps the maps' own z, as before the axes were estimated. No margin in its favour: on a sparse map a pose
+  // tens of degrees off can leave nearly as many inliers as the truth (fr3's, overlap 0.2).
+  if (axes.also_try_z) tryAxes(Eigen::Vector3d::UnitZ(), Eigen::Vector3d::UnitZ(), 0.0, true);
   GlobalLandmarkAlignmentResult result = finish(source, best, start);
   result.source_up_axis = source_up, result.target_up_axis = target_up;
   return result;
