@@ -2,9 +2,11 @@
 // levelled by, and the global search given a source whose up axis is its own.
 
 #include <cmath>
+#include <cstddef>
 #include <map>
 #include <random>
 #include <stdexcept>
+#include <utility>
 
 #include <gtest/gtest.h>
 
@@ -367,32 +369,85 @@ TEST(UpAxis, MapsTurnedAboutTheirOwnZAreStillRecoveredByTheSearchAboutZ) {
 // turned 90° about the true up: the mini-map's 40 cameras face within 31° of one another (heading spread 0.07), and
 // their up estimate is 37° off, turned about their rows. Searched about its estimate (tilts of 8°) and about z, the
 // search ends over 10° off; the levellings pitched about the rows, searched as well, find the truth.
-TEST(UpAxis, AMiniMapWhoseCamerasFaceOneWayIsFoundByALevellingPitchedAboutItsRows) {
-  WEIGHTED_ICP_REQUIRE_FILE(weighted_icp::testing::realMapPath());
+/// The real map in its first camera's frame, its frames 150-189 apart (their cameras face about one way) turned 90°
+/// about up: the whole map the aligner's target, the mini-map the source.
+struct OneHeadingMiniMap {
+  GlobalLandmarkAligner aligner;
+  LandmarkCloud::Ptr source;
+  UpAxisEstimate estimate;
+  SharedUpAxes axes;
+  Eigen::Isometry3d moved = Eigen::Isometry3d::Identity();
+  Eigen::Vector3d up;
+};
+
+OneHeadingMiniMap oneHeadingMiniMap() {
+  OneHeadingMiniMap c;
   LandmarkMap map = io::readLandmarkMap(weighted_icp::testing::realMapPath().string());
   const Eigen::Isometry3d first = map.frames.begin()->second;
   map.transform(first.inverse());
   auto [whole, mini] = weighted_icp::testing::mapAndMiniMap(map, 150, 189);
-  const Eigen::Vector3d up = first.linear().transpose() * Eigen::Vector3d::UnitZ();
-  Eigen::Isometry3d moved = Eigen::Isometry3d::Identity();
-  moved.linear() = Eigen::AngleAxisd(M_PI / 2.0, up).toRotationMatrix();
-  mini.transform(moved);
-  const UpAxisEstimate estimate = estimateUpAxis(mini.frames);
-  ASSERT_GT(angleDeg(estimate.axis, up), 30.0);
+  c.up = first.linear().transpose() * Eigen::Vector3d::UnitZ();
+  c.moved.linear() = Eigen::AngleAxisd(M_PI / 2.0, c.up).toRotationMatrix();
+  mini.transform(c.moved);
+  c.estimate = estimateUpAxis(mini.frames);
+  c.aligner.setTarget(toLandmarkCloud(whole, CovarianceWeight{}));
+  c.source = toLandmarkCloud(mini, CovarianceWeight{});
+  c.axes = chooseUpAxes(c.estimate, estimateUpAxis(whole.frames));
+  return c;
+}
 
-  GlobalLandmarkAligner aligner;
-  aligner.setTarget(toLandmarkCloud(whole, CovarianceWeight{}));
-  const LandmarkCloud::Ptr source = toLandmarkCloud(mini, CovarianceWeight{});
-  SharedUpAxes axes = chooseUpAxes(estimate, estimateUpAxis(whole.frames));
-  ASSERT_FALSE(axes.alternatives.empty());
-  const GlobalLandmarkAlignmentResult found = aligner.align(source, axes);
+TEST(UpAxis, AMiniMapWhoseCamerasFaceOneWayIsFoundByALevellingPitchedAboutItsRows) {
+  WEIGHTED_ICP_REQUIRE_FILE(weighted_icp::testing::realMapPath());
+  OneHeadingMiniMap c = oneHeadingMiniMap();
+  ASSERT_GT(angleDeg(c.estimate.axis, c.up), 30.0);
+  ASSERT_FALSE(c.axes.alternatives.empty());
+  const GlobalLandmarkAlignmentResult found = c.aligner.align(c.source, c.axes);
   const Eigen::Isometry3d result(found.alignment.transformation);
-  EXPECT_LT(rotationErrorDeg(result, moved.inverse()), 2.0);
-  EXPECT_LT(translationError(result, moved.inverse()), 0.05);
-  EXPECT_GT(angleDeg(found.source_up_axis, estimate.axis), 10.0);  // a pitched levelling won
-  axes.alternatives.clear();
-  const Eigen::Isometry3d without(aligner.align(source, axes).alignment.transformation);
-  EXPECT_GT(rotationErrorDeg(without, moved.inverse()), 10.0);
+  EXPECT_LT(rotationErrorDeg(result, c.moved.inverse()), 2.0);
+  EXPECT_LT(translationError(result, c.moved.inverse()), 0.05);
+  EXPECT_GT(angleDeg(found.source_up_axis, c.estimate.axis), 10.0);  // a pitched levelling won
+  c.axes.alternatives.clear();
+  const Eigen::Isometry3d without(c.aligner.align(c.source, c.axes).alignment.transformation);
+  EXPECT_GT(rotationErrorDeg(without, c.moved.inverse()), 10.0);
+}
+
+// Of many alternative levellings only those a first look favours are searched fully (kAlternativesSearchedFully,
+// kFirstLookKeptFraction): fewer than all on a mini-map of 40 frames, the one that finds it kept when it comes last
+// behind levellings a right angle off, and a pair with no more alternatives than that searched fully without a look.
+TEST(UpAxis, OnlyTheAlternativesAFirstLookFavoursAreSearchedFully) {
+  WEIGHTED_ICP_REQUIRE_FILE(weighted_icp::testing::realMapPath());
+  OneHeadingMiniMap c = oneHeadingMiniMap();
+  ASSERT_EQ(c.axes.alternatives.size(), kPitchedLevellingsDeg.size());
+  const std::size_t own_and_z = c.axes.also_try_z ? 2 : 1;
+  const GlobalLandmarkAlignmentResult all = c.aligner.align(c.source, c.axes);
+  EXPECT_EQ(all.first_looks, kPitchedLevellingsDeg.size());
+  EXPECT_GE(all.searches, own_and_z + kAlternativesSearchedFully);
+  EXPECT_LT(all.searches, own_and_z + kPitchedLevellingsDeg.size());
+
+  // The winning alternative last, behind four turned a right angle about the rows (nothing found there).
+  const std::pair<Eigen::Vector3d, Eigen::Vector3d> kept{all.source_up_axis, all.target_up_axis};
+  ASSERT_GT(angleDeg(kept.first, c.estimate.axis), 10.0);  // an alternative won
+  SharedUpAxes decoyed = c.axes;
+  decoyed.alternatives.clear();
+  for (const double deg : {90.0, -90.0, 90.0, -90.0}) {
+    const Eigen::Vector3d off = Eigen::AngleAxisd(deg * M_PI / 180.0, c.estimate.rows) * c.estimate.axis;
+    decoyed.alternatives.emplace_back(off, kept.second);
+  }
+  decoyed.alternatives.push_back(kept);
+  const GlobalLandmarkAlignmentResult found = c.aligner.align(c.source, decoyed);
+  EXPECT_EQ(found.first_looks, 5u);
+  EXPECT_GE(found.searches, own_and_z + kAlternativesSearchedFully);
+  EXPECT_LT(found.searches, own_and_z + 5);
+  const Eigen::Isometry3d result(found.alignment.transformation);
+  EXPECT_LT(rotationErrorDeg(result, c.moved.inverse()), 2.0);
+  EXPECT_LT(translationError(result, c.moved.inverse()), 0.05);
+
+  // As many alternatives as are searched fully: no look.
+  decoyed.alternatives.erase(decoyed.alternatives.begin(),
+                             decoyed.alternatives.end() - static_cast<std::ptrdiff_t>(kAlternativesSearchedFully));
+  const GlobalLandmarkAlignmentResult few = c.aligner.align(c.source, decoyed);
+  EXPECT_EQ(few.first_looks, 0u);
+  EXPECT_EQ(few.searches, own_and_z + kAlternativesSearchedFully);
 }
 
 // The rotations' votes, the hypotheses' refinement and the tilts are shared out on threads: one thread or two,

@@ -6,8 +6,10 @@
 // overlap) stay out of it.
 
 #include <chrono>
+#include <cstddef>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -31,7 +33,23 @@ struct GlobalLandmarkAlignmentResult {
   GlobalAlignmentResult global;
   /// The up axes of the search kept (the source's, the target's).
   Eigen::Vector3d source_up_axis = Eigen::Vector3d::UnitZ(), target_up_axis = Eigen::Vector3d::UnitZ();
+  /// Levellings searched fully (the maps' own, the alternatives kept after a first look, z) and alternatives first
+  /// looked at (kAlternativesSearchedFully); align(source) searches once and looks at none.
+  std::size_t searches = 1;
+  std::size_t first_looks = 0;
 };
+
+/// @brief Of SharedUpAxes::alternatives, how many GlobalLandmarkAligner::align(source, axes) searches fully at least.
+/// When there are more, each is first looked at cheaply (the vote and its three best-voted hypotheses refined; no
+/// climb, tilts or final tilts: about a fifth of a search), and only the ones whose look scores highest (these two,
+/// and any scoring kFirstLookKeptFraction of the best look or more) are searched as the maps' own levellings are
+/// (docs/global_alignment.md, "A first look at the pitched levellings").
+inline constexpr std::size_t kAlternativesSearchedFully = 2;
+/// @brief Further alternatives searched fully: every one whose first look scores at least this fraction of the best
+/// look's. A look ranks levellings well where the map holds enough landmarks for the right one to stand out (fr3's
+/// mini-maps: 149 against 40-60), not on a mini-map of 99 landmarks, where every look scores 7-15 and the right
+/// levelling's may come last (9.4 against the best 13.6); there a half keeps nearly all.
+inline constexpr double kFirstLookKeptFraction = 0.5;
 
 /// @brief PCL-style aligner of weighted landmark clouds from any start.
 class GlobalLandmarkAligner {
@@ -57,18 +75,28 @@ class GlobalLandmarkAligner {
   ///                target onto it (GlobalAlignmentSettings::reverse_larger_source)
   GlobalLandmarkAlignmentResult align(const LandmarkCloud::ConstPtr& source);
   /// @brief As align(source), the search about the given up axes (chooseUpAxes(): each map levelled by its own,
-  /// with tilts, then each of `axes.alternatives`, and z tried as well when `axes.also_try_z`; the search with the
-  /// highest inlier score kept, ties to the earlier but z's; the time reported is all the searches').
+  /// with tilts, then those of `axes.alternatives` a first look scores highest (kAlternativesSearchedFully), and z
+  /// tried as well when `axes.also_try_z`; the search with the highest inlier score kept, ties to the earlier but
+  /// z's; the time reported is all the searches' and looks').
   /// @param source  as align(source)
   /// @param axes    the source's and the target's up axes; the settings' up_axis and tilt_range_deg give way
   GlobalLandmarkAlignmentResult align(const LandmarkCloud::ConstPtr& source, const SharedUpAxes& axes);
 
  private:
   /// The weighted ICP from the global stage's result, within its distance limit.
+  /// Indices of the `axes.alternatives` to search fully, in their order: all when there are at most
+  /// kAlternativesSearchedFully, else those whose first look (screen_) scores highest (ties to the earlier) and those
+  /// scoring kFirstLookKeptFraction of the best look or more. Adds the looks' time to `time_ms`.
+  std::vector<std::size_t> promisingAlternatives(const GlobalAlignment::Cloud& source, const SharedUpAxes& axes,
+                                                 double& time_ms);
   GlobalLandmarkAlignmentResult finish(const LandmarkCloud::ConstPtr& source, GlobalAlignmentResult global,
                                        std::chrono::steady_clock::time_point start) const;
 
   GlobalAlignment global_;
+  /// The first look at alternative levellings: global_'s settings with the three best-voted hypotheses refined, no
+  /// climb or tilts and 20 final iterations. Its target is set on first use (screen_has_target_), as few pairs need it.
+  GlobalAlignment screen_;
+  bool screen_has_target_ = false;
   AlignmentSettings icp_settings_;
   LandmarkCloud::ConstPtr target_;
 };

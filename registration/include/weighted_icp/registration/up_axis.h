@@ -64,9 +64,10 @@ struct SharedUpAxes {
   /// (the higher GlobalAlignmentResult::inlier_score): the estimates are a guess, and two maps of one frame displaced
   /// about its z axis (as a test of a map written in a camera's frame would) share z exactly.
   bool also_try_z = false;
-  /// Further levellings searched, each as (source axis, target axis) with tilt_range_deg, the one whose search has
-  /// the highest inlier score kept (ties to the earlier, the estimates' own first): a map whose cameras face about
-  /// one way fixes its up axis only to within a turn about their rows (chooseUpAxes).
+  /// Further levellings, each as (source axis, target axis) with tilt_range_deg, the one whose search has the highest
+  /// inlier score kept (ties to the earlier, the estimates' own first): a map whose cameras face about one way fixes
+  /// its up axis only to within a turn about their rows (chooseUpAxes). Of more than kAlternativesSearchedFully,
+  /// GlobalLandmarkAligner::align(source, axes) searches fully only those a cheap first look scores highest.
   std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> alternatives;
   /// True when both are +z and nothing else is tried.
   bool zUpOnly() const {
