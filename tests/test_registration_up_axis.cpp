@@ -365,12 +365,8 @@ TEST(UpAxis, MapsTurnedAboutTheirOwnZAreStillRecoveredByTheSearchAboutZ) {
   }
 }
 
-// The real map in its first camera's frame, and its mini-map of frames 150-189 (the landmarks both hold dealt out),
-// turned 90° about the true up: the mini-map's 40 cameras face within 31° of one another (heading spread 0.07), and
-// their up estimate is 37° off, turned about their rows. Searched about its estimate (tilts of 8°) and about z, the
-// search ends over 10° off; the levellings pitched about the rows, searched as well, find the truth.
-/// The real map in its first camera's frame, its frames 150-189 apart (their cameras face about one way) turned 90°
-/// about up: the whole map the aligner's target, the mini-map the source.
+/// The real map in its first camera's frame and its mini-map of frames 150-189 (their cameras face about one way),
+/// turned 90° about up: the whole map the aligner's target, the mini-map the source.
 struct OneHeadingMiniMap {
   GlobalLandmarkAligner aligner;
   LandmarkCloud::Ptr source;
@@ -396,6 +392,10 @@ OneHeadingMiniMap oneHeadingMiniMap() {
   return c;
 }
 
+// The real map in its first camera's frame, and its mini-map of frames 150-189 (the landmarks both hold dealt out),
+// turned 90° about the true up: the mini-map's 40 cameras face within 31° of one another (heading spread 0.07), and
+// their up estimate is 37° off, turned about their rows. Searched about its estimate (tilts of 8°) and about z, the
+// search ends over 10° off; the levellings pitched about the rows, searched as well, find the truth.
 TEST(UpAxis, AMiniMapWhoseCamerasFaceOneWayIsFoundByALevellingPitchedAboutItsRows) {
   WEIGHTED_ICP_REQUIRE_FILE(weighted_icp::testing::realMapPath());
   OneHeadingMiniMap c = oneHeadingMiniMap();

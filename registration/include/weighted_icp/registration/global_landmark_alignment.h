@@ -83,12 +83,12 @@ class GlobalLandmarkAligner {
   GlobalLandmarkAlignmentResult align(const LandmarkCloud::ConstPtr& source, const SharedUpAxes& axes);
 
  private:
-  /// The weighted ICP from the global stage's result, within its distance limit.
   /// Indices of the `axes.alternatives` to search fully, in their order: all when there are at most
   /// kAlternativesSearchedFully, else those whose first look (screen_) scores highest (ties to the earlier) and those
   /// scoring kFirstLookKeptFraction of the best look or more. Adds the looks' time to `time_ms`.
   std::vector<std::size_t> promisingAlternatives(const GlobalAlignment::Cloud& source, const SharedUpAxes& axes,
                                                  double& time_ms);
+  /// The weighted ICP from the global stage's result, within its distance limit.
   GlobalLandmarkAlignmentResult finish(const LandmarkCloud::ConstPtr& source, GlobalAlignmentResult global,
                                        std::chrono::steady_clock::time_point start) const;
 
