@@ -2,11 +2,13 @@
 // from geometry alone (a yaw of 180° no local ICP recovers); maps written in
 // their first camera's frame, levelled by their cameras (--up-axis auto).
 
+#include <cmath>
 #include <filesystem>
 #include <string>
 
 #include <gtest/gtest.h>
 
+#include "test_landmark_pairs.h"
 #include "test_support.h"
 #include "tool_runner.h"
 #include "weighted_icp/io/map_format.h"
@@ -68,6 +70,34 @@ TEST(WicpAlignGlobal, LevelsMapsWrittenInTheirFirstCamerasFrameByTheirCameras) {
       "wicp_align", "--source " + source_path + " --target " + path + " --global --up-axis z --json", scratch);
   const Eigen::Matrix4d tz = weighted_icp::testing::alignTransformation(weighted_icp::testing::lastLine(z.out));
   EXPECT_GT(weighted_icp::rotationErrorDeg(Eigen::Isometry3d(tz), moved.inverse()), 2.0);
+}
+
+// A mini-map whose cameras face about one way (the real map's frames 150-189, in its first camera's frame, turned 90°
+// about up) onto the whole map: its pitched levellings are looked at first, the tool says how many it searched, and
+// the pose is recovered.
+TEST(WicpAlignGlobal, SaysHowManyPitchedLevellingsOfAOneHeadingMiniMapItSearched) {
+  WEIGHTED_ICP_REQUIRE_FILE(weighted_icp::testing::realMapPath());
+  const fs::path scratch = weighted_icp::testing::scratchDir("wicp_align_global_one_heading");
+  weighted_icp::LandmarkMap map = weighted_icp::io::readLandmarkMap(weighted_icp::testing::realMapPath().string());
+  const Eigen::Isometry3d first = map.frames.begin()->second;
+  map.transform(first.inverse());
+  auto [whole, mini] = weighted_icp::testing::mapAndMiniMap(map, 150, 189);
+  Eigen::Isometry3d moved = Eigen::Isometry3d::Identity();
+  moved.linear() =
+      Eigen::AngleAxisd(M_PI / 2.0, first.linear().transpose() * Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  mini.transform(moved);
+  const std::string whole_path = (scratch / "whole.txt").string(), mini_path = (scratch / "mini.txt").string();
+  weighted_icp::io::writeLandmarkMap(whole, whole_path);
+  weighted_icp::io::writeLandmarkMap(mini, mini_path);
+
+  const auto r = weighted_icp::testing::runBuiltTool(
+      "wicp_align", "--source " + mini_path + " --target " + whole_path + " --global --json", scratch);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("about its cameras' rows (they face about one way)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("6 pitched levellings looked at first, "), std::string::npos) << r.out;
+  const Eigen::Matrix4d t = weighted_icp::testing::alignTransformation(weighted_icp::testing::lastLine(r.out));
+  EXPECT_LT(weighted_icp::rotationErrorDeg(Eigen::Isometry3d(t), moved.inverse()), 2.0);
+  EXPECT_LT(weighted_icp::translationError(Eigen::Isometry3d(t), moved.inverse()), 0.05);
 }
 
 }  // namespace
