@@ -171,12 +171,9 @@ AlignmentResult runAlignment(const AlignCommand& c, const AlignInputs& in, const
             << both.global.inlier_fraction << ", distance limit " << both.global.distance_limit
             << " m, up axes kept: source " << tools::vectorText(facts.up_axes.source) << ", target "
             << tools::vectorText(facts.up_axes.target) << '\n';
-  if (both.first_looks > 0) {
-    const std::size_t own_and_z = resolved.axes.also_try_z ? 2 : 1;
+  if (both.first_looks > 0)
     std::cout << "global search: " << both.first_looks << " pitched levellings looked at first, "
-              << both.searches - own_and_z << " of them promising enough to search fully (" << both.searches
-              << " searches in all)\n";
-  }
+              << both.alternatives_searched << " of them promising enough to search fully\n";
   if (facts.reversed)
     std::cout << "global search: the source is much larger than the target: the search and the weighted "
                  "ICP ran the other way, the target onto the source (the fitness score and correspondences below are "

@@ -25,7 +25,6 @@
 #include <iomanip>
 #include <iostream>
 #include <memory>
-#include <set>
 #include <sstream>
 
 #include <boost/program_options.hpp>
@@ -93,21 +92,6 @@ std::vector<std::pair<double, double>> parseXyList(const std::string& text) {
   return xys;
 }
 
-/// Landmarks seen by both maps go to one of them only, by id parity.
-void makeDisjoint(LandmarkMap& a, LandmarkMap& b) {
-  std::set<LandmarkId> in_a, in_b;
-  for (const auto& l : a.landmarks) in_a.insert(l.id);
-  for (const auto& l : b.landmarks) in_b.insert(l.id);
-  const auto drop = [](LandmarkMap& map, const std::set<LandmarkId>& other, int parity) {
-    std::vector<Landmark> kept;
-    for (auto& l : map.landmarks)
-      if (!other.count(l.id) || static_cast<int>(l.id % 2) == parity) kept.push_back(std::move(l));
-    map.landmarks = std::move(kept);
-  };
-  drop(a, in_b, 0);
-  drop(b, in_a, 1);
-}
-
 /// Each mini-map of `ranges` (the source) paired with the whole map (the target); with `disjoint` the landmarks both
 /// hold dealt out by id parity (the mini-map keeps the even ones).
 std::vector<Pair> makeInsidePairs(const LandmarkMap& map, const std::vector<tools::FrameRange>& ranges, bool disjoint,
@@ -115,7 +99,7 @@ std::vector<Pair> makeInsidePairs(const LandmarkMap& map, const std::vector<tool
   std::vector<Pair> pairs;
   for (const auto& range : ranges) {
     LandmarkMap mini = map.miniMap(range.first, range.last), whole = map;
-    if (disjoint) makeDisjoint(mini, whole);
+    if (disjoint) dealOutSharedLandmarks(mini, whole);
     std::ostringstream name;
     name << "frames [" << range.first << "-" << range.last << "] in the whole map" << (disjoint ? " disjoint" : "");
     pairs.push_back(
@@ -136,7 +120,7 @@ std::vector<Pair> makePairs(const LandmarkMap& map, const std::vector<double>& o
     if (!inside.empty()) break;  // --inside pairs instead
     const auto length = static_cast<FrameId>(std::llround(frames / (2.0 - o)));
     LandmarkMap a = map.miniMap(first, first + length - 1), b = map.miniMap(last - length + 1, last);
-    if (disjoint) makeDisjoint(a, b);
+    if (disjoint) dealOutSharedLandmarks(a, b);
     std::ostringstream name;
     name << "overlap " << o << (disjoint ? " disjoint" : "") << " [" << first << "-" << first + length - 1 << "] ["
          << last - length + 1 << "-" << last << "]";

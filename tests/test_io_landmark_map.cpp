@@ -135,6 +135,18 @@ TEST(LandmarkMapFilter, WithMinObservations) {
   EXPECT_EQ(frameIds(map.withMinObservations(3)), frameIds(map));
 }
 
+// Landmarks both maps hold go to one only, by id parity (the first keeps the even ids); the others stay where they are.
+TEST(LandmarkMapFilter, DealOutSharedLandmarksLeavesNoLandmarkInBoth) {
+  const LandmarkMap map = fiveFrames();  // landmarks 1-4
+  LandmarkMap a = map, b = map;
+  a.landmarks.erase(a.landmarks.begin() + 3);  // a: 1, 2, 3
+  b.landmarks.erase(b.landmarks.begin());      // b: 2, 3, 4
+  dealOutSharedLandmarks(a, b);
+  EXPECT_EQ(landmarkIds(a), (std::vector<LandmarkId>{1, 2}));
+  EXPECT_EQ(landmarkIds(b), (std::vector<LandmarkId>{3, 4}));
+  EXPECT_EQ(frameIds(a), frameIds(map));
+}
+
 TEST(LandmarkMapMetrics, MeanObservationDistanceNamesAnUnknownFrame) {
   const LandmarkMap map = fiveFrames();
   const Landmark stray{7, Eigen::Vector3d::Zero(), Eigen::Matrix3d::Identity(), {{10, 0, 0}, {99, 0, 0}}};

@@ -59,36 +59,36 @@ GlobalLandmarkAlignmentResult GlobalLandmarkAligner::align(const LandmarkCloud::
   pcl::copyPointCloud(*source, xyz);
   GlobalAlignmentResult best = global_.align(xyz, axes.source, axes.target, axes.tilt_range_deg);
   Eigen::Vector3d source_up = axes.source, target_up = axes.target;
-  std::size_t searches = 1;
   // One more search, kept when it scores higher (or as high, given `wins_ties`); the time is all the searches'.
   const auto tryAxes = [&](const Eigen::Vector3d& source_axis, const Eigen::Vector3d& target_axis,
                            double tilt_range_deg, bool wins_ties) {
     GlobalAlignmentResult other = global_.align(xyz, source_axis, target_axis, tilt_range_deg);
-    ++searches;
     const double time_ms = best.time_ms + other.time_ms;
     if (other.inlier_score > best.inlier_score || (wins_ties && other.inlier_score == best.inlier_score))
       best = std::move(other), source_up = source_axis, target_up = target_axis;
     best.time_ms = time_ms;
   };
-  double looks_ms = 0.0;
-  for (const std::size_t i : promisingAlternatives(xyz, axes, looks_ms))
+  const Promising promising = promisingAlternatives(xyz, axes);
+  for (const std::size_t i : promising.indices)
     tryAxes(axes.alternatives[i].first, axes.alternatives[i].second, axes.tilt_range_deg, false);
-  best.time_ms += looks_ms;
+  best.time_ms += promising.time_ms;
   // A tie keeps the maps' own z, as before the axes were estimated. No margin in its favour: on a sparse map a pose
   // tens of degrees off can leave nearly as many inliers as the truth (fr3's, overlap 0.2).
   if (axes.also_try_z) tryAxes(Eigen::Vector3d::UnitZ(), Eigen::Vector3d::UnitZ(), 0.0, true);
   GlobalLandmarkAlignmentResult result = finish(source, best, start);
   result.source_up_axis = source_up, result.target_up_axis = target_up;
-  result.searches = searches;
-  result.first_looks = axes.alternatives.size() > kAlternativesSearchedFully ? axes.alternatives.size() : 0;
+  result.first_looks = promising.looks;
+  result.alternatives_searched = promising.indices.size();
   return result;
 }
 
-std::vector<std::size_t> GlobalLandmarkAligner::promisingAlternatives(const GlobalAlignment::Cloud& source,
-                                                                      const SharedUpAxes& axes, double& time_ms) {
-  std::vector<std::size_t> order(axes.alternatives.size());
+GlobalLandmarkAligner::Promising GlobalLandmarkAligner::promisingAlternatives(const GlobalAlignment::Cloud& source,
+                                                                              const SharedUpAxes& axes) {
+  Promising promising;
+  std::vector<std::size_t>& order = promising.indices;
+  order.resize(axes.alternatives.size());
   for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
-  if (order.size() <= kAlternativesSearchedFully) return order;
+  if (order.size() <= kAlternativesSearchedFully) return promising;
   if (!screen_has_target_) {
     GlobalAlignment::Cloud xyz;
     pcl::copyPointCloud(*target_, xyz);
@@ -100,8 +100,9 @@ std::vector<std::size_t> GlobalLandmarkAligner::promisingAlternatives(const Glob
     const GlobalAlignmentResult look =
         screen_.align(source, axes.alternatives[i].first, axes.alternatives[i].second, 0.0);
     scores[i] = look.inlier_score;
-    time_ms += look.time_ms;
+    promising.time_ms += look.time_ms;
   }
+  promising.looks = order.size();
   std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return scores[a] > scores[b]; });
   // Past the best few, every look scoring kFirstLookKeptFraction of the best or more: on a small map the looks cannot
   // tell the levellings apart (all near the noise), and nearly all are then searched.
@@ -110,7 +111,7 @@ std::vector<std::size_t> GlobalLandmarkAligner::promisingAlternatives(const Glob
   while (kept < order.size() && scores[order[kept]] >= kept_from) ++kept;
   order.resize(kept);
   std::sort(order.begin(), order.end());
-  return order;
+  return promising;
 }
 
 GlobalLandmarkAlignmentResult GlobalLandmarkAligner::finish(const LandmarkCloud::ConstPtr& source,

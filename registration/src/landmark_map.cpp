@@ -1,7 +1,10 @@
 #include "weighted_icp/registration/landmark_map.h"
 
+#include <set>
 #include <stdexcept>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace weighted_icp {
 
@@ -63,6 +66,20 @@ std::pair<LandmarkMap, LandmarkMap> LandmarkMap::alternateHalves() const {
   for (std::size_t i = 0; i < landmarks.size(); ++i)
     (i % 2 == 0 ? halves.first : halves.second).landmarks.push_back(landmarks[i]);
   return halves;
+}
+
+void dealOutSharedLandmarks(LandmarkMap& a, LandmarkMap& b) {
+  std::set<LandmarkId> in_a, in_b;
+  for (const auto& l : a.landmarks) in_a.insert(l.id);
+  for (const auto& l : b.landmarks) in_b.insert(l.id);
+  const auto keep = [](LandmarkMap& map, const std::set<LandmarkId>& other, LandmarkId parity) {
+    std::vector<Landmark> kept;
+    for (auto& l : map.landmarks)
+      if (!other.count(l.id) || l.id % 2 == parity) kept.push_back(std::move(l));
+    map.landmarks = std::move(kept);
+  };
+  keep(a, in_b, 0);
+  keep(b, in_a, 1);
 }
 
 void LandmarkMap::transform(const Eigen::Isometry3d& motion) {

@@ -33,10 +33,10 @@ struct GlobalLandmarkAlignmentResult {
   GlobalAlignmentResult global;
   /// The up axes of the search kept (the source's, the target's).
   Eigen::Vector3d source_up_axis = Eigen::Vector3d::UnitZ(), target_up_axis = Eigen::Vector3d::UnitZ();
-  /// Levellings searched fully (the maps' own, the alternatives kept after a first look, z) and alternatives first
-  /// looked at (kAlternativesSearchedFully); align(source) searches once and looks at none.
-  std::size_t searches = 1;
+  /// Alternatives (SharedUpAxes::alternatives) first looked at and, of them, searched fully
+  /// (kAlternativesSearchedFully); the maps' own levelling and z are always searched. align(source): none.
   std::size_t first_looks = 0;
+  std::size_t alternatives_searched = 0;
 };
 
 /// @brief Of SharedUpAxes::alternatives, how many GlobalLandmarkAligner::align(source, axes) searches fully at least.
@@ -83,11 +83,15 @@ class GlobalLandmarkAligner {
   GlobalLandmarkAlignmentResult align(const LandmarkCloud::ConstPtr& source, const SharedUpAxes& axes);
 
  private:
-  /// Indices of the `axes.alternatives` to search fully, in their order: all when there are at most
+  /// Which of `axes.alternatives` to search fully (`indices`, in their order): all when there are at most
   /// kAlternativesSearchedFully, else those whose first look (screen_) scores highest (ties to the earlier) and those
-  /// scoring kFirstLookKeptFraction of the best look or more. Adds the looks' time to `time_ms`.
-  std::vector<std::size_t> promisingAlternatives(const GlobalAlignment::Cloud& source, const SharedUpAxes& axes,
-                                                 double& time_ms);
+  /// scoring kFirstLookKeptFraction of the best look or more; how many were looked at and the looks' time.
+  struct Promising {
+    std::vector<std::size_t> indices;
+    std::size_t looks = 0;
+    double time_ms = 0.0;
+  };
+  Promising promisingAlternatives(const GlobalAlignment::Cloud& source, const SharedUpAxes& axes);
   /// The weighted ICP from the global stage's result, within its distance limit.
   GlobalLandmarkAlignmentResult finish(const LandmarkCloud::ConstPtr& source, GlobalAlignmentResult global,
                                        std::chrono::steady_clock::time_point start) const;

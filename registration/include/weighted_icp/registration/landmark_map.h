@@ -75,4 +75,11 @@ class LandmarkMap {
   void transform(const Eigen::Isometry3d& motion);
 };
 
+/// @brief Deals out the landmarks both maps hold (the same id) by id parity: `a` keeps the even ids, `b` the odd
+/// ones, so no landmark is in both (two mini-maps of one session sharing no point, as wicp_global_sweep --disjoint
+/// makes them).
+/// @param a  the first map; keeps its landmarks `b` lacks and the shared even ids
+/// @param b  the second map; keeps its landmarks `a` lacks and the shared odd ids
+void dealOutSharedLandmarks(LandmarkMap& a, LandmarkMap& b);
+
 }  // namespace weighted_icp
