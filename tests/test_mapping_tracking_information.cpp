@@ -70,9 +70,17 @@ TEST(TrackingInformation, ALandmarkBothKeyframesSeeCancelsInTheRelativePose) {
   EXPECT_LT(joint->diagonal().head<3>().sum(), 0.8 * twice.diagonal().head<3>().sum());
   EXPECT_LT(joint->diagonal().tail<3>().sum(), 0.8 * twice.diagonal().tail<3>().sum());
 
-  // With exactly known landmarks nothing is shared but the pixels, and both ways agree.
+  // With exactly known landmarks nothing is shared but the pixels, and both ways agree. Each keyframe keeps the
+  // landmarks both see: one only it sees was mapped from itself (the fixture has no third keyframe) and holds it in
+  // the relative pose not at all, in its own pose covariance as much as any other.
   mapping::KeyframeSnapshot exact = map;
   for (auto& [id, point] : exact.points) point.covariance.setZero();
+  for (auto& [id, keyframe] : exact.keyframes) {
+    std::vector<frontend::MapPointId> both;
+    for (const frontend::MapPointId point : keyframe.observed_points)
+      if (exact.points.at(point).observations.size() >= 2) both.push_back(point);
+    keyframe.observed_points = both;
+  }
   const auto joint_exact = mapping::relativePoseCovariance(exact, a, b, data.camera);
   ASSERT_TRUE(joint_exact.has_value());
   const Covariance6d separate_exact = separate(exact);
@@ -125,6 +133,44 @@ TEST(TrackingInformation, KeyframesWithoutALandmarkInCommonHaveNoTrackedRelative
   const auto edges = mapping::odometryEdgeCovariances(map, {a, b}, data.camera);
   ASSERT_EQ(edges.size(), 2u);
   EXPECT_FALSE(edges[1].has_value()) << "the pose graph then takes the odometry noise model for this edge";
+}
+
+TEST(TrackingInformation, ALandmarkOnlyOneKeyframeSeesHoldsItOnlyWhenAnOlderKeyframeMeasuredIt) {
+  // Edge b -> c of three keyframes. c sees, besides its landmarks, a copy of each that only it observes (same
+  // position, covariance and pixel): landmarks mapped from c itself.
+  const SyntheticKeyframes data = syntheticKeyframes(12, false, 180.0, {0, 3, 6});
+  ASSERT_EQ(data.snapshot.keyframes.size(), 3u);
+  auto it = data.snapshot.keyframes.begin();
+  const frontend::KeyframeId a = (it++)->first, b = (it++)->first, c = it->first;
+  const auto before = mapping::relativePoseCovariance(data.snapshot, b, c, data.camera);
+  ASSERT_TRUE(before.has_value());
+  const auto withCopies = [&](const std::vector<frontend::KeyframeId>& also_observed_by) {
+    mapping::KeyframeSnapshot map = data.snapshot;
+    frontend::MapPointId next_id = map.points.rbegin()->first + 1;
+    std::vector<frontend::MapPointId>& seen = map.keyframes.at(c).observed_points;
+    for (const frontend::MapPointId id : std::vector<frontend::MapPointId>(seen)) {
+      frontend::MapPoint copy = map.points.at(id);
+      copy.id = next_id;
+      copy.observations.clear();
+      for (const frontend::MapPointObservation& o : map.points.at(id).observations)
+        if (o.keyframe == c) copy.observations.push_back(o);
+      for (const frontend::KeyframeId other : also_observed_by)
+        copy.observations.push_back({other, Eigen::Vector2d::Zero(), 0.0});
+      map.points.emplace(next_id, copy);
+      seen.push_back(next_id++);
+    }
+    return mapping::relativePoseCovariance(map, b, c, data.camera);
+  };
+  // Mapped from c, or seen since by a newer keyframe only: the edge is as it was.
+  for (const auto& observers : {std::vector<frontend::KeyframeId>{}, std::vector<frontend::KeyframeId>{c + 1}}) {
+    const auto same = withCopies(observers);
+    ASSERT_TRUE(same.has_value());
+    EXPECT_LT((*same - *before).norm(), 1e-9 * before->norm()) << observers.size() << " other observers";
+  }
+  // Measured by the older keyframe a too: they hold c in the map, and the edge tightens.
+  const auto held = withCopies({a});
+  ASSERT_TRUE(held.has_value());
+  EXPECT_LT(held->trace(), 0.9 * before->trace()) << held->trace() << " against " << before->trace();
 }
 
 /// A circle of 40 keyframes whose odometry is exact but for one step (`bad`), which is 8 cm and 2 degrees off.

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <utility>
 #include <vector>
 
@@ -22,6 +23,8 @@ struct Observation {
   frontend::MapPointId point = 0;
   Eigen::Matrix3d world_to_camera = Eigen::Matrix3d::Identity();
   Eigen::Matrix3d world_covariance = Eigen::Matrix3d::Zero();
+  /// The oldest keyframe other than this one that observes the landmark; none: the largest id.
+  frontend::KeyframeId oldest_other_observer = std::numeric_limits<frontend::KeyframeId>::max();
 
   /// The landmark's covariance in the camera.
   Eigen::Matrix3d cameraCovariance() const { return world_to_camera * world_covariance * world_to_camera.transpose(); }
@@ -46,6 +49,10 @@ std::vector<Observation> inlierObservations(const KeyframeSnapshot& map, const f
       const Eigen::Matrix3d covariance =
           point->second.covariance.allFinite() ? point->second.covariance : Eigen::Matrix3d::Zero();
       observations.push_back({c, residual, id, world_to_camera.linear(), covariance});
+      for (const frontend::MapPointObservation& other : point->second.observations)
+        if (other.keyframe != keyframe.id)
+          observations.back().oldest_other_observer =
+              std::min(observations.back().oldest_other_observer, other.keyframe);
       break;
     }
   }
@@ -93,19 +100,28 @@ Information6d withInflationAndFloors(Covariance6d covariance, const TrackingInfo
   return 0.5 * (information + information.transpose());
 }
 
+/// True when a landmark only one keyframe of the pair sees holds that keyframe in the map: another keyframe older
+/// than the newer of the two observes it, so its position was measured apart from the keyframe. One mapped from the
+/// keyframe itself (or seen since only by later ones) holds it to its own measurement: counted with its map
+/// covariance, it claimed a link as firm as tracking's wherever consecutive keyframes share few landmarks (fr3 there
+/// and back made dark: a verified loop refused on two of six draws, 5.71 and 10.07 cm; docs/mapping.md).
+bool heldApart(const Observation& alone, frontend::KeyframeId newer) { return alone.oldest_other_observer < newer; }
+
 /// The information of two keyframes' poses (12 x 12, a's perturbation first) from the landmarks either sees:
 /// both poses and every landmark are unknowns of one Gauss-Newton system, the landmarks held by their map
 /// covariances as a prior, and the landmarks are eliminated (Schur complement). A landmark both keyframes see
 /// then moves both alike, so its error cancels in their relative pose instead of being counted once per keyframe.
-/// A landmark only one sees eliminates in closed form: its covariance joins the pixel noise, as in
-/// keyframePoseCovariance. Each list is sorted by landmark id (inlierObservations' order).
+/// A landmark only one sees eliminates in closed form, its covariance joining the pixel noise as in
+/// keyframePoseCovariance, when it is held apart from that keyframe (heldApart); otherwise it is left out.
+/// Each list is sorted by landmark id (inlierObservations' order); `newer` is the newer keyframe's id.
 Eigen::Matrix<double, 12, 12> twoPoseInformation(const std::vector<Observation>& seen_a,
                                                  const std::vector<Observation>& seen_b, const PinholeCamera& camera,
-                                                 double min_pixel_sigma_px) {
+                                                 double min_pixel_sigma_px, frontend::KeyframeId newer) {
   const std::array<double, 2> weight = {1.0 / std::pow(pixelSigma(seen_a, min_pixel_sigma_px), 2),
                                         1.0 / std::pow(pixelSigma(seen_b, min_pixel_sigma_px), 2)};
   Eigen::Matrix<double, 12, 12> poses = Eigen::Matrix<double, 12, 12>::Zero();
   const auto alone = [&](int k, const Observation& o) {
+    if (!heldApart(o, newer)) return;
     const Eigen::Matrix<double, 2, 3> projection = camera.projectionJacobian(o.in_camera);
     const Eigen::Matrix<double, 2, 6> J = poseJacobian(projection, o.in_camera);
     const Eigen::Matrix2d pixel_covariance =
@@ -196,16 +212,17 @@ bool shareALandmark(const std::vector<Observation>& seen_a, const std::vector<Ob
 /// The relative covariance a -> b from both keyframes' inlier observations (relativePoseCovariance's steps 2-3).
 std::optional<Covariance6d> relativeFromObservations(const std::vector<Observation>& seen_a,
                                                      const std::vector<Observation>& seen_b,
-                                                     const Eigen::Isometry3d& a_wc, const Eigen::Isometry3d& b_wc,
+                                                     const frontend::Keyframe& a, const frontend::Keyframe& b,
                                                      const PinholeCamera& camera,
                                                      const TrackingInformationOptions& options) {
   const std::size_t needed = std::max<std::size_t>(options.min_observations, 3);
   if (seen_a.size() < needed || seen_b.size() < needed || !shareALandmark(seen_a, seen_b)) return std::nullopt;
-  const Eigen::Matrix<double, 12, 12> poses = twoPoseInformation(seen_a, seen_b, camera, options.min_pixel_sigma_px);
+  const Eigen::Matrix<double, 12, 12> poses =
+      twoPoseInformation(seen_a, seen_b, camera, options.min_pixel_sigma_px, std::max(a.id, b.id));
   const Eigen::LDLT<Eigen::Matrix<double, 12, 12>> ldlt(poses);
   if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0.0)) return std::nullopt;
   const Eigen::Matrix<double, 12, 12> joint = ldlt.solve(Eigen::Matrix<double, 12, 12>::Identity());
-  const auto [J_a, J_b] = edgeJacobians(a_wc, b_wc);
+  const auto [J_a, J_b] = edgeJacobians(a.pose_wc, b.pose_wc);
   Eigen::Matrix<double, 6, 12> J;
   J << J_a, J_b;
   const Covariance6d covariance = J * joint * J.transpose();
@@ -221,8 +238,8 @@ std::optional<Covariance6d> relativePoseCovariance(const KeyframeSnapshot& map, 
   const auto found_a = map.keyframes.find(a), found_b = map.keyframes.find(b);
   if (found_a == map.keyframes.end() || found_b == map.keyframes.end() || a == b) return std::nullopt;
   return relativeFromObservations(inlierObservations(map, found_a->second, camera, options.inlier_px),
-                                  inlierObservations(map, found_b->second, camera, options.inlier_px),
-                                  found_a->second.pose_wc, found_b->second.pose_wc, camera, options);
+                                  inlierObservations(map, found_b->second, camera, options.inlier_px), found_a->second,
+                                  found_b->second, camera, options);
 }
 
 std::vector<std::optional<Covariance6d>> odometryEdgeCovariances(const KeyframeSnapshot& map,
@@ -240,8 +257,7 @@ std::vector<std::optional<Covariance6d>> odometryEdgeCovariances(const KeyframeS
     }
     std::vector<Observation> current = inlierObservations(map, found->second, camera, options.inlier_px);
     if (previous_keyframe && previous_keyframe->id != found->second.id)
-      covariances[i] = relativeFromObservations(previous, current, previous_keyframe->pose_wc, found->second.pose_wc,
-                                                camera, options);
+      covariances[i] = relativeFromObservations(previous, current, *previous_keyframe, found->second, camera, options);
     previous = std::move(current);
     previous_keyframe = &found->second;
   }

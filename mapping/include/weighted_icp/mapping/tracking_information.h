@@ -75,8 +75,11 @@ Information6d trackedOdometryInformation(const Eigen::Isometry3d& a_wc, const Co
 /// Gauss-Newton system (the landmarks held by their map covariances as a prior); eliminating the landmarks leaves
 /// the poses' joint covariance, in which a landmark both keyframes see moves both alike, so its error cancels in
 /// the relative pose instead of being added once per keyframe (what keyframePoseCovariance twice, propagated by
-/// trackedOdometryInformation, does). Unknown keyframes, a == b, too few inliers in either, no inlier landmark
-/// both observe (their poses were not measured against each other) or a singular system give nothing.
+/// trackedOdometryInformation, does). A landmark only one of them sees holds that keyframe only when a keyframe
+/// older than the newer of the two also observes it: one mapped from the keyframe itself, or seen since by later
+/// keyframes only, would hold it to its own measurement and is left out. Unknown keyframes, a == b, too few inliers
+/// in either, no inlier landmark both observe (their poses were not measured against each other) or a singular
+/// system give nothing.
 /// @param map keyframes and map points (world positions, covariances, observations)
 /// @param a the older keyframe
 /// @param b the newer keyframe
