@@ -70,9 +70,9 @@ TEST(TrackingInformation, ALandmarkBothKeyframesSeeCancelsInTheRelativePose) {
   EXPECT_LT(joint->diagonal().head<3>().sum(), 0.8 * twice.diagonal().head<3>().sum());
   EXPECT_LT(joint->diagonal().tail<3>().sum(), 0.8 * twice.diagonal().tail<3>().sum());
 
-  // With exactly known landmarks nothing is shared but the pixels, and both ways agree. Each keyframe keeps the
-  // landmarks both see: one only it sees was mapped from itself (the fixture has no third keyframe) and holds it in
-  // the relative pose not at all, in its own pose covariance as much as any other.
+  // With exactly known landmarks nothing is shared but the pixels, and both ways agree once each keyframe keeps only
+  // the landmarks both see: one only it sees was mapped from itself (the fixture has no third keyframe), which holds
+  // it in keyframePoseCovariance but not in the relative pose.
   mapping::KeyframeSnapshot exact = map;
   for (auto& [id, point] : exact.points) point.covariance.setZero();
   for (auto& [id, keyframe] : exact.keyframes) {
