@@ -59,8 +59,7 @@ struct CameraFramePair {
 const CameraFramePair& cameraFramePair() {
   static const CameraFramePair p = [] {
     LandmarkMap map = io::readLandmarkMap(map_path).withMinObservations(2);
-    const Eigen::Isometry3d first = map.frames.begin()->second;
-    map.transform(first.inverse());
+    const Eigen::Isometry3d first = map.toFirstCameraFrame();
     auto [even, odd] = map.alternateHalves();
     Eigen::Isometry3d turn = Eigen::Isometry3d::Identity();
     turn.linear() =
@@ -78,8 +77,7 @@ const CameraFramePair& cameraFramePair() {
 const CameraFramePair& oneHeadingPair() {
   static const CameraFramePair p = [] {
     LandmarkMap map = io::readLandmarkMap(map_path);
-    const Eigen::Isometry3d first = map.frames.begin()->second;
-    map.transform(first.inverse());
+    const Eigen::Isometry3d first = map.toFirstCameraFrame();
     LandmarkMap mini = map.miniMap(150, 189);
     dealOutSharedLandmarks(mini, map);
     map = map.withMinObservations(2), mini = mini.withMinObservations(2);

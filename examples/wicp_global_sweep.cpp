@@ -298,8 +298,7 @@ LandmarkMap loadMap(GlobalSweepCommand& c) {
     map = simulation::generateSyntheticSession(session).estimated;
   }
   if (c.camera_frame) {
-    const Eigen::Isometry3d first = map.frames.begin()->second;
-    map.transform(first.inverse());
+    const Eigen::Isometry3d first = map.toFirstCameraFrame();
     if (c.map_pose_text.empty()) c.world_from_map = first;  // turns about the original z axis
   }
   if (c.tilt_deg != 0.0) {

@@ -147,6 +147,18 @@ TEST(LandmarkMapFilter, DealOutSharedLandmarksLeavesNoLandmarkInBoth) {
   EXPECT_EQ(frameIds(a), frameIds(map));
 }
 
+TEST(LandmarkMapFilter, ToFirstCameraFrameMakesTheFirstCameraTheOrigin) {
+  LandmarkMap map = fiveFrames();
+  map.frames[10].linear() = Eigen::AngleAxisd(0.5, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  const LandmarkMap before = map;
+  const Eigen::Isometry3d first = map.toFirstCameraFrame();
+  EXPECT_TRUE(first.isApprox(before.frames.at(10)));
+  EXPECT_LT((map.frames.at(10).matrix() - Eigen::Matrix4d::Identity()).norm(), 1e-12);
+  for (std::size_t i = 0; i < map.landmarks.size(); ++i)
+    EXPECT_LT((map.landmarks[i].position - first.inverse() * before.landmarks[i].position).norm(), 1e-12) << i;
+  EXPECT_THROW(LandmarkMap{}.toFirstCameraFrame(), std::invalid_argument);
+}
+
 TEST(LandmarkMapMetrics, MeanObservationDistanceNamesAnUnknownFrame) {
   const LandmarkMap map = fiveFrames();
   const Landmark stray{7, Eigen::Vector3d::Zero(), Eigen::Matrix3d::Identity(), {{10, 0, 0}, {99, 0, 0}}};

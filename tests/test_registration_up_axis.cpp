@@ -176,8 +176,7 @@ std::pair<LandmarkMap, LandmarkMap> disjointMiniMaps(const LandmarkMap& map, Fra
 TEST(UpAxis, GlobalSearchRecoversAMapLevelledByItsOwnCameras) {
   WEIGHTED_ICP_REQUIRE_FILE(weighted_icp::testing::realMapPath());
   LandmarkMap map = io::readLandmarkMap(weighted_icp::testing::realMapPath().string());
-  const Eigen::Isometry3d first = map.frames.begin()->second;
-  map.transform(first.inverse());
+  const Eigen::Isometry3d first = map.toFirstCameraFrame();
   auto [target, source] = disjointMiniMaps(map, 143, 96, 239);
   const Eigen::Vector3d up = first.linear().transpose() * Eigen::Vector3d::UnitZ();
   Eigen::Isometry3d moved = Eigen::Isometry3d::Identity();
@@ -344,7 +343,7 @@ TEST(UpAxis, ASecondRoundOfFinalTiltsReachesTheTruthFromTwoDegreesOff) {
 TEST(UpAxis, MapsTurnedAboutTheirOwnZAreStillRecoveredByTheSearchAboutZ) {
   WEIGHTED_ICP_REQUIRE_FILE(weighted_icp::testing::realMapPath());
   LandmarkMap map = io::readLandmarkMap(weighted_icp::testing::realMapPath().string());
-  map.transform(map.frames.begin()->second.inverse());
+  map.toFirstCameraFrame();
   const auto [even, odd] = map.withMinObservations(2).alternateHalves();
   LandmarkMap source = odd;
   const Displacement d{1.5, -1.0, 0.0, 0.0, 0.0, 135.0};
@@ -379,8 +378,7 @@ struct OneHeadingMiniMap {
 OneHeadingMiniMap oneHeadingMiniMap() {
   OneHeadingMiniMap c;
   LandmarkMap map = io::readLandmarkMap(weighted_icp::testing::realMapPath().string());
-  const Eigen::Isometry3d first = map.frames.begin()->second;
-  map.transform(first.inverse());
+  const Eigen::Isometry3d first = map.toFirstCameraFrame();
   auto [whole, mini] = weighted_icp::testing::mapAndMiniMap(map, 150, 189);
   c.up = first.linear().transpose() * Eigen::Vector3d::UnitZ();
   c.moved.linear() = Eigen::AngleAxisd(M_PI / 2.0, c.up).toRotationMatrix();
@@ -454,7 +452,7 @@ TEST(UpAxis, OnlyTheAlternativesAFirstLookFavoursAreSearchedFully) {
 TEST(UpAxis, TheSearchDoesNotDependOnTheNumberOfThreads) {
   WEIGHTED_ICP_REQUIRE_FILE(weighted_icp::testing::realMapPath());
   LandmarkMap map = io::readLandmarkMap(weighted_icp::testing::realMapPath().string());
-  map.transform(map.frames.begin()->second.inverse());
+  map.toFirstCameraFrame();
   const auto [even, odd] = map.withMinObservations(2).alternateHalves();
   GlobalAlignment::Cloud target, source;
   for (const auto& l : even.landmarks) target.push_back(pcl::PointXYZ(l.position.x(), l.position.y(), l.position.z()));

@@ -26,8 +26,7 @@ struct CameraFrameMap {
 };
 CameraFrameMap realMapInItsFirstCamerasFrame() {
   weighted_icp::LandmarkMap map = weighted_icp::io::readLandmarkMap(weighted_icp::testing::realMapPath().string());
-  const Eigen::Isometry3d first = map.frames.begin()->second;
-  map.transform(first.inverse());
+  const Eigen::Isometry3d first = map.toFirstCameraFrame();
   return {map, first.linear().transpose() * Eigen::Vector3d::UnitZ()};
 }
 

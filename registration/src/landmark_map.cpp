@@ -82,6 +82,13 @@ void dealOutSharedLandmarks(LandmarkMap& a, LandmarkMap& b) {
   keep(b, in_a, 1);
 }
 
+Eigen::Isometry3d LandmarkMap::toFirstCameraFrame() {
+  if (frames.empty()) throw std::invalid_argument("LandmarkMap::toFirstCameraFrame: the map has no frames");
+  const Eigen::Isometry3d first = frames.begin()->second;
+  transform(first.inverse());
+  return first;
+}
+
 void LandmarkMap::transform(const Eigen::Isometry3d& motion) {
   for (auto& [id, pose] : frames) pose = motion * pose;
   const Eigen::Matrix3d rotation = motion.linear();

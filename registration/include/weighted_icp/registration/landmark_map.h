@@ -73,6 +73,11 @@ class LandmarkMap {
   /// Applies a rigid transform to frame poses and landmark positions, and
   /// rotates the covariances with it.
   void transform(const Eigen::Isometry3d& motion);
+
+  /// Moves the map into its first frame's camera frame, as a SLAM without gravity writes it, and returns that
+  /// camera's pose before the move (the former world's z in the camera's frame is its linear().transpose() * z).
+  /// A map without frames throws std::invalid_argument.
+  Eigen::Isometry3d toFirstCameraFrame();
 };
 
 /// @brief Deals out the landmarks both maps hold (the same id) by id parity: `a` keeps the even ids, `b` the odd
