@@ -472,8 +472,8 @@ struct SlamCommand {
 /// The words of the front end's default choices that wicp_rgbd_slam reads as text.
 std::map<std::string, std::string> defaultChoiceWords(const frontend::FrontendOptions& options) {
   std::map<std::string, std::string> words;
-  for (const char* key :
-       {"describe", "gate-free-retry", "motion-timing", "keyframe-before-loss", "feature-width", "pnp-thresholds"})
+  for (const char* key : {"describe", "gate-free-retry", "motion-timing", "keyframe-before-loss", "feature-width",
+                          "pnp-thresholds", "pnp-prediction"})
     words[key] = frontend::frontendChoiceWord(options, key);
   return words;
 }
@@ -624,6 +624,10 @@ po::options_description ablationOptions(frontend::FrontendOptions& f, std::map<s
       ("pnp-thresholds", word("pnp-thresholds"),
        "working: PnP's RANSAC threshold and Huber scale in pixels of the image features are found at (a frame "
        "halved for them: twice its own pixels); frame: in the frame's own pixels (as before 2026-11-27)")
+      ("pnp-prediction", word("pnp-prediction"),
+       "start: the motion model's prediction replaces RANSAC's hypothesis when it explains more matches within "
+       "the RANSAC threshold; candidate: also refined on the matches it explains within twice that, kept when it "
+       "ends with more inliers than RANSAC's pose")
       ("pnp-ransac-iterations", tools::rangedValue(&f.pnp.ransac_iterations, 1, 100000)
                                     ->default_value(f.pnp.ransac_iterations),
        "most RANSAC draws a frame's PnP makes; fewer when the inliers found already give 99 % confidence (1-100000)");

@@ -44,6 +44,13 @@ TEST(FrontendChoices, EachKeySetsItsOption) {
     EXPECT_FALSE(options.*choice.flag) << choice.key;
     EXPECT_THROW(setFrontendChoice(options, choice.key, "yes"), std::invalid_argument) << choice.key;
   }
+  // The PnP prediction's word sets a nested option.
+  setFrontendChoice(options, "pnp-prediction", "candidate");
+  EXPECT_TRUE(options.pnp.refine_guess);
+  EXPECT_EQ(frontendChoiceWord(options, "pnp-prediction"), "candidate");
+  setFrontendChoice(options, "pnp-prediction", "start");
+  EXPECT_FALSE(options.pnp.refine_guess);
+  EXPECT_THROW(setFrontendChoice(options, "pnp-prediction", "guess"), std::invalid_argument);
   EXPECT_TRUE(FrontendOptions{}.gate_free_retry);  // the defaults
   EXPECT_FALSE(FrontendOptions{}.motion_per_period);
   EXPECT_TRUE(FrontendOptions{}.keyframe_before_loss);
@@ -58,7 +65,7 @@ TEST(FrontendChoices, EachKeySetsItsOption) {
   EXPECT_EQ(options.dense_odometry.kind, DenseOdometryKind::Icp);
   EXPECT_EQ(options.quality.mode, QualityGateMode::Absolute);
   EXPECT_EQ(options.matcher.kind, MatcherKind::KdTree);
-  EXPECT_EQ(frontendChoiceKeys().size(), 16u);
+  EXPECT_EQ(frontendChoiceKeys().size(), 17u);
   // The widths features are found at: full, or MIN-MAX pixels.
   EXPECT_EQ(FrontendOptions{}.features.min_working_width, 427);
   EXPECT_EQ(FrontendOptions{}.features.max_working_width, 960);

@@ -101,6 +101,57 @@ TEST(PosePnp, AGoodGuessSurvivesARansacFailure) {
   EXPECT_LT(translationError(seeded.pose_wc, kPnpTruthWc), 0.002);
 }
 
+TEST(PosePnp, ThePredictionRefinedAsACandidateRecoversWhatRansacMisses) {
+  // A prediction 0.45 deg off (4-6 px on every match): none of its matches within RANSAC's 3 px, all within 6. With
+  // 80 % outliers and one RANSAC draw, RANSAC finds no model; the prediction cannot start the refinement either.
+  const auto camera = syntheticCamera();
+  const PnpScene scene = makePnpScene(camera, kPnpTruthWc, 500, 0.3, 0.8, 5);
+  const Eigen::Isometry3d guess = kPnpTruthWc * makePose({0, 0.45, 0}, {0, 0, 0});
+  PnpOptions options;
+  options.ransac_iterations = 1;
+  const PoseEstimate start_only = estimatePosePnp(scene.points, scene.pixels, camera, guess, options);
+  EXPECT_FALSE(start_only.ok);
+
+  options.refine_guess = true;
+  const PoseEstimate candidate = estimatePosePnp(scene.points, scene.pixels, camera, guess, options);
+  ASSERT_TRUE(candidate.ok) << candidate.failure;
+  EXPECT_TRUE(candidate.refined_from_guess);
+  EXPECT_TRUE(candidate.initial_pose_wc.isApprox(guess));
+  EXPECT_LT(rotationErrorDeg(candidate.pose_wc, kPnpTruthWc), 0.1);
+  EXPECT_LT(translationError(candidate.pose_wc, kPnpTruthWc), 0.002);
+  EXPECT_GE(candidate.inliers.size(), 95u);  // the 100 right matches, 0.3 px noise
+}
+
+TEST(PosePnp, ThePredictionCandidateIsKeptOnlyWithMoreInliersThanRansacs) {
+  // 400 matches of the camera at the truth and 150 consistent with another pose B (a moving object's), the
+  // prediction near B: refined, it explains B's 150 matches, fewer than RANSAC's 400, and RANSAC's pose stays.
+  const auto camera = syntheticCamera();
+  PnpScene scene = makePnpScene(camera, kPnpTruthWc, 400, 0.5, 0.0, 6);
+  const Eigen::Isometry3d other_wc = kPnpTruthWc * makePose({0, 3, 0}, {0.1, 0, 0});
+  std::mt19937 rng(7);
+  for (const Eigen::Vector3d& point : pointsInView(camera, other_wc, 150, 1.0, 5.0, rng)) {
+    scene.points.push_back(point);
+    scene.pixels.push_back(projectWorld(camera, other_wc, point) + gaussianPixel(0.5, rng));
+  }
+  PnpOptions options;
+  options.refine_guess = true;
+  const Eigen::Isometry3d guess = other_wc * makePose({0, 0.45, 0}, {0, 0, 0});
+  const PoseEstimate estimate = estimatePosePnp(scene.points, scene.pixels, camera, guess, options);
+  ASSERT_TRUE(estimate.ok) << estimate.failure;
+  EXPECT_FALSE(estimate.refined_from_guess);
+  EXPECT_LT(rotationErrorDeg(estimate.pose_wc, kPnpTruthWc), 0.1);
+  EXPECT_GE(estimate.inliers.size(), 390u);
+
+  // The same prediction near the truth instead: both candidates end at the truth with the same inliers, and a tie
+  // keeps RANSAC's.
+  const PoseEstimate near_truth =
+      estimatePosePnp(scene.points, scene.pixels, camera, kPnpTruthWc * makePose({0, 0.45, 0}, {0, 0, 0}), options);
+  ASSERT_TRUE(near_truth.ok) << near_truth.failure;
+  EXPECT_EQ(near_truth.inliers.size(), 400u);
+  EXPECT_FALSE(near_truth.refined_from_guess);
+  EXPECT_LT(rotationErrorDeg(near_truth.pose_wc, kPnpTruthWc), 0.1);
+}
+
 TEST(PosePnp, FindsThePoseWhenOnlyAQuarterOfTheMatchesAreRight) {
   // A dim frame in a fast turn (fr3 Kinect-like + low light): 60-120 matches, a quarter or fewer right. An
   // all-inlier 4-point set then comes with p = 0.25^4 = 0.4 % a draw: 100 draws (OpenCV's default, ours until

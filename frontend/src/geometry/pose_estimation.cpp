@@ -163,6 +163,55 @@ std::optional<std::string> pnpInputProblem(const std::vector<Eigen::Vector3d>& p
   return std::nullopt;
 }
 
+/// A pose, the matches within `ransac_reprojection_px` of it, and whether it came from the guess.
+struct PoseCandidate {
+  Eigen::Isometry3d pose_wc = Eigen::Isometry3d::Identity();
+  std::vector<int> inliers;
+  bool from_guess = false;
+};
+
+/// Where refinement starts: RANSAC's hypothesis and its consensus, or the guess and the matches it explains when
+/// those are more.
+PoseCandidate startingPose(const std::vector<Eigen::Vector3d>& points_world, const std::vector<Eigen::Vector2d>& pixels,
+                           const std::vector<int>& valid, const PinholeCamera& camera,
+                           const std::optional<Eigen::Isometry3d>& guess_wc, const PnpOptions& options) {
+  auto [ransac_wc, ransac_inliers] = ransacPnp(points_world, pixels, valid, camera, options);
+  if (guess_wc) {
+    std::vector<int> guess_inliers =
+        selectInliers(points_world, pixels, valid, camera, *guess_wc, options.ransac_reprojection_px);
+    if (guess_inliers.size() > ransac_inliers.size()) return {*guess_wc, std::move(guess_inliers), true};
+  }
+  return {ransac_wc, std::move(ransac_inliers), false};
+}
+
+/// The Huber refinement from `start_wc` on `start_inliers`, and the matches within the RANSAC threshold after it.
+PoseCandidate refineCandidate(const std::vector<Eigen::Vector3d>& points_world,
+                              const std::vector<Eigen::Vector2d>& pixels, const std::vector<int>& valid,
+                              const PinholeCamera& camera, const Eigen::Isometry3d& start_wc,
+                              const std::vector<int>& start_inliers, const PnpOptions& options) {
+  PoseCandidate candidate;
+  candidate.pose_wc = refinePose(points_world, pixels, start_inliers, camera, start_wc, options.huber_px,
+                                 options.refine_max_iterations, nullptr);
+  candidate.inliers =
+      selectInliers(points_world, pixels, valid, camera, candidate.pose_wc, options.ransac_reprojection_px);
+  return candidate;
+}
+
+/// The guess refined on the matches it explains within twice the inlier radius, when there are enough of them. Twice:
+/// a prediction off by a few pixels (half a degree at 525 px focal length, or a sideways step traded for a turn on far
+/// landmarks) explains almost none of its matches within the inlier radius but most within twice it.
+std::optional<PoseCandidate> guessCandidate(const std::vector<Eigen::Vector3d>& points_world,
+                                            const std::vector<Eigen::Vector2d>& pixels, const std::vector<int>& valid,
+                                            const PinholeCamera& camera, const Eigen::Isometry3d& guess_wc,
+                                            const PnpOptions& options) {
+  const std::vector<int> near =
+      selectInliers(points_world, pixels, valid, camera, guess_wc, 2.0 * options.ransac_reprojection_px);
+  if (static_cast<int>(near.size()) < options.min_inliers) return std::nullopt;
+  PoseCandidate candidate = refineCandidate(points_world, pixels, valid, camera, guess_wc, near, options);
+  candidate.from_guess = true;
+  return candidate;
+}
+
 }  // namespace
 
 Eigen::Isometry3d refinePoseHuber(const std::vector<Eigen::Vector3d>& points_world,
@@ -200,27 +249,30 @@ PoseEstimate estimatePosePnp(const std::vector<Eigen::Vector3d>& points_world,
     return estimate;
   }
 
-  auto [start_wc, start_inliers] = ransacPnp(points_world, pixels, valid, camera, options);
-  if (guess_wc) {
-    std::vector<int> guess_inliers =
-        selectInliers(points_world, pixels, valid, camera, *guess_wc, options.ransac_reprojection_px);
-    if (guess_inliers.size() > start_inliers.size()) {
-      start_wc = *guess_wc;
-      start_inliers = std::move(guess_inliers);
-      estimate.initial_from_guess = true;
+  const PoseCandidate start = startingPose(points_world, pixels, valid, camera, guess_wc, options);
+  estimate.initial_from_guess = start.from_guess;
+  const bool enough_to_start = static_cast<int>(start.inliers.size()) >= options.min_inliers;
+  PoseCandidate best;
+  if (enough_to_start) {
+    estimate.initial_pose_wc = start.pose_wc;
+    best = refineCandidate(points_world, pixels, valid, camera, start.pose_wc, start.inliers, options);
+  }
+  // Refining the guess on its wider neighbourhood is a second candidate unless refinement already starts there.
+  if (guess_wc && options.refine_guess && !(estimate.initial_from_guess && enough_to_start)) {
+    if (auto from_guess = guessCandidate(points_world, pixels, valid, camera, *guess_wc, options);
+        from_guess && from_guess->inliers.size() > best.inliers.size()) {
+      best = std::move(*from_guess);
+      estimate.initial_pose_wc = *guess_wc;
+      estimate.refined_from_guess = true;
     }
   }
-  if (static_cast<int>(start_inliers.size()) < options.min_inliers) {
-    estimate.failure = "RANSAC found " + std::to_string(start_inliers.size()) + " inliers, " +
+  if (!enough_to_start && !estimate.refined_from_guess) {
+    estimate.failure = "RANSAC found " + std::to_string(start.inliers.size()) + " inliers, " +
                        std::to_string(options.min_inliers) + " needed";
     return estimate;
   }
-  estimate.initial_pose_wc = start_wc;
-
-  const Eigen::Isometry3d refined_wc = refinePoseHuber(points_world, pixels, start_inliers, camera, start_wc,
-                                                       options.huber_px, options.refine_max_iterations);
-  std::vector<int> inliers =
-      selectInliers(points_world, pixels, valid, camera, refined_wc, options.ransac_reprojection_px);
+  const Eigen::Isometry3d refined_wc = best.pose_wc;
+  std::vector<int> inliers = std::move(best.inliers);
   if (static_cast<int>(inliers.size()) < options.min_inliers) {
     estimate.failure = "refined pose keeps " + std::to_string(inliers.size()) + " inliers, " +
                        std::to_string(options.min_inliers) + " needed";

@@ -100,6 +100,9 @@ const std::vector<Choice>& choices() {
        [](const FrontendOptions& o) -> std::string {
          return wordOfTwo(o.pnp_thresholds_in_working_pixels, "frame", "working");
        }},
+      {"pnp-prediction",
+       [](FrontendOptions& o, const std::string& v) { o.pnp.refine_guess = secondOfTwo(v, "start", "candidate"); },
+       [](const FrontendOptions& o) -> std::string { return wordOfTwo(o.pnp.refine_guess, "start", "candidate"); }},
       {"gate-free-retry",
        [](FrontendOptions& o, const std::string& v) { o.gate_free_retry = secondOfTwo(v, "off", "on"); },
        [](const FrontendOptions& o) -> std::string { return wordOfTwo(o.gate_free_retry, "off", "on"); }},

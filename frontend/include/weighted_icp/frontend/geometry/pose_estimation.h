@@ -28,6 +28,11 @@ struct PnpOptions {
   int refine_max_iterations = 20;
   /// The solver inside RANSAC; the Huber refinement follows either.
   PnpMethod method = PnpMethod::Ap3p;
+  /// The guess as a second candidate: also refine it on the matches it explains within twice
+  /// `ransac_reprojection_px` and keep that pose when it ends with more inliers than RANSAC's refined pose. Off, the
+  /// guess only replaces RANSAC's hypothesis when it already explains more matches within `ransac_reprojection_px`,
+  /// which a guess a degree off never does (docs/frontend_generalisation.md).
+  bool refine_guess = false;
 };
 
 struct PoseEstimate {
@@ -40,6 +45,8 @@ struct PoseEstimate {
   /// explained more matches.
   Eigen::Isometry3d initial_pose_wc = Eigen::Isometry3d::Identity();
   bool initial_from_guess = false;
+  /// The pose came from the guess refined as a second candidate (PnpOptions::refine_guess).
+  bool refined_from_guess = false;
 };
 
 /// RANSAC PnP (OpenCV, AP3P minimal sets, EPnP on the consensus), then
@@ -48,7 +55,8 @@ struct PoseEstimate {
 /// (<= ransac_reprojection_px, in front of the camera) after refinement.
 /// `guess_wc` (e.g. the constant-velocity prediction) competes with RANSAC:
 /// refinement starts from whichever pose has more inliers, so a good guess
-/// survives a RANSAC failure. Matches with a non-finite point or pixel are
+/// survives a RANSAC failure; with `options.refine_guess` the guess refined on
+/// its wider neighbourhood competes too, by inliers after refinement. Matches with a non-finite point or pixel are
 /// ignored. Deterministic: OpenCV's RANSAC draws from its own fixed-seed
 /// generator and the refinement is single-threaded.
 PoseEstimate estimatePosePnp(const std::vector<Eigen::Vector3d>& points_world,
