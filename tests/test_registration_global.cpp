@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <limits>
+#include <random>
 #include <stdexcept>
 #include <string>
 
@@ -105,6 +106,53 @@ TEST(GlobalAlignment, AlignsAWholeMapOntoOneOfItsMiniMapsByTheSearchTheOtherWay)
   const GlobalLandmarkAlignmentResult before = aligner.align(toLandmarkCloud(moved, CovarianceWeight{}));
   EXPECT_FALSE(before.global.reversed);
   EXPECT_GT(rotationErrorDeg(Eigen::Isometry3d(before.alignment.transformation), d.toIsometry().inverse()), 10.0);
+}
+
+TEST(GlobalAlignment, WithSearchSettingsSharesTheTargetAndRefusesSettingsThatShapeIt) {
+  // Random landmarks in a 4 x 3 x 2 m room; the source the same points turned by 90 degrees and moved.
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> x(0.f, 4.f), y(0.f, 3.f), z(0.f, 2.f);
+  GlobalAlignment::Cloud target, source;
+  for (int i = 0; i < 400; ++i) target.push_back(pcl::PointXYZ(x(rng), y(rng), z(rng)));
+  const Eigen::Isometry3d moved = Displacement{0.5, -0.3, 0.0, 0.0, 0.0, 90.0}.toIsometry();
+  for (const auto& p : target) {
+    const Eigen::Vector3d q = moved * Eigen::Vector3d(p.x, p.y, p.z);
+    source.push_back(pcl::PointXYZ(static_cast<float>(q.x()), static_cast<float>(q.y()), static_cast<float>(q.z())));
+  }
+  GlobalAlignment full;
+  full.setTarget(target);
+  GlobalAlignmentSettings look = full.settings();
+  look.refined_hypotheses = 3;
+  look.climbed_hypotheses = 0;
+  look.final_iterations = 20;
+  const GlobalAlignment shared = full.withSearchSettings(look);
+  GlobalAlignment own(look);
+  own.setTarget(target);
+  const GlobalAlignmentResult from_shared = shared.align(source), from_own = shared.align(source);
+  EXPECT_TRUE(from_shared.transformation == own.align(source).transformation);  // the same target, bit for bit
+  EXPECT_EQ(from_shared.inliers, from_own.inliers);
+  EXPECT_LT(rotationErrorDeg(Eigen::Isometry3d(from_shared.transformation), moved.inverse()), 1.0);
+
+  // A new target for the first aligner leaves the copy's as it was.
+  GlobalAlignment::Cloud elsewhere = target;
+  for (auto& p : elsewhere) p.x += 10.f;
+  full.setTarget(elsewhere);
+  EXPECT_TRUE(shared.align(source).transformation == from_shared.transformation);
+
+  for (const char* name : {"sample_cell", "max_target_samples", "fine_window", "medium_cell"}) {
+    GlobalAlignmentSettings other = full.settings();
+    if (std::string(name) == "sample_cell") other.sample_cell = 0.3;
+    if (std::string(name) == "max_target_samples") other.max_target_samples = 100;
+    if (std::string(name) == "fine_window") other.fine_window *= 2.0;
+    if (std::string(name) == "medium_cell") other.medium_cell *= 2.0;
+    try {
+      full.withSearchSettings(other);
+      ADD_FAILURE() << name << " changed and accepted";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_THROW(GlobalAlignment{}.withSearchSettings(look).align(source), std::invalid_argument);  // no target yet
 }
 
 TEST(GlobalAlignment, BadInputIsRefusedWithAClearMessage) {

@@ -577,7 +577,7 @@ Eigen::Matrix3d levellingRotation(const Eigen::Vector3d& source_up_axis, const E
 }  // namespace
 
 GlobalAlignment::GlobalAlignment(GlobalAlignmentSettings settings)
-    : settings_(std::move(settings)), target_(std::make_unique<Target>()), pool_(std::make_unique<WorkerPool>()) {
+    : settings_(std::move(settings)), target_(std::make_shared<Target>()), pool_(std::make_unique<WorkerPool>()) {
   const auto& s = settings_;
   const auto require = [](bool ok, const char* what) {
     if (!ok) throw std::invalid_argument(std::string("GlobalAlignmentSettings::") + what);
@@ -619,7 +619,7 @@ GlobalAlignment::GlobalAlignment(GlobalAlignment&&) noexcept = default;
 GlobalAlignment& GlobalAlignment::operator=(GlobalAlignment&&) noexcept = default;
 
 void GlobalAlignment::setTarget(const Cloud& target) {
-  auto fresh = std::make_unique<Target>();
+  auto fresh = std::make_shared<Target>();
   fresh->points = finitePoints(target, "target");
   fresh->index.build(toCloud(fresh->points));
   fresh->spacing = medianSpacing(fresh->points, fresh->index);
@@ -642,6 +642,20 @@ void GlobalAlignment::setTarget(const Cloud& target) {
   fresh->voxels = firsts.size();
   fresh->sample = strided(firsts, settings_.max_target_samples);
   target_ = std::move(fresh);
+}
+
+GlobalAlignment GlobalAlignment::withSearchSettings(GlobalAlignmentSettings settings) const {
+  // Exact comparisons: the target is built from these values, and a copy of them compares equal.
+  for (const auto& [same, name] : {std::pair{settings.sample_cell == settings_.sample_cell, "sample_cell"},
+                                   {settings.max_target_samples == settings_.max_target_samples, "max_target_samples"},
+                                   {settings.fine_window == settings_.fine_window, "fine_window"},
+                                   {settings.medium_cell == settings_.medium_cell, "medium_cell"}})
+    if (!same)
+      throw std::invalid_argument(std::string("GlobalAlignment::withSearchSettings: ") + name +
+                                  " shapes the target and must equal this aligner's");
+  GlobalAlignment other(std::move(settings));
+  other.target_ = target_;
+  return other;
 }
 
 GlobalAlignmentResult GlobalAlignment::align(const Cloud& source_cloud, const Eigen::Vector3d& source_up_axis) const {

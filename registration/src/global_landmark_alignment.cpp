@@ -15,6 +15,7 @@ namespace weighted_icp {
 namespace {
 
 /// The first look's settings (GlobalLandmarkAligner::screen_): the vote and its best few hypotheses refined, no more.
+/// Search settings only: the first look shares the full search's target (GlobalAlignment::withSearchSettings).
 GlobalAlignmentSettings firstLookSettings(GlobalAlignmentSettings settings) {
   settings.refined_hypotheses = std::min(settings.refined_hypotheses, 3u);
   settings.climbed_hypotheses = 0;
@@ -37,7 +38,7 @@ void GlobalLandmarkAligner::setTarget(LandmarkCloud::ConstPtr target) {
   GlobalAlignment::Cloud xyz;
   pcl::copyPointCloud(*target, xyz);
   global_.setTarget(xyz);
-  screen_has_target_ = false;
+  screen_ = global_.withSearchSettings(screen_.settings());
   target_ = std::move(target);
 }
 
@@ -89,12 +90,6 @@ GlobalLandmarkAligner::Promising GlobalLandmarkAligner::promisingAlternatives(co
   order.resize(axes.alternatives.size());
   for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
   if (order.size() <= kAlternativesSearchedFully) return promising;
-  if (!screen_has_target_) {
-    GlobalAlignment::Cloud xyz;
-    pcl::copyPointCloud(*target_, xyz);
-    screen_.setTarget(xyz);
-    screen_has_target_ = true;
-  }
   std::vector<double> scores(order.size());
   for (std::size_t i = 0; i < order.size(); ++i) {
     const GlobalAlignmentResult look =

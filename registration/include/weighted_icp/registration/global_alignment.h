@@ -187,6 +187,12 @@ class GlobalAlignment {
   GlobalAlignmentResult align(const Cloud& source, const Eigen::Vector3d& source_up_axis,
                               const Eigen::Vector3d& up_axis, double tilt_range_deg) const;
 
+  /// @brief An aligner with other search settings sharing this one's target (its points, index and sample: not built
+  /// again), as GlobalLandmarkAligner's first look at alternative levellings does.
+  /// @param settings  checked as the constructor checks them; those that shape the target (`sample_cell`,
+  ///                  `max_target_samples`, `fine_window`, `medium_cell`) must equal this aligner's (else
+  ///                  std::invalid_argument naming the first that differs)
+  GlobalAlignment withSearchSettings(GlobalAlignmentSettings settings) const;
   /// @brief Only the trimmed ICP (no search), from `guess`: for a start already in the basin.
   /// @param source  as align()
   /// @param guess   initial transformation of the source onto the target
@@ -227,7 +233,8 @@ class GlobalAlignment {
   unsigned threadsFor(std::size_t n) const;
 
   GlobalAlignmentSettings settings_;
-  std::unique_ptr<Target> target_;
+  /// Shared with the aligners withSearchSettings() makes; never changed once built (setTarget() replaces it).
+  std::shared_ptr<const Target> target_;
   std::unique_ptr<WorkerPool> pool_;
 };
 

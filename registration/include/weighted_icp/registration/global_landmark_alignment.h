@@ -98,9 +98,8 @@ class GlobalLandmarkAligner {
 
   GlobalAlignment global_;
   /// The first look at alternative levellings: global_'s settings with the three best-voted hypotheses refined, no
-  /// climb or tilts and 20 final iterations. Its target is set on first use (screen_has_target_), as few pairs need it.
+  /// climb or tilts and 20 final iterations; it shares global_'s target (GlobalAlignment::withSearchSettings).
   GlobalAlignment screen_;
-  bool screen_has_target_ = false;
   AlignmentSettings icp_settings_;
   LandmarkCloud::ConstPtr target_;
 };
