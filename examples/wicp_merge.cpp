@@ -147,8 +147,9 @@ bool parseCommand(int argc, char** argv, MergeCommand& c) {
        "verified loops that must agree on a session's transform (1-1000)")
       ("max-free-space-violation", tools::rangedValue(&c.options.max_free_space_violation, 0.0, 1.0)
                                        ->default_value(c.options.max_free_space_violation),
-       "largest fraction of landmark sightings that may lie in space the other session saw through (0-1; "
-       "1 turns the check off; docs/mapping.md)")
+       "largest fraction of the judged landmarks that may lie, by most of their sightings, in space the other "
+       "session saw through: laid by the agreed transform or, failing that, as a pose graph of both sessions and "
+       "their agreeing loops lays them (0-1; 1 turns the check off; docs/mapping.md)")
       ("agreeing-loops-only", "keep only the loops verified without prior that agree on the transform (do not "
                               "verify the other keyframes again with the link as prior)")
       ("odometry-information", tools::namedValue(&c.options.tracking_information, tools::parseOdometryInformation,

@@ -91,7 +91,6 @@ std::vector<LoopConstraint> verifiedLoops(const Prepared& query, const Prepared&
   return loops;
 }
 
-/// The query session's world in the match session's world, as one loop says.
 /// A landmark moved as its first observer moved (`delta`: each keyframe's new pose times its old one's inverse).
 void moveWithFirstObserver(frontend::MapPoint& point, const std::map<frontend::KeyframeId, Eigen::Isometry3d>& delta) {
   if (point.observations.empty()) return;
@@ -100,6 +99,7 @@ void moveWithFirstObserver(frontend::MapPoint& point, const std::map<frontend::K
   point.covariance = moved.rotation() * point.covariance * moved.rotation().transpose();
 }
 
+/// The query session's world in the match session's world, as one loop says.
 Eigen::Isometry3d worldTransform(const LoopConstraint& loop, const Prepared& query, const Prepared& match) {
   return match.snapshot.keyframes.at(loop.match).pose_wc * loop.query_in_match *
          query.snapshot.keyframes.at(loop.query).pose_wc.inverse();

@@ -42,7 +42,8 @@ struct SessionMergeOptions {
   /// judged by checkFreeSpace (both ways) may lie, by the majority of their sightings, in space the other
   /// session's keyframes saw through. Chosen between correct merges (at most 0.22 % measured: synthetic, a larger
   /// room, TUM fr1 and fr3) and merges forced by perceptual aliasing (at least 4.1 %), about ten times above the
-  /// first (docs/mapping.md).
+  /// first (docs/mapping.md). Judged with the agreed transform and, when that fails, on the two maps as a pose graph
+  /// of both sessions' odometry and the agreeing loops lays them (a session that drifted within itself).
   double max_free_space_violation = 0.02;
   /// @brief How checkFreeSpace judges a sighting.
   FreeSpaceOptions free_space;
