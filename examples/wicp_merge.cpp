@@ -80,7 +80,9 @@ tools::JsonObject makeReport(const std::vector<std::string>& folders, const mapp
           .add(key + "_loops_agreeing", link.loops_agreeing)
           .add(key + "_loops_with_link_prior", link.loops_with_link_prior)
           .add(key + "_free_space_judged", link.free_space_judged)
-          .add(key + "_free_space_violation", link.free_space_violation);
+          .add(key + "_free_space_violation", link.free_space_violation)
+          .add(key + "_free_space_rigid_violation", link.free_space_rigid_violation)
+          .add(key + "_free_space_optimised", link.free_space_optimised);
     if (link.merged) {
       ++merged;
       report.add(key + "_linked_to", link.linked_to)

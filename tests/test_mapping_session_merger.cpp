@@ -111,6 +111,7 @@ TEST(SessionMerger, VerifiesTheOtherKeyframesAgainWithTheLinkAsPrior) {
   EXPECT_EQ(second->second.first, second->second.second);
   EXPECT_LT(second->second.second, first->second.second);
   ASSERT_TRUE(merge.sessions[1].merged);
+  EXPECT_FALSE(merge.sessions[1].free_space_optimised);  // a session true to itself lies on the other rigidly
   EXPECT_GT(merge.sessions[1].loops_with_link_prior, 0u) << "no keyframe was verified again";
   EXPECT_EQ(merge.loops.size(), agreeing_only.loops.size() + merge.sessions[1].loops_with_link_prior);
   ASSERT_EQ(merge.loop_used.size(), merge.loops.size());
@@ -158,6 +159,8 @@ TEST(SessionMerger, ASessionThatDriftedWithinItselfIsJudgedAsTheJointGraphLaysIt
   EXPECT_EQ(link.loops_agreeing, link.loops_found);
   ASSERT_GE(link.loops_agreeing, 10u) << "loops at both ends of the bend must agree for the test to say anything";
   EXPECT_TRUE(link.merged) << "free space " << link.free_space_violation;
+  EXPECT_TRUE(link.free_space_optimised);
+  EXPECT_GT(link.free_space_rigid_violation, options.max_free_space_violation);
   EXPECT_LT(link.free_space_violation, 0.005);
 
   // Its unbent start (keyframes 0-5) lands where the truth puts it.

@@ -283,10 +283,12 @@ void linkSessions(const std::vector<Prepared>& prepared, const BinaryVocabulary:
         link.loops_agreeing = std::max(link.loops_agreeing, agreeing.size());
         if (agreeing.size() < options.min_agreeing_loops) continue;
         // Rigidly first (as calibrated, docs/mapping.md), then as the joint pose graph would lay the two maps.
-        if (!consistent(prepared[s].snapshot, sessions[s].camera, prepared[m].snapshot, sessions[m].camera, s_in_m,
-                        options, link) &&
-            !consistentOnceOptimised(prepared[s], sessions[s].camera, s, prepared[m], sessions[m].camera, m, s_in_m,
-                                     agreeing, options, link))
+        const bool rigid = consistent(prepared[s].snapshot, sessions[s].camera, prepared[m].snapshot,
+                                      sessions[m].camera, s_in_m, options, link);
+        link.free_space_rigid_violation = link.free_space_violation;
+        link.free_space_optimised = !rigid;
+        if (!rigid && !consistentOnceOptimised(prepared[s], sessions[s].camera, s, prepared[m], sessions[m].camera, m,
+                                               s_in_m, agreeing, options, link))
           continue;
         link.merged = progress = true;
         link.linked_to = m;

@@ -78,6 +78,11 @@ struct SessionLink {
   /// joined, or the last one tried): landmarks judged both ways and the fraction in the other's free space.
   std::size_t free_space_judged = 0;
   double free_space_violation = 0.0;
+  /// @brief The fraction with the agreed transform alone, and whether the check was made again on the maps as the
+  /// two sessions' pose graph lays them (the rigid one failed); free_space_judged and free_space_violation are then
+  /// the second judgement's.
+  double free_space_rigid_violation = 0.0;
+  bool free_space_optimised = false;
   /// @brief Its world frame in the first session's world frame, after the joint optimisation.
   Eigen::Isometry3d world_in_first = Eigen::Isometry3d::Identity();
 };
