@@ -196,6 +196,18 @@ void requireUsableRun(const RunCounts& counts, std::size_t frames, const Landmar
                              frames_text.str() + "; is there valid depth? nothing written");
 }
 
+/// The relative pose error frame to frame (evaluate_rpe.py with a fixed delta of one frame): each step's accuracy,
+/// which one wrong step long ago does not dominate as it dominates the ATE; the reason instead when it cannot be had.
+void addFrameToFrameRpe(const Trajectory& truth, const Trajectory& trajectory, tools::JsonObject& report) {
+  try {
+    const metrics::RelativePoseError rpe = metrics::computeRpe(truth, trajectory, 1.0, metrics::DeltaUnit::Frames);
+    report.add("rpe_frame_translation_rmse_m", rpe.translation.rmse)
+        .add("rpe_frame_rotation_rmse_deg", rpe.rotation_deg.rmse);
+  } catch (const std::exception& e) {
+    report.add("rpe_unavailable", std::string(e.what()));
+  }
+}
+
 /// ATE against the ground truth when there is one. When it cannot be computed
 /// (fewer than 3 tracked poses, no timestamps in common) the run's own outputs
 /// are still valid: a warning, and the report says why instead of a number.
@@ -214,6 +226,7 @@ void addAte(const Trajectory& truth, const Trajectory& trajectory, tools::JsonOb
   }
   if (ate) {
     report.add("ate_rmse_m", ate->translation.rmse).add("ate_pairs", ate->pairs);
+    addFrameToFrameRpe(truth, trajectory, report);
   } else {
     std::cerr << "wicp_rgbd_slam: warning: no ATE against the ground truth: " << why << '\n';
     report.add("ate_unavailable", why);

@@ -2,7 +2,7 @@
 """The front-end ablation of issue #11: wicp_rgbd_slam on every sequence of the cross-sequence set
 (fr1 head, fr3 head, the synthetic sequence, and their variants made by wicp_make_variant) once per
 option set, and a Markdown table (sequence x option set: ATE RMSE, frames not tracked (each keeps the motion
-model's predicted pose), median and 90th-percentile tracking time per frame).
+model's predicted pose), the frame-to-frame RPE, median and 90th-percentile tracking time per frame).
 
 Option sets are wicp_rgbd_slam command-line flags passed through unchanged, so any option the tool
 has (today's and future ones) slots in without changing this script:
@@ -130,8 +130,12 @@ def cell(report):
         return "failed"
     ate = report.get("ate_rmse_m")
     ate_text = f"{ate * 100:.2f}" if ate is not None else "–"
+    # Frame to frame: one wrong step long ago moves the ATE of every later frame, not this.
+    rpe = report.get("rpe_frame_translation_rmse_m")
+    rpe_text = f"{rpe * 1000:.1f}" if rpe is not None else "–"
     missing = report["frames"] - report["tracked_frames"]
-    text = f"{ate_text} ({missing}) · {report['median_ms_per_frame']:.0f} / {report['p90_ms_per_frame']:.0f}"
+    text = (f"{ate_text} ({missing}) · {rpe_text} · {report['median_ms_per_frame']:.0f} / "
+            f"{report['p90_ms_per_frame']:.0f}")
     if report.get("dense_fallback_frames", 0) > 0:
         text += f" [{report['dense_fallback_frames']} dense]"
     return text
@@ -150,7 +154,8 @@ def main():
     arguments.scratch.mkdir(parents=True, exist_ok=True)
     names = [name for name, _ in arguments.sets]
     lines = [
-        "ATE RMSE cm (frames not tracked, posed by prediction) · median / p90 tracking ms per frame",
+        "ATE RMSE cm (frames not tracked, posed by prediction) · frame-to-frame RPE mm · median / p90 tracking ms "
+        "per frame",
         f"(wicp_rgbd_slam {arguments.common}; each column adds its flags)",
         "",
         "| sequence | " + " | ".join(names) + " |",

@@ -15,6 +15,7 @@
 #include "tool_runner.h"
 #include "weighted_icp/io/trajectory.h"
 #include "weighted_icp/mapping/session.h"
+#include "weighted_icp/metrics/trajectory_error.h"
 #include "weighted_icp/simulation/rgbd_sequence.h"
 
 namespace weighted_icp::testing {
@@ -51,6 +52,13 @@ TEST(WicpRgbdSlamLoops, ReportsLoopsAndWritesTheGraphAndTheSession) {
   const mapping::Session session = mapping::loadSession((out / "session").string());
   EXPECT_EQ(session.frames.size(), 30u);
   EXPECT_EQ(io::readTrajectory((out / "trajectory.txt").string()).size(), 30u);
+  // The frame-to-frame RPE, as computed from the files the run wrote.
+  const metrics::RelativePoseError rpe =
+      metrics::computeRpe(io::readTrajectory((out / "groundtruth.txt").string()),
+                          io::readTrajectory((out / "trajectory.txt").string()), 1.0, metrics::DeltaUnit::Frames);
+  EXPECT_GT(rpe.translation.rmse, 0.0);
+  EXPECT_NEAR(jsonNumber(report, "rpe_frame_translation_rmse_m"), rpe.translation.rmse, 1e-9) << report;
+  EXPECT_NEAR(jsonNumber(report, "rpe_frame_rotation_rmse_deg"), rpe.rotation_deg.rmse, 1e-7) << report;
 }
 
 TEST(WicpRgbdSlamLoops, ListsEveryLoopCandidateWithItsVerdict) {
