@@ -91,6 +91,16 @@ std::vector<LoopConstraint> verifiedLoops(const Prepared& query, const Prepared&
   return loops;
 }
 
+/// Moves `keyframe` to its optimised pose (its id offset by s * kStride in `poses`); returns how it moved (the new pose
+/// times the old one's inverse), for its landmarks to follow.
+Eigen::Isometry3d moveToOptimised(frontend::Keyframe& keyframe, std::size_t s,
+                                  const std::map<frontend::KeyframeId, Eigen::Isometry3d>& poses) {
+  const Eigen::Isometry3d& pose = poses.at(s * kStride + keyframe.id);
+  const Eigen::Isometry3d moved = pose * keyframe.pose_wc.inverse();
+  keyframe.pose_wc = pose;
+  return moved;
+}
+
 /// A landmark moved as its first observer moved (`delta`: each keyframe's new pose times its old one's inverse).
 void moveWithFirstObserver(frontend::MapPoint& point, const std::map<frontend::KeyframeId, Eigen::Isometry3d>& delta) {
   if (point.observations.empty()) return;
@@ -212,11 +222,7 @@ KeyframeSnapshot movedSnapshot(const KeyframeSnapshot& snapshot, std::size_t s,
                                const std::map<frontend::KeyframeId, Eigen::Isometry3d>& poses) {
   KeyframeSnapshot moved = snapshot;
   std::map<frontend::KeyframeId, Eigen::Isometry3d> delta;
-  for (auto& [id, keyframe] : moved.keyframes) {
-    const Eigen::Isometry3d& pose = poses.at(s * kStride + id);
-    delta[id] = pose * keyframe.pose_wc.inverse();
-    keyframe.pose_wc = pose;
-  }
+  for (auto& [id, keyframe] : moved.keyframes) delta[id] = moveToOptimised(keyframe, s, poses);
   for (auto& [id, point] : moved.points) moveWithFirstObserver(point, delta);
   return moved;
 }
@@ -337,11 +343,7 @@ Session corrected(const Session& session, std::size_t s,
                   const std::map<frontend::KeyframeId, Eigen::Isometry3d>& poses) {
   Session moved = session;
   std::map<frontend::KeyframeId, Eigen::Isometry3d> delta;
-  for (auto& keyframe : moved.keyframes) {
-    const Eigen::Isometry3d& pose = poses.at(s * kStride + keyframe.id);
-    delta[keyframe.id] = pose * keyframe.pose_wc.inverse();
-    keyframe.pose_wc = pose;
-  }
+  for (auto& keyframe : moved.keyframes) delta[keyframe.id] = moveToOptimised(keyframe, s, poses);
   for (auto& point : moved.points) moveWithFirstObserver(point, delta);
   return moved;
 }
