@@ -186,6 +186,42 @@ TEST(LoopVerification, WithoutTheIcpCheckTheGeometryIsJudgedAtPnpsPose) {
   EXPECT_EQ(refused.refused_by, "overlap") << refused.reason;
 }
 
+TEST(LoopVerification, AnIcpWithinTheCorrectionBoundConfirmsAPnpEdgeWithoutReproducingItsPixels) {
+  // The query's landmarks turned 1 degree about its camera, its keyframes and features not: PnP (the query's pixels
+  // on the candidate's landmarks) still finds the camera, the landmark clouds put it about a degree away. As the
+  // clouds of frames taken in the dark do: well within the 2 degrees that make a loop wrong, yet the ICP's pose
+  // projects few of PnP's inliers within its 3 px. With the PnP edge (the default) the ICP only checks the pose and
+  // the loop stands; with the ICP edge its pose would be the loop, and must explain the descriptor matches.
+  std::vector<std::size_t> frames = testing::everyNth(36, kEvery);
+  for (std::size_t f : testing::everyNth(216, kEvery, 180)) frames.push_back(f);
+  const auto data = testing::syntheticKeyframes(11, false, kFramesPerLoop, frames);
+  const frontend::KeyframeId match = 2, query = 8;
+  const Eigen::Vector3d centre = data.snapshot.keyframes.at(query).pose_wc.translation();
+  const Eigen::Isometry3d turn = Eigen::Translation3d(centre) *
+                                 Eigen::AngleAxisd(1.0 * kDegree, Eigen::Vector3d::UnitZ()) *
+                                 Eigen::Translation3d(-centre);
+  KeyframeSnapshot turned = data.snapshot;
+  for (auto& [id, point] : turned.points) {
+    point.position = turn * point.position;
+    point.covariance = turn.linear() * point.covariance * turn.linear().transpose();
+  }
+  const LoopVerifier verifier(data.camera);
+  const LoopVerification result = verifier.verify(turned, query, data.snapshot, match);
+  ASSERT_TRUE(result.accepted) << result.reason;
+  EXPECT_GT(result.icp_correction_deg, 0.5) << "the ICP did not see the turn: the test proves nothing";
+  EXPECT_LT(result.icp_explained_inliers, verifier.options().min_inliers)
+      << "the ICP's pose still reproduces PnP's pixels: the test proves nothing";
+  const auto [metres, degrees] =
+      poseError(result.constraint.query_in_match, trueQueryInMatch(data.snapshot, query, match));
+  EXPECT_LT(metres, 0.02) << "the edge is PnP's pose";
+  EXPECT_LT(degrees, 0.5);
+  LoopVerificationOptions icp_edge;
+  icp_edge.edge = LoopEdgeSource::Icp;
+  const LoopVerification refused = LoopVerifier(data.camera, icp_edge).verify(turned, query, data.snapshot, match);
+  EXPECT_FALSE(refused.accepted);
+  EXPECT_EQ(refused.refused_by, "icp_inliers") << refused.reason;
+}
+
 TEST(LoopVerification, AnIcpThatLeavesThePnpPoseDoesNotRefuseATrueLoop) {
   // A room three times as large: landmarks metres apart on far walls, where the weighted stage's choice of the most
   // confident neighbour pulled the same way at every iteration and slid 1.3 m away from a PnP pose right to 1 cm.

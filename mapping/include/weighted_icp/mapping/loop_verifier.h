@@ -49,8 +49,8 @@ struct LoopVerificationOptions {
   double ratio = 0.8;
   /// RANSAC PnP (the front end's: AP3P + EPnP, then Huber refinement).
   frontend::PnpOptions pnp{200, 3.0, 0.999, 12, 2.0, 20};
-  /// PnP inliers needed, and PnP inliers the ICP's camera pose must still explain (project within the PnP
-  /// reprojection threshold).
+  /// PnP inliers needed, and, with LoopEdgeSource::Icp, PnP inliers the ICP's camera pose must still explain
+  /// (project within the PnP reprojection threshold).
   std::size_t min_inliers = 30;
   /// Weighted ICP between the local landmark clouds, started from the PnP pose: the weight strategy, the
   /// neighbours it chooses among, and the correspondence limit (metres) that keeps the parts without a
@@ -142,8 +142,9 @@ struct LoopVerification {
   bool icp_weighted = true;
   /// @brief How far ICP moved the PnP pose (metres, degrees).
   double icp_correction_m = 0.0, icp_correction_deg = 0.0;
-  /// @brief How many PnP inliers the ICP's camera pose still projects within the PnP reprojection threshold: the
-  /// loop is refused below min_inliers (the ICP left the solution the descriptor matches support).
+  /// @brief How many PnP inliers the ICP's camera pose still projects within the PnP reprojection threshold. With
+  /// LoopEdgeSource::Icp the loop is refused below min_inliers (the ICP's pose, which would be the loop, left the
+  /// solution the descriptor matches support); with the PnP edge the correction bound alone judges the agreement.
   std::size_t icp_explained_inliers = 0;
 };
 
