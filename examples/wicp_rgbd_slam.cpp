@@ -277,8 +277,11 @@ std::map<std::string, std::size_t> writeLoopCandidates(const fs::path& path, con
   for (const mapping::LoopCandidateRecord& c :
        detector ? detector->candidates() : std::vector<mapping::LoopCandidateRecord>{}) {
     std::string verdict = c.refused_by, reason = c.reason;
-    if (verdict.empty() && accepted.count({c.query, c.match})) {
+    if (verdict.empty() && accepted.count({c.query, c.edge_match})) {
       verdict = "accepted";
+      if (c.edge_match != c.match)
+        reason += (reason.empty() ? "" : " ") + ("edge to keyframe " + std::to_string(c.edge_match)) +
+                  ", which saw the most PnP inliers";
     } else if (verdict.empty()) {
       verdict = "pose_graph";
       reason = "verified, but not admitted by the pose graph's consistency test";

@@ -38,7 +38,8 @@ std::optional<LoopConstraint> BowLoopDetector::detect(const frontend::Map& map, 
   if (const auto previous = bridgeCandidate(snapshot, query)) {
     // No prior: the segment started at a guess (the last known pose), which is what the bridge corrects.
     LoopVerification result = bridge_verifier_.verify(snapshot, query, snapshot, *previous);
-    candidates_.push_back({query, *previous, 0.0, result.refused_by, "segment bridge: " + result.reason});
+    candidates_.push_back({query, *previous, 0.0, result.refused_by, "segment bridge: " + result.reason,
+                           result.accepted ? result.constraint.match : *previous});
     if (result.accepted) {
       bridged_segments_.insert(segment);
       recognizer_.add(query, std::move(bow), segment);
@@ -50,13 +51,14 @@ std::optional<LoopConstraint> BowLoopDetector::detect(const frontend::Map& map, 
   for (const PlaceCandidate& candidate : recognizer_.detect(query, bow, snapshot.covisible(query), segment)) {
     if (!snapshot.keyframes.count(candidate.keyframe)) {
       candidates_.push_back({query, candidate.keyframe, candidate.normalised_score, "culled",
-                             "bundle adjustment culled the keyframe since it was added"});
+                             "bundle adjustment culled the keyframe since it was added", candidate.keyframe});
       continue;
     }
     std::optional<LoopPrior> prior;
     if (options_.use_odometry_prior) prior = odometryPrior(snapshot, query, candidate.keyframe, options_.drift);
     LoopVerification result = verifier_.verify(snapshot, query, snapshot, candidate.keyframe, prior);
-    candidates_.push_back({query, candidate.keyframe, candidate.normalised_score, result.refused_by, result.reason});
+    candidates_.push_back({query, candidate.keyframe, candidate.normalised_score, result.refused_by, result.reason,
+                           result.accepted ? result.constraint.match : candidate.keyframe});
     if (!result.accepted) continue;
     result.constraint.score = candidate.normalised_score;
     loop = result.constraint;

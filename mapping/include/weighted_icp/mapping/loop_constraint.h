@@ -17,7 +17,8 @@ namespace weighted_icp::mapping {
 struct LoopConstraint {
   /// @brief The newer keyframe, the one that asked "have I been here before?".
   frontend::KeyframeId query = 0;
-  /// @brief The older keyframe it was recognised as.
+  /// @brief The older keyframe the loop joins: the one it was recognised as or, for a PnP edge, that keyframe's
+  /// neighbour that saw the most of the PnP inliers (LoopVerifier::verify).
   frontend::KeyframeId match = 0;
   /// @brief Pose of the query keyframe's camera in the match keyframe's camera frame
   /// (camera-to-camera: x_match = query_in_match * x_query).

@@ -46,6 +46,9 @@ struct LoopCandidateRecord {
   std::string refused_by;
   /// @brief Why, with the measured values; empty when verified.
   std::string reason;
+  /// @brief The keyframe the verified loop's edge joins (LoopConstraint::match: with the PnP edge, the candidate's
+  /// neighbour that saw the most of PnP's inliers, often the candidate itself); the candidate when refused.
+  frontend::KeyframeId edge_match = 0;
 };
 
 /// @brief What the detector did so far (for reports and tests); the candidate counts are those of candidates().

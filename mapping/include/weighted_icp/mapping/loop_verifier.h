@@ -133,7 +133,8 @@ struct LoopVerification {
   std::size_t matches = 0;
   /// @brief Fraction of the query cloud's points within inlier_distance_m after ICP.
   double overlap = 0.0;
-  /// @brief The relative pose PnP alone gave (before the ICP), as query_in_match.
+  /// @brief The relative pose PnP alone gave (before the ICP), the query camera in the candidate's (`match` of
+  /// verify()) camera frame.
   Eigen::Isometry3d pnp_query_in_match = Eigen::Isometry3d::Identity();
   /// @brief False when, verified with an odometry prior, the weighted ICP's result overlapped the candidate's cloud
   /// less than PnP's pose did (it left the pose instead of refining it): the checks, and with LoopEdgeSource::Icp
@@ -167,7 +168,10 @@ class LoopVerifier {
   /// The query's features are matched to the landmarks of the match's neighbourhood; RANSAC PnP gives the
   /// query camera's pose in the match map's frame; the query's local landmark cloud, moved by it, is aligned
   /// to the match's by the weighted ICP with refinement, which must agree with PnP. With LoopEdgeSource::Pnp (the
-  /// default) query_in_match is PnP's pose relative to the match keyframe and the information the Gauss-Newton
+  /// default) the loop joins the keyframe of the candidate's neighbourhood that observed the most of PnP's inlier
+  /// landmarks (the candidate on a tie): PnP placed the camera among those landmarks, which sit where that keyframe's
+  /// pose put them, while the candidate's pose may differ from its neighbours' by their drift (constraint.match);
+  /// query_in_match is PnP's pose relative to it and the information the Gauss-Newton
   /// Hessian of the inliers' reprojection residuals, each whitened by the pixel noise plus its landmark's projected
   /// covariance. With LoopEdgeSource::Icp it is match_wc^-1 * correction * query_wc and the Hessian of the ICP's
   /// point-to-point residuals, whitened by both landmarks' covariances (docs/place_recognition.md).
