@@ -127,11 +127,16 @@ KeyframeSnapshot moved(const KeyframeSnapshot& map, const Eigen::Isometry3d& mot
   return result;
 }
 
-TEST(LoopVerification, RecoversTheRelativePoseAtAnyYaw) {
-  // Keyframes at the start (frames 0-30) and where the camera comes back (frames 180-210).
+/// Keyframes at the start (frames 0-30, ids 0-5) and where the camera comes back (frames 180-210, ids 6-11): keyframe 8
+/// (frame 192) sees the place of keyframe 2 (frame 12).
+testing::SyntheticKeyframes startAndReturn() {
   std::vector<std::size_t> frames = testing::everyNth(36, kEvery);
   for (std::size_t f : testing::everyNth(216, kEvery, 180)) frames.push_back(f);
-  const auto data = testing::syntheticKeyframes(11, false, kFramesPerLoop, frames);
+  return testing::syntheticKeyframes(11, false, kFramesPerLoop, frames);
+}
+
+TEST(LoopVerification, RecoversTheRelativePoseAtAnyYaw) {
+  const auto data = startAndReturn();
   const frontend::KeyframeId match = 2;  // frame 12
   const frontend::KeyframeId query = 8;  // frame 192
   ASSERT_GT(viewOverlap(data.snapshot, query, match, data.camera), 0.5);
@@ -165,9 +170,7 @@ TEST(LoopVerification, WithoutTheIcpCheckTheGeometryIsJudgedAtPnpsPose) {
   // As a segment bridge verifies: the overlap and fitness at PnP's pose, no ICP moving it. A true loop passes; a
   // query map whose landmarks are 35 cm off its keyframes (PnP, on the match map's landmarks and the query's pixels,
   // still finds the camera) does not overlap there.
-  std::vector<std::size_t> frames = testing::everyNth(36, kEvery);
-  for (std::size_t f : testing::everyNth(216, kEvery, 180)) frames.push_back(f);
-  const auto data = testing::syntheticKeyframes(11, false, kFramesPerLoop, frames);
+  const auto data = startAndReturn();
   const frontend::KeyframeId match = 2, query = 8;
   LoopVerificationOptions options;
   options.icp_check = false;
@@ -197,9 +200,7 @@ TEST(LoopVerification, AnIcpWithinTheCorrectionBoundConfirmsAPnpEdgeWithoutRepro
   // clouds of frames taken in the dark do: well within the 2 degrees that make a loop wrong, yet the ICP's pose
   // projects few of PnP's inliers within its 3 px. With the PnP edge (the default) the ICP only checks the pose and
   // the loop stands; with the ICP edge its pose would be the loop, and must explain the descriptor matches.
-  std::vector<std::size_t> frames = testing::everyNth(36, kEvery);
-  for (std::size_t f : testing::everyNth(216, kEvery, 180)) frames.push_back(f);
-  const auto data = testing::syntheticKeyframes(11, false, kFramesPerLoop, frames);
+  const auto data = startAndReturn();
   const frontend::KeyframeId match = 2, query = 8;
   const Eigen::Vector3d centre = data.snapshot.keyframes.at(query).pose_wc.translation();
   const Eigen::Isometry3d turn = Eigen::Translation3d(centre) *
@@ -229,12 +230,10 @@ TEST(LoopVerification, AnIcpWithinTheCorrectionBoundConfirmsAPnpEdgeWithoutRepro
 
 TEST(LoopVerification, APnpLoopJoinsTheKeyframeThatSawItsInliers) {
   // As in the dark, where keyframes share few landmarks: the candidate's pose has drifted 8 cm and 3 degrees from
-  // its neighbours' and it saw none of the landmarks PnP placed the query by (its observations taken out, the
-  // landmarks only it saw removed). PnP finds the query camera among its neighbours' landmarks; relative to the
+  // its neighbours' and it saw none of the landmarks PnP placed the query by (its observations taken out of every
+  // landmark another keyframe saw too). PnP finds the query camera among its neighbours' landmarks; relative to the
   // candidate that pose carries the drift, relative to the neighbour that saw the most of its inliers it does not.
-  std::vector<std::size_t> frames = testing::everyNth(36, kEvery);
-  for (std::size_t f : testing::everyNth(216, kEvery, 180)) frames.push_back(f);
-  const auto data = testing::syntheticKeyframes(11, false, kFramesPerLoop, frames);
+  const auto data = startAndReturn();
   const frontend::KeyframeId match = 2, query = 8;
   KeyframeSnapshot drifted = data.snapshot;
   Eigen::Isometry3d drift = Eigen::Isometry3d::Identity();
