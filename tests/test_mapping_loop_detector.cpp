@@ -11,6 +11,7 @@
 #include "mapping_fixtures.h"
 #include "weighted_icp/mapping/loop_closing_slam.h"
 #include "weighted_icp/mapping/loop_detector.h"
+#include "weighted_icp/mapping/loop_verifier.h"
 #include "weighted_icp/metrics/trajectory_error.h"
 #include "weighted_icp/simulation/rgbd_sequence.h"
 
@@ -72,9 +73,16 @@ TEST(LoopDetector, ClosesTheLoopOfARevisitingSequenceWithoutMakingItWorse) {
   const std::set<std::string> checks = {
       "descriptor_matches", "pnp",     "pnp_inliers", "icp_landmarks", "icp_degenerate", "icp_correction",
       "icp_inliers",        "overlap", "fitness",     "drift",         "culled"};
+  const std::size_t mini_map = mapping::LoopVerificationOptions{}.neighbour_keyframes;
   for (const mapping::LoopCandidateRecord& c : with.candidates) {
     EXPECT_LT(c.match, c.query);
-    if (c.refused_by.empty()) continue;
+    if (c.refused_by.empty()) {
+      // The loop joins its candidate or the keyframe of the candidate's mini-map that saw the most PnP inliers.
+      EXPECT_LE(c.edge_match > c.match ? c.edge_match - c.match : c.match - c.edge_match, mini_map);
+      EXPECT_LT(c.edge_match, c.query);
+      continue;
+    }
+    EXPECT_EQ(c.edge_match, c.match) << "a refused candidate joins nothing";
     EXPECT_TRUE(checks.count(c.refused_by)) << c.refused_by;
     EXPECT_FALSE(c.reason.empty()) << c.refused_by;
   }
