@@ -90,7 +90,7 @@ inline Eigen::Matrix4d alignTransformation(const std::string& json) {
 /// The number `key` holds in a flat JSON object (a tool's report); std::runtime_error when it holds none.
 inline double jsonNumber(const std::string& json, const std::string& key) {
   std::smatch match;
-  if (!std::regex_search(json, match, std::regex("\"" + key + "\":(-?[0-9.eE+-]+)")))
+  if (!std::regex_search(json, match, std::regex("\"" + key + "\":\\s*(-?[0-9.eE+-]+)")))
     throw std::runtime_error("no number " + key + " in " + json);
   return std::stod(match[1]);
 }

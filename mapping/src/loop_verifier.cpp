@@ -336,7 +336,7 @@ frontend::KeyframeId edgeKeyframe(const KeyframeSnapshot& match_map,
                                   const std::vector<frontend::KeyframeId>& neighbourhood,
                                   frontend::KeyframeId candidate, const Matches& matches,
                                   const std::vector<int>& inliers) {
-  std::map<frontend::KeyframeId, std::size_t> seen;
+  std::map<frontend::KeyframeId, std::size_t> seen;  // the neighbourhood, the candidate included
   for (const frontend::KeyframeId id : neighbourhood) seen[id] = 0;
   for (const int i : inliers) {
     const auto point = match_map.points.find(matches.ids[static_cast<std::size_t>(i)]);
@@ -350,7 +350,7 @@ frontend::KeyframeId edgeKeyframe(const KeyframeSnapshot& match_map,
     return id > candidate ? id - candidate : candidate - id;
   };
   frontend::KeyframeId best = candidate;
-  std::size_t most = seen.count(candidate) ? seen.at(candidate) : 0;
+  std::size_t most = seen[candidate];
   for (const auto& [id, count] : seen)  // in id order: of two as near the candidate, the older
     if (count > most || (count == most && distance(id) < distance(best))) {
       best = id;
