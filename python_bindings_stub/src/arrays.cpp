@@ -2,6 +2,7 @@
 #include "arrays.h"
 
 #include <cmath>
+#include <filesystem>
 #include <sstream>
 #include <stdexcept>
 
@@ -167,9 +168,20 @@ Trajectory fromPoses(const py::handle& timestamps, const py::handle& poses, cons
 
 }  // namespace
 
+std::string toPath(const py::handle& path_like) { return py::str(py::module_::import("os").attr("fspath")(path_like)); }
+
+std::string existingPath(const py::handle& path_like) {
+  const std::string path = toPath(path_like);
+  if (!std::filesystem::exists(path)) {
+    PyErr_SetFromErrnoWithFilename(PyExc_FileNotFoundError, path.c_str());
+    throw py::error_already_set();
+  }
+  return path;
+}
+
 Trajectory toTrajectory(const py::handle& trajectory, const char* name) {
   if (py::isinstance<py::str>(trajectory) || py::hasattr(trajectory, "__fspath__")) {
-    const std::string path = py::str(py::module_::import("os").attr("fspath")(trajectory));
+    const std::string path = toPath(trajectory);
     try {
       return io::readTrajectory(path);
     } catch (const std::runtime_error& e) {

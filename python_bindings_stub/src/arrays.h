@@ -63,6 +63,15 @@ py::array_t<T> toArray(const std::vector<T>& values) {
 /// @param name        the argument's name, for errors
 Trajectory toTrajectory(const py::handle& trajectory, const char* name);
 
+/// @brief The path a str or an os.PathLike names (os.fspath).
+/// @param path_like  the Python object
+std::string toPath(const py::handle& path_like);
+
+/// @brief toPath(), raising Python's FileNotFoundError naming the path when nothing is there: a missing file is
+/// not malformed input.
+/// @param path_like  the Python object
+std::string existingPath(const py::handle& path_like);
+
 /// @brief TUM rows (N, 8): timestamp tx ty tz qx qy qz qw, one per pose.
 /// @param trajectory  the poses
 py::array_t<double> toTumRows(const Trajectory& trajectory);

@@ -1,4 +1,5 @@
-// The RGB-D front end for Python: RgbdSlam on a TUM folder or frame by frame, the GIL released while it works.
+// The RGB-D SLAM for Python: RgbdSlam (tracking, bundle adjustment, loop closing) on a TUM folder or frame by frame,
+// the GIL released while it works.
 #include <filesystem>
 #include <map>
 #include <mutex>
@@ -14,10 +15,15 @@
 
 #include "arrays.h"
 #include "bindings.h"
+#include "loop_record.h"
+#include "vocabulary.h"
 #include "weighted_icp/frontend/slam/frontend_choices.h"
 #include "weighted_icp/frontend/slam/rgbd_slam.h"
 #include "weighted_icp/io/camera.h"
 #include "weighted_icp/io/tum_sequence.h"
+#include "weighted_icp/mapping/loop_closing_slam.h"
+#include "weighted_icp/mapping/loop_detector.h"
+#include "weighted_icp/mapping/session.h"
 #include "weighted_icp/registration/weight_strategies.h"
 
 namespace weighted_icp::python {
@@ -61,12 +67,14 @@ PinholeCamera toCamera(const py::handle& camera) {
   throw py::value_error("camera must be a Camera or 'fr1', 'fr2', 'fr3' or a camera YAML path");
 }
 
-/// RgbdSlam with what Python needs around it: a lock (the GIL is released while it runs, so two Python
-/// threads could otherwise enter it at once), the arrays the current frame views, the ground truth of run().
+/// mapping::LoopClosingSlam (the SLAM wicp_rgbd_slam runs) with what Python needs around it: a lock (the GIL is
+/// released while it runs, so two Python threads could otherwise enter it at once), the arrays the current frame views,
+/// the ground truth of run().
 class PythonSlam {
  public:
-  PythonSlam(const PinholeCamera& camera, const frontend::RgbdSlamOptions& options)
-      : camera_(camera), slam_(std::make_unique<frontend::RgbdSlam>(camera, options)) {}
+  PythonSlam(const PinholeCamera& camera, mapping::LoopDetector detector,
+             const mapping::LoopClosingSlamOptions& options)
+      : camera_(camera), slam_(std::make_unique<mapping::LoopClosingSlam>(camera, std::move(detector), options)) {}
 
   TrackResult track(const py::array& color, const py::array& depth, double timestamp, bool bgr) {
     RgbdFrame frame;
@@ -81,15 +89,19 @@ class PythonSlam {
     return toTrackResult(slam_->process(frame));
   }
 
-  void run(const std::string& folder, std::size_t max_frames, const py::object& progress) {
+  void run(const std::string& folder, std::size_t max_frames, const py::object& progress, std::size_t first_frame) {
     const io::TumSequence sequence = io::TumSequence::open(folder);
     groundtruth_ = sequence.groundTruth();
+    // As wicp_rgbd_slam's --first-frame and --max-frames: both counted from the sequence's start.
     const std::size_t frames = max_frames > 0 ? std::min(max_frames, sequence.size()) : sequence.size();
+    if (first_frame >= frames)
+      throw py::value_error("first_frame " + std::to_string(first_frame) +
+                            " leaves no frame (the run ends before frame " + std::to_string(frames) + ")");
     try {
-      for (std::size_t i = 0; i < frames; ++i) {
+      for (std::size_t i = first_frame; i < frames; ++i) {
         std::string status = step(sequence, i);
         if (PyErr_CheckSignals() != 0) throw py::error_already_set();  // Ctrl-C between frames
-        if (!progress.is_none()) progress(i + 1, frames, status);
+        if (!progress.is_none()) progress(i + 1 - first_frame, frames - first_frame, status);
       }
     } catch (...) {
       finish();  // the bundle-adjustment thread stops before the error reaches Python
@@ -104,10 +116,32 @@ class PythonSlam {
     slam_->finish();
   }
 
+  /// f(the tracker) under the lock.
   template <typename F>
   auto locked(F f) const {
     std::lock_guard<std::mutex> lock(mutex_);
-    return f(*slam_);
+    return f(slam_->slam());
+  }
+
+  /// f(the tracker with its loop closer) under the lock.
+  template <typename F>
+  auto lockedClosing(F f) const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return f(static_cast<const mapping::LoopClosingSlam&>(*slam_));
+  }
+
+  /// The session folder wicp_merge reads (as wicp_rgbd_slam's session/), after finish().
+  void saveSession(const py::object& folder, bool overwrite) {
+    const std::string path = toPath(folder);
+    std::error_code error;
+    if (!overwrite && fs::exists(path, error) && !fs::is_empty(path, error)) {
+      PyErr_SetString(PyExc_FileExistsError, (path + ": exists and is not empty (overwrite=True replaces it)").c_str());
+      throw py::error_already_set();
+    }
+    finish();
+    py::gil_scoped_release unlocked;
+    std::lock_guard<std::mutex> lock(mutex_);
+    mapping::saveSession(mapping::captureSession(slam_->slam(), camera_), path, overwrite);
   }
 
   const PinholeCamera& camera() const { return camera_; }
@@ -173,7 +207,7 @@ class PythonSlam {
   }
 
   PinholeCamera camera_;
-  std::unique_ptr<frontend::RgbdSlam> slam_;
+  std::unique_ptr<mapping::LoopClosingSlam> slam_;
   mutable std::mutex mutex_;
   py::object color_owner_, depth_owner_;
   Trajectory groundtruth_;
@@ -181,21 +215,31 @@ class PythonSlam {
 
 std::unique_ptr<PythonSlam> makeSlam(const py::object& camera, std::size_t minimap_keyframes,
                                      const std::string& matcher, bool quality_gate, bool deterministic,
-                                     const std::map<std::string, std::string>& choices) {
+                                     const std::map<std::string, std::string>& choices, bool loop_closure,
+                                     const py::object& vocabulary) {
   if (minimap_keyframes < 1) throw py::value_error("minimap_keyframes must be >= 1");
-  frontend::RgbdSlamOptions options;
-  options.minimap_keyframes = minimap_keyframes;
-  options.frontend.matcher.kind = frontend::parseMatcherKind(matcher);
-  options.frontend.quality_gate = quality_gate;
+  if (!loop_closure && !vocabulary.is_none()) throw py::value_error("vocabulary has no use with loop_closure=False");
+  mapping::LoopClosingSlamOptions options;
+  options.slam.minimap_keyframes = minimap_keyframes;
+  options.slam.frontend.matcher.kind = frontend::parseMatcherKind(matcher);
+  options.slam.frontend.quality_gate = quality_gate;
   for (const auto& [key, name] : choices) {
     try {
-      frontend::setFrontendChoice(options.frontend, key, name);
+      frontend::setFrontendChoice(options.slam.frontend, key, name);
     } catch (const std::invalid_argument& e) {
       throw py::value_error(std::string("options: ") + e.what());
     }
   }
-  options.backend.background_thread = !deterministic;
-  return std::make_unique<PythonSlam>(toCamera(camera), options);
+  // As wicp_rgbd_slam --deterministic: bundle adjustment and loop closing inline.
+  options.slam.backend.background_thread = !deterministic;
+  options.loop_closing.background_thread = !deterministic;
+  options.loop_closure = loop_closure;
+  const PinholeCamera cam = toCamera(camera);
+  // The detector as wicp_rgbd_slam builds it (LoopDetectorOptions' defaults), loaded before any frame is tracked.
+  mapping::LoopDetector detector;
+  if (loop_closure)
+    detector = mapping::asLoopDetector(std::make_shared<mapping::BowLoopDetector>(loadVocabulary(vocabulary), cam));
+  return std::make_unique<PythonSlam>(cam, std::move(detector), options);
 }
 
 /// RgbdSlam.landmarks: the session map's landmark positions (N, 3) and their weights by `strategy` (N,).
@@ -282,31 +326,68 @@ const std::string& slamInitDoc() {
   static const std::string doc = [] {
     std::string keys;
     for (const std::string& key : frontend::frontendChoiceKeys()) keys += (keys.empty() ? "" : ", ") + key;
-    return "camera: a Camera, 'fr1'|'fr2'|'fr3' or a YAML path. deterministic runs bundle adjustment inline "
-           "(reproducible) instead of in its own thread. options: the front end's choices by wicp_rgbd_slam's "
+    return "camera: a Camera, 'fr1'|'fr2'|'fr3' or a YAML path. deterministic runs bundle adjustment and loop "
+           "closing inline (reproducible) instead of in their threads. loop_closure: close loops as wicp_rgbd_slam "
+           "does by default (place recognition, verification, pose graph; the trajectory is the corrected one); "
+           "vocabulary: its place-recognition vocabulary file, None for the package's default (FileNotFoundError "
+           "when missing, ValueError naming the line when malformed). options: the front end's choices by "
+           "wicp_rgbd_slam's "
            "option names and values, e.g. {'quality-measure': 'brisque', 'pnp': 'iterative'} (keys: " +
            keys + "; options win over the matcher argument); a wrong key or value raises ValueError.";
   }();
   return doc;
 }
 
-/// RgbdSlam: the front end fed frame by frame or over a TUM folder.
+/// RgbdSlam.loops: the loops the run closed, with their keyframes' timestamps.
+std::vector<LoopRecord> loopRecords(const PythonSlam& slam) {
+  return slam.lockedClosing([](const mapping::LoopClosingSlam& s) {
+    std::map<frontend::KeyframeId, double> timestamps;
+    for (const frontend::Keyframe& keyframe : s.slam().map().keyframes()) timestamps[keyframe.id] = keyframe.timestamp;
+    std::vector<LoopRecord> records;
+    for (const mapping::LoopConstraint& loop : s.acceptedLoops())
+      records.push_back(toLoopRecord(loop, 0, timestamps.at(loop.query), timestamps.at(loop.match), true));
+    return records;
+  });
+}
+
+/// RgbdSlam.loop_stats: report.json's loop counters.
+std::map<std::string, std::size_t> loopStats(const PythonSlam& slam) {
+  const mapping::LoopClosingStats stats =
+      slam.lockedClosing([](const mapping::LoopClosingSlam& s) { return s.loopStats(); });
+  return {{"loops_detected", stats.loops_detected},
+          {"loops_accepted", stats.loops_accepted},
+          {"pose_graph_optimisations", stats.pose_graph_optimisations}};
+}
+
+/// RgbdSlam: the SLAM fed frame by frame or over a TUM folder.
 void bindSlam(py::module_& m) {
   py::class_<PythonSlam>(m, "RgbdSlam",
-                         "The RGB-D SLAM front end (wicp_rgbd_slam's): feed frames with track(), or a TUM folder "
-                         "with run(); read the trajectory, keyframes and landmarks.")
+                         "The RGB-D SLAM (wicp_rgbd_slam's): feed frames with track(), or a TUM folder with run(); "
+                         "read the trajectory (loops closed), keyframes, landmarks and loops; save the session for "
+                         "merge_sessions().")
       .def(py::init(&makeSlam), py::arg("camera") = "fr1", py::arg("minimap_keyframes") = 10,
            py::arg("matcher") = defaultMatcherName(), py::arg("quality_gate") = true, py::arg("deterministic") = false,
-           py::arg("options") = std::map<std::string, std::string>{}, slamInitDoc().c_str())
+           py::arg("options") = std::map<std::string, std::string>{}, py::arg("loop_closure") = true,
+           py::arg("vocabulary") = py::none(), slamInitDoc().c_str())
       .def("track", &PythonSlam::track, py::arg("rgb"), py::arg("depth"), py::arg("timestamp"), py::arg("bgr") = false,
            "Tracks one frame: rgb (H, W, 3) uint8 in RGB order (bgr=True: OpenCV's order, not copied) or (H, W) "
            "grey; depth (H, W) uint16 raw (divided by the camera's depth_factor) or float32 metres. The GIL is "
            "released while it runs.")
       .def("run", &PythonSlam::run, py::arg("folder"), py::arg("max_frames") = 0, py::arg("progress") = py::none(),
-           "Tracks the frames of a TUM RGB-D folder (max_frames 0: all), then finish(). progress(done, total, "
+           py::arg("first_frame") = 0,
+           "Tracks the frames first_frame to max_frames - 1 of a TUM RGB-D folder, both counted from its start as "
+           "wicp_rgbd_slam's --first-frame and --max-frames (max_frames 0: to the end), then finish(). "
+           "progress(done, total, "
            "status) is called after each frame; an exception from it, or Ctrl-C, stops the run. Unreadable frames "
            "are skipped with a RuntimeWarning, as the tool does.")
-      .def("finish", &PythonSlam::finish, "Waits for the pending bundle adjustment.")
+      .def("finish", &PythonSlam::finish,
+           "Waits for the pending bundle adjustment and loop closing, and applies a correction still pending.")
+      .def("save_session", &PythonSlam::saveSession, py::arg("folder"), py::arg("overwrite") = false,
+           "finish(), then writes the session folder merge_sessions() and wicp_merge read (wicp_rgbd_slam's "
+           "session/), published by one rename; a non-empty folder is refused without overwrite=True.")
+      .def_property_readonly("loops", &loopRecords, "The loops closed so far (Loop), in order, as loops.txt.")
+      .def_property_readonly("loop_stats", &loopStats,
+                             "{'loops_detected', 'loops_accepted', 'pose_graph_optimisations'}, as report.json.")
       .def_property_readonly(
           "camera", [](const PythonSlam& s) { return s.camera(); }, "The camera.")
       .def_property_readonly(
@@ -314,7 +395,7 @@ void bindSlam(py::module_& m) {
           [](const PythonSlam& s) {
             return toTumRows(s.locked([](const frontend::RgbdSlam& r) { return r.trajectory(); }));
           },
-          "(N, 8) TUM rows (timestamp tx ty tz qx qy qz qw), one per frame with a pose.")
+          "(N, 8) TUM rows (timestamp tx ty tz qx qy qz qw), one per frame with a pose, as loop closing corrected it.")
       .def_property_readonly(
           "ground_truth",
           [](const PythonSlam& s) -> py::object {
@@ -363,7 +444,8 @@ void bindTumRuns(py::module_& m) {
   m.def(
       "run_tum",
       [](const std::string& folder, const py::object& camera, std::size_t max_frames, const py::object& progress,
-         std::size_t minimap_keyframes, bool deterministic, const std::map<std::string, std::string>& options) {
+         std::size_t minimap_keyframes, bool deterministic, const std::map<std::string, std::string>& options,
+         bool loop_closure, const py::object& vocabulary, std::size_t first_frame) {
         // Python's convention: a folder or camera the caller got wrong is a ValueError, as before.
         PinholeCamera cam;
         try {
@@ -371,16 +453,18 @@ void bindTumRuns(py::module_& m) {
         } catch (const std::runtime_error& e) {
           throw py::value_error(e.what());
         }
-        auto slam = makeSlam(py::cast(cam), minimap_keyframes, defaultMatcherName(), true, deterministic, options);
-        slam->run(folder, max_frames, progress);
+        auto slam = makeSlam(py::cast(cam), minimap_keyframes, defaultMatcherName(), true, deterministic, options,
+                             loop_closure, vocabulary);
+        slam->run(folder, max_frames, progress, first_frame);
         return slam;
       },
       py::arg("folder"), py::arg("camera") = py::none(), py::arg("max_frames") = 0, py::arg("progress") = py::none(),
       py::arg("minimap_keyframes") = 10, py::arg("deterministic") = false,
-      py::arg("options") = std::map<std::string, std::string>{},
-      "A new RgbdSlam run over a TUM folder; the camera, when not given, the folder's camera.yaml, else from its name "
-      "(fr1 ...); "
-      "options as RgbdSlam's.");
+      py::arg("options") = std::map<std::string, std::string>{}, py::arg("loop_closure") = true,
+      py::arg("vocabulary") = py::none(), py::arg("first_frame") = 0,
+      "A new RgbdSlam run over a TUM folder (first_frame, max_frames as run()'s); the camera, when not given, the "
+      "folder's camera.yaml, else from its name "
+      "(fr1 ...); options, loop_closure and vocabulary as RgbdSlam's.");
 }
 
 }  // namespace

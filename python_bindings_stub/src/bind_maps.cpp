@@ -1,5 +1,4 @@
 // LandmarkMap and the weight strategies for Python: the paper's map format in, numpy arrays out.
-#include <filesystem>
 #include <string>
 
 #include <pybind11/stl.h>
@@ -14,12 +13,7 @@ namespace weighted_icp::python {
 namespace {
 
 LandmarkMap loadMap(const py::object& path_like, std::size_t min_observations) {
-  const std::string path = py::str(py::module_::import("os").attr("fspath")(path_like));
-  // A missing file is not malformed input: Python's own error for it, naming the path.
-  if (!std::filesystem::exists(path)) {
-    PyErr_SetFromErrnoWithFilename(PyExc_FileNotFoundError, path.c_str());
-    throw py::error_already_set();
-  }
+  const std::string path = existingPath(path_like);
   LandmarkMap map;
   {
     py::gil_scoped_release unlocked;  // large maps take a while to parse
@@ -182,10 +176,7 @@ void bindMaps(py::module_& m) {
                   "A map of bare landmarks (ids 0..N-1, no frames, no observations) from an (N, 3) array and "
                   "optional (N, 3, 3) covariances.")
       .def(
-          "save",
-          [](const LandmarkMap& map, const py::object& path) {
-            io::writeLandmarkMap(map, py::str(py::module_::import("os").attr("fspath")(path)));
-          },
+          "save", [](const LandmarkMap& map, const py::object& path) { io::writeLandmarkMap(map, toPath(path)); },
           py::arg("path"), "Writes the map in the paper's format, atomically (a temporary file, then a rename).")
       .def(
           "copy", [](const LandmarkMap& map) { return LandmarkMap(map); }, "An independent copy.")

@@ -105,8 +105,7 @@ void bindMetricFunctions(py::module_& m) {
   m.def(
       "write_trajectory",
       [](const py::object& trajectory, const py::object& path) {
-        io::writeTrajectory(toTrajectory(trajectory, "trajectory"),
-                            py::str(py::module_::import("os").attr("fspath")(path)));
+        io::writeTrajectory(toTrajectory(trajectory, "trajectory"), toPath(path));
       },
       py::arg("trajectory"), py::arg("path"), "Writes a trajectory (as ate() takes it) in TUM format, atomically.");
 }

@@ -12,6 +12,8 @@ void bindMaps(pybind11::module_& m);
 void bindRegistration(pybind11::module_& m);
 /// @brief ate(), rpe() and the trajectory files. @param m the module
 void bindMetrics(pybind11::module_& m);
+/// @brief Loop, merge_sessions() and its results. @param m the module
+void bindMapping(pybind11::module_& m);
 /// @brief Camera, RgbdSlam (a TUM folder or frame by frame). @param m the module
 void bindFrontend(pybind11::module_& m);
 

@@ -30,3 +30,18 @@ def contract(path: str, source_xyz: npt.NDArray[np.float64], target_xyz: npt.NDA
             len(minimaps) + float(counts.sum()) + e.rmse + p.translation.rmse + float(xyz.sum() + weights.sum()) +
             float(step.tracking_ms) + len(s) + len(t) + float(slam.trajectory.sum()) + (1 if r.converged else 0) +
             r.iterations)
+
+
+def mapping(folder: str, vocabulary: str) -> float:
+    slam = wi.run_tum(folder, deterministic=True, vocabulary=vocabulary, first_frame=2, max_frames=50)
+    loops: list[wi.Loop] = slam.loops
+    closed: int = slam.loop_stats["loops_accepted"]
+    slam.save_session("a", overwrite=True)
+    wi.RgbdSlam("fr1", loop_closure=False).run(folder, first_frame=40)
+    merge: wi.SessionMerge = wi.merge_sessions(["a", "b"], min_agreeing_loops=2, max_free_space_violation=0.02,
+                                               progress=lambda name, done, total: None)
+    second: wi.MergedSession = merge.sessions[1]
+    frames = second.trajectory
+    return (float(merge.trajectory.sum()) + float(second.world_in_first[0, 3]) + len(merge.map) + closed +
+            sum(loop.inliers + float(loop.query_in_match[0, 3]) for loop in loops + merge.loops) +
+            (0.0 if frames is None else float(frames.sum())))

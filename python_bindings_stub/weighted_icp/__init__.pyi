@@ -251,8 +251,35 @@ class TrackResult:
     @property
     def tracking_ms(self) -> float: ...
 
+class Loop:
+    """A verified loop: the query keyframe's camera in the match keyframe's (x_match = query_in_match @ x_query)."""
+
+    @property
+    def query_session(self) -> int: ...
+    @property
+    def query(self) -> int: ...
+    @property
+    def query_timestamp(self) -> float: ...
+    @property
+    def match_session(self) -> int: ...
+    @property
+    def match(self) -> int: ...
+    @property
+    def match_timestamp(self) -> float: ...
+    @property
+    def query_in_match(self) -> _FloatArray:
+        """(4, 4) float64."""
+    @property
+    def inliers(self) -> int: ...
+    @property
+    def fitness(self) -> float: ...
+    @property
+    def score(self) -> float: ...
+    @property
+    def used(self) -> bool: ...
+
 class RgbdSlam:
-    """The RGB-D SLAM front end."""
+    """The RGB-D SLAM (wicp_rgbd_slam's): tracking, bundle adjustment, loop closing."""
 
     def __init__(
         self,
@@ -262,17 +289,29 @@ class RgbdSlam:
         quality_gate: bool = True,
         deterministic: bool = False,
         options: Dict[str, str] = ...,
+        loop_closure: bool = True,
+        vocabulary: Optional[_PathLike] = None,
     ) -> None: ...
     def track(
         self, rgb: npt.NDArray[np.uint8], depth: npt.NDArray[np.generic], timestamp: float, bgr: bool = False
     ) -> TrackResult:
         """Tracks one frame (the GIL released)."""
     def run(
-        self, folder: str, max_frames: int = 0, progress: Optional[Callable[[int, int, str], object]] = None
+        self,
+        folder: str,
+        max_frames: int = 0,
+        progress: Optional[Callable[[int, int, str], object]] = None,
+        first_frame: int = 0,
     ) -> None:
-        """Tracks the frames of a TUM folder, then finish()."""
+        """Tracks frames first_frame to max_frames - 1 of a TUM folder, then finish()."""
     def finish(self) -> None:
-        """Waits for the pending bundle adjustment."""
+        """Waits for the pending bundle adjustment and loop closing."""
+    def save_session(self, folder: _PathLike, overwrite: bool = False) -> None:
+        """finish(), then writes the session folder merge_sessions() reads."""
+    @property
+    def loops(self) -> List[Loop]: ...
+    @property
+    def loop_stats(self) -> Dict[str, int]: ...
     @property
     def camera(self) -> Camera: ...
     @property
@@ -288,6 +327,58 @@ class RgbdSlam:
     def mini_maps(self) -> List[LandmarkMap]: ...
     def landmarks(self, strategy: str = "covariance") -> Tuple[_FloatArray, _FloatArray]: ...
 
+class MergedSession:
+    """One session's part of merge_sessions()."""
+
+    @property
+    def folder(self) -> str: ...
+    @property
+    def merged(self) -> bool: ...
+    @property
+    def linked_to(self) -> int: ...
+    @property
+    def loops_found(self) -> int: ...
+    @property
+    def loops_agreeing(self) -> int: ...
+    @property
+    def loops_with_link_prior(self) -> int: ...
+    @property
+    def free_space_judged(self) -> int: ...
+    @property
+    def free_space_violation(self) -> float: ...
+    @property
+    def free_space_rigid_violation(self) -> float: ...
+    @property
+    def free_space_optimised(self) -> bool: ...
+    @property
+    def world_in_first(self) -> _FloatArray:
+        """(4, 4) float64."""
+    @property
+    def trajectory(self) -> Optional[_FloatArray]: ...
+
+class SessionMerge:
+    """What merge_sessions() found."""
+
+    @property
+    def sessions(self) -> List[MergedSession]: ...
+    @property
+    def loops(self) -> List[Loop]: ...
+    @property
+    def trajectory(self) -> _FloatArray:
+        """(N, 8) TUM rows of every merged session's frames."""
+    @property
+    def map(self) -> LandmarkMap: ...
+
+def merge_sessions(
+    sessions: Sequence[_PathLike],
+    vocabulary: Optional[_PathLike] = None,
+    min_agreeing_loops: int = 2,
+    max_free_space_violation: float = 0.02,
+    loops_with_link_prior: bool = True,
+    progress: Optional[Callable[[str, int, int], object]] = None,
+) -> SessionMerge:
+    """Merges session folders into the first one's frame, as wicp_merge."""
+
 def tum_frames(folder: str) -> List[Tuple[float, str, str]]:
     """[(timestamp, rgb path, depth path)] of a TUM folder, associated as run() does."""
 
@@ -299,5 +390,8 @@ def run_tum(
     minimap_keyframes: int = 10,
     deterministic: bool = False,
     options: Dict[str, str] = ...,
+    loop_closure: bool = True,
+    vocabulary: Optional[_PathLike] = None,
+    first_frame: int = 0,
 ) -> RgbdSlam:
     """A new RgbdSlam run over a TUM folder."""

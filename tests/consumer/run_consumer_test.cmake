@@ -31,4 +31,7 @@ message(STATUS "${last_output}")
 if(PYTHON AND PYTHON_DIR)
   run("import the installed Python module" ${CMAKE_COMMAND} -E env PYTHONPATH=${prefix}/${PYTHON_DIR}
       ${PYTHON} -c "import weighted_icp, sys; assert weighted_icp.__file__.startswith('${prefix}'), weighted_icp.__file__; print(weighted_icp.__version__)")
+  # Loop closure by default reads the package's own vocabulary, installed beside the extension.
+  run("close loops with the installed package's vocabulary" ${CMAKE_COMMAND} -E env PYTHONPATH=${prefix}/${PYTHON_DIR}
+      ${PYTHON} -c "import weighted_icp; weighted_icp.RgbdSlam('fr1', loop_closure=True)")
 endif()
