@@ -6,6 +6,8 @@
 //   graph.txt       the joint mini-map graph (sequential and merge edges)
 //   loops.txt       the verified loops between sessions given to the joint pose graph (timestamps, relative pose)
 //   report.json     per session: merged or not, loops found and agreeing, its frame in the first one's
+//   merge.png       the merged sessions' camera paths and the loops between them, from above and from the side
+//                   (matplotlib; a missing one is a warning, never a failed run)
 // A session that shares no place with the others is left out and reported as
 // "no overlap" (exit 0); it is never forced in.
 
@@ -18,6 +20,7 @@
 
 #include <boost/program_options.hpp>
 
+#include "plotting.h"
 #include "tool_support.h"
 #include "weighted_icp/io/atomic_folder.h"
 #include "weighted_icp/io/cloud_io.h"
@@ -101,8 +104,44 @@ tools::JsonObject makeReport(const std::vector<std::string>& folders, const mapp
   return report;
 }
 
-/// Every output file into the (unpublished) folder `dir`.
-void writeOutputs(const fs::path& dir, const std::vector<std::string>& folders,
+/// merge.png: each merged session's camera path in the first session's frame and the loops between sessions, their
+/// keyframes placed where the joint optimisation put the frames of those timestamps.
+bool plotMerge(const fs::path& png, const std::vector<std::string>& folders,
+               const std::vector<mapping::Session>& sessions, const mapping::SessionMerge& merge) {
+  constexpr std::uint64_t stride = mapping::MiniMapGraph::kSessionIdStride;
+  std::vector<Trajectory> paths;
+  std::vector<std::string> names;
+  std::vector<std::map<frontend::KeyframeId, Eigen::Vector3d>> keyframe_positions(sessions.size());
+  std::string left_out;
+  for (std::size_t s = 0; s < sessions.size(); ++s) {
+    if (!merge.sessions[s].merged) {
+      left_out += (left_out.empty() ? "" : ", ") + folders[s];
+      continue;
+    }
+    paths.push_back(merge.session_trajectories[s]);
+    names.push_back("session " + std::to_string(s) + ": " + folders[s]);
+    std::map<double, Eigen::Vector3d> at_time;
+    for (const auto& [t, pose] : merge.session_trajectories[s]) at_time[t] = pose.translation();
+    for (const frontend::Keyframe& keyframe : sessions[s].keyframes)
+      if (const auto found = at_time.find(keyframe.timestamp); found != at_time.end())
+        keyframe_positions[s][keyframe.id] = found->second;
+  }
+  std::vector<tools::PlottedLoop> loops;
+  for (std::size_t i = 0; i < merge.loops.size(); ++i) {
+    const auto& positions_q = keyframe_positions[merge.loops[i].query / stride];
+    const auto& positions_m = keyframe_positions[merge.loops[i].match / stride];
+    const auto q = positions_q.find(merge.loops[i].query % stride);
+    const auto m = positions_m.find(merge.loops[i].match % stride);
+    if (q != positions_q.end() && m != positions_m.end()) loops.push_back({q->second, m->second, merge.loop_used[i]});
+  }
+  const std::string title = "wicp_merge: " + std::to_string(paths.size()) + " of " + std::to_string(sessions.size()) +
+                            " sessions merged, " + std::to_string(merge.loops.size()) + " loops between them" +
+                            (left_out.empty() ? std::string() : "; no overlap: " + left_out);
+  return tools::plotMerge("wicp_merge", paths, names, loops, png.string(), title);
+}
+
+/// Every output file into the (unpublished) folder `dir`; whether merge.png was drawn.
+bool writeOutputs(const fs::path& dir, const std::vector<std::string>& folders,
                   const std::vector<mapping::Session>& sessions, const mapping::SessionMerge& merge) {
   io::writeTrajectory(merge.trajectory, (dir / "trajectory.txt").string());
   // Per session too: runs of one sequence that overlap in time repeat timestamps in trajectory.txt.
@@ -115,6 +154,7 @@ void writeOutputs(const fs::path& dir, const std::vector<std::string>& folders,
   writeLoops(dir / "loops.txt", sessions, merge);
   const tools::JsonObject report = makeReport(folders, merge);
   tools::writeTextFile((dir / "report.json").string(), report.str() + "\n");
+  return plotMerge(dir / "merge.png", folders, sessions, merge);
 }
 
 /// Everything the command line sets.
@@ -215,11 +255,11 @@ int main(int argc, char** argv) {
     };
     const mapping::SessionMerge merge = mapping::mergeSessions(sessions, vocabulary, c.options);
     progress->finish();
-    writeOutputs(folder.path(), c.folders, sessions, merge);
+    const bool plotted = writeOutputs(folder.path(), c.folders, sessions, merge);
     folder.publish();
     printSummary(c.folders, merge);
-    std::cout << "wrote " << folder.target().string()
-              << "/{trajectory.txt, map.ply, graph.txt, loops.txt, report.json}\n";
+    std::cout << "wrote " << folder.target().string() << "/{trajectory.txt, map.ply, graph.txt, loops.txt, report.json"
+              << (plotted ? ", merge.png}\n" : "}\n");
     return 0;
   });
 }

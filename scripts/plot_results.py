@@ -8,6 +8,11 @@
     plot_results.py alignment --data DIR --out alignment.png [--title T]
         DIR/source.csv (x,y,z,aligned_x,aligned_y,aligned_z) and DIR/target.csv (x,y,z,weight): the two
         landmark clouds before and after alignment, top view, the target coloured by weight.
+    plot_results.py merge --data DIR --out merge.png [--title T]
+        DIR/sessions.csv (session,t,x,y,z: each merged session's camera path in the first session's frame),
+        DIR/names.txt (one legend label per session) and DIR/loops.csv (qx,qy,qz,mx,my,mz,used: the loops between
+        sessions, their two keyframes' positions): the paths seen along the direction they vary least ("from
+        above" whatever the frame) and from the side, loops as segments (dotted: refused by the pose graph).
 
 Exit status: 0 written, 1 bad input, 3 matplotlib is not installed (the tools turn that into a warning).
 """
@@ -92,9 +97,70 @@ def alignment_figure(plt, data, title):
     return figure
 
 
+def principal_axes(points):
+    """The unit axes along which `points` (rows of x, y, z) vary most, next and least (numpy, which matplotlib
+    needs anyway)."""
+    import numpy
+    if len(points) < 3:  # too few to tell: the frame's own axes
+        return [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+    _, vectors = numpy.linalg.eigh(numpy.cov(numpy.asarray(points, dtype=float).T))
+    return [list(vectors[:, k]) for k in (2, 1, 0)]
+
+
+def merge_figure(plt, data, title):
+    """The merged sessions' paths from above and from the side, loops between sessions as segments."""
+    paths = load(os.path.join(data, "sessions.csv"))
+    loops = load(os.path.join(data, "loops.csv"))
+    try:
+        with open(os.path.join(data, "names.txt")) as handle:
+            names = [line.rstrip("\n") for line in handle]
+    except OSError as error:
+        sys.exit(f"plot_results.py: names.txt: {error.strerror}")
+    if not paths:
+        sys.exit("plot_results.py: no merged session has a pose; nothing to draw")
+    points = list(zip(paths["x"], paths["y"], paths["z"]))
+    axes = principal_axes(points)
+
+    def project(x, y, z, a, b):
+        p = (x, y, z)
+        return (sum(p[i] * axes[a][i] for i in range(3)), sum(p[i] * axes[b][i] for i in range(3)))
+
+    figure, panels = plt.subplots(1, 2, figsize=(15, 7), constrained_layout=True)
+    views = [(0, 1, "from above (the plane the paths span most)"), (0, 2, "from the side")]
+    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    for panel, (a, b, label) in zip(panels, views):
+        for s, name in enumerate(names):
+            rows = [k for k, session in enumerate(paths["session"]) if int(session) == s]
+            if not rows:
+                continue
+            xy = [project(paths["x"][k], paths["y"][k], paths["z"][k], a, b) for k in rows]
+            colour = colours[s % len(colours)]
+            panel.plot([p[0] for p in xy], [p[1] for p in xy], color=colour, linewidth=1.2, label=name)
+            panel.scatter([xy[0][0]], [xy[0][1]], color=colour, marker="o", s=30)
+        for k in range(len(loops.get("used", []))):
+            q = project(loops["qx"][k], loops["qy"][k], loops["qz"][k], a, b)
+            m = project(loops["mx"][k], loops["my"][k], loops["mz"][k], a, b)
+            used = loops["used"][k] > 0.5
+            colour = "k" if used else "#d62728"
+            # A right loop joins two keyframes at one place: its segment is short, so its ends are marked too.
+            panel.plot([q[0], m[0]], [q[1], m[1]], color=colour, linewidth=0.8, linestyle="-" if used else ":",
+                       marker="x", markersize=4, alpha=0.7)
+        panel.set_aspect("equal", adjustable="datalim")
+        panel.set(xlabel="principal axis 1 (m)", ylabel=f"principal axis {b + 1} (m)", title=label)
+    used = sum(1 for u in loops.get("used", []) if u > 0.5)
+    panels[0].plot([], [], color="k", linewidth=0.8, marker="x", markersize=4,
+                   label=f"loops between sessions ({used})")
+    if used < len(loops.get("used", [])):
+        panels[0].plot([], [], color="#d62728", linewidth=0.8, linestyle=":", marker="x", markersize=4,
+                       label=f"refused by the pose graph ({len(loops['used']) - used})")
+    panels[0].legend(loc="best", fontsize="small")
+    figure.suptitle(title + "  (o: a session's first frame)")
+    return figure
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("kind", choices=["trajectory", "alignment"])
+    parser.add_argument("kind", choices=["trajectory", "alignment", "merge"])
     parser.add_argument("--data", required=True, help="folder with the tables")
     parser.add_argument("--out", required=True, help="the PNG to write")
     parser.add_argument("--title", default="")
@@ -107,7 +173,7 @@ def main():
         print(f"plot_results.py: matplotlib is not installed for {sys.executable} (Debian: python3-matplotlib)",
               file=sys.stderr)
         return NO_MATPLOTLIB
-    draw = trajectory_figure if args.kind == "trajectory" else alignment_figure
+    draw = {"trajectory": trajectory_figure, "alignment": alignment_figure, "merge": merge_figure}[args.kind]
     figure = draw(plt, args.data, args.title)
     figure.savefig(args.out, dpi=110, format="png")
     return 0

@@ -243,6 +243,11 @@ TEST(WicpMerge, TwoRunsOfOneSequenceMergeAtTheirKnownRelativePose) {
   EXPECT_NE(report.find("all sessions merged"), std::string::npos) << report;
   EXPECT_TRUE(fs::is_regular_file(out / "map.ply"));
   EXPECT_TRUE(fs::is_regular_file(out / "graph.txt"));
+  // The picture of the merge beside them; without matplotlib only a warning says why it is missing.
+  if (run.err.find("matplotlib is not installed") == std::string::npos) {
+    EXPECT_TRUE(weighted_icp::testing::isPng(out / "merge.png")) << run.err;
+    EXPECT_NE(run.out.find("merge.png}"), std::string::npos) << run.out;
+  }
   EXPECT_NE(report.find("\"session_1_loops_with_link_prior\":"), std::string::npos) << report;
   // loops.txt: a header, then one loop a line naming both sessions and keyframe timestamps the runs share.
   std::istringstream loops(readAll(out / "loops.txt"));

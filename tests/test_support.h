@@ -81,6 +81,14 @@ inline void writeFile(const std::filesystem::path& path, const std::string& text
   out << text;
 }
 
+/// True when `path` starts with the PNG signature (a tool's picture).
+inline bool isPng(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  char magic[8] = {};
+  in.read(magic, 8);
+  return in && std::string(magic + 1, 3) == "PNG";
+}
+
 }  // namespace weighted_icp::testing
 
 /// Skips the test, saying why, only where the shared data set is absent.

@@ -14,18 +14,11 @@
 #include "weighted_icp/io/trajectory.h"
 
 using namespace weighted_icp;
+using weighted_icp::testing::isPng;
 using weighted_icp::testing::runBuiltTool;
 namespace fs = std::filesystem;
 
 namespace {
-
-/// True when `path` starts with the PNG signature.
-bool isPng(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  char magic[8] = {};
-  in.read(magic, 8);
-  return in && std::string(magic + 1, 3) == "PNG";
-}
 
 /// A ground truth along a curve and an estimate off it by a growing error.
 void writeTrajectories(const fs::path& dir) {
