@@ -137,7 +137,7 @@ bool plotMerge(const fs::path& png, const std::vector<std::string>& folders,
   const std::string title = "wicp_merge: " + std::to_string(paths.size()) + " of " + std::to_string(sessions.size()) +
                             " sessions merged, " + std::to_string(merge.loops.size()) + " loops between them" +
                             (left_out.empty() ? std::string() : "; no overlap: " + left_out);
-  return tools::plotMerge("wicp_merge", paths, names, loops, png.string(), title);
+  return tools::plotPaths("wicp_merge", paths, names, loops, png.string(), title);
 }
 
 /// Every output file into the (unpublished) folder `dir`; whether merge.png was drawn.

@@ -240,6 +240,28 @@ std::map<frontend::KeyframeId, double> keyframeTimestamps(const mapping::LoopClo
   return timestamps;
 }
 
+/// trajectory.png beside trajectory.txt (a missing matplotlib is a warning, not a failed run): against the ground
+/// truth when there is one (the ATE's figure), else the path itself from above and from the side with the loops
+/// closed, each joining its two keyframes where the corrected map puts them.
+void drawTrajectory(const fs::path& png, const FrameSource& source, const Trajectory& trajectory,
+                    const std::optional<metrics::AbsoluteTrajectoryError>& ate, const mapping::LoopClosingSlam& slam) {
+  if (ate) {
+    tools::plotTrajectory("wicp_rgbd_slam", source.groundTruth(), trajectory, ate->alignment, 0.02, png.string(),
+                          source.describe());
+    return;
+  }
+  std::map<frontend::KeyframeId, Eigen::Vector3d> positions;
+  for (const frontend::Keyframe& keyframe : slam.slam().map().keyframes())
+    positions[keyframe.id] = keyframe.pose_wc.translation();
+  std::vector<tools::PlottedLoop> loops;
+  for (const mapping::LoopConstraint& loop : slam.acceptedLoops()) {
+    const auto query = positions.find(loop.query), match = positions.find(loop.match);
+    if (query != positions.end() && match != positions.end()) loops.push_back({query->second, match->second, true});
+  }
+  tools::plotPaths("wicp_rgbd_slam", {trajectory}, {"camera path"}, loops, png.string(),
+                   source.describe() + ": no ground truth, " + std::to_string(loops.size()) + " loop(s) closed");
+}
+
 /// loops.txt: one accepted loop a line, `query_timestamp match_timestamp tx ty tz qx qy qz qw inliers fitness`
 /// (the query keyframe's camera in the match keyframe's, as the pose graph took it), so that a run with ground truth
 /// can tell a right loop from a wrong one.
@@ -418,10 +440,7 @@ int writeAndPublish(io::AtomicFolder& folder, const FrameSource& source, std::si
   // The synthetic sequence's truth exists nowhere else: written so that runs can be compared frame by frame.
   if (!truth.empty() && !source.groundTruthOnDisk())
     io::writeTrajectory(truth, (folder.path() / "groundtruth.txt").string());
-  // The picture beside trajectory.txt; a missing matplotlib is a warning, not a failed run.
-  if (ate)
-    tools::plotTrajectory("wicp_rgbd_slam", source.groundTruth(), trajectory, ate->alignment, 0.02,
-                          (folder.path() / "trajectory.png").string(), source.describe());
+  drawTrajectory(folder.path() / "trajectory.png", source, trajectory, ate, closing);
   tools::writeTextFile((folder.path() / "report.json").string(), report.str() + "\n");
   if (tools::interrupted()) return discardInterrupted(folder, frames, frames);  // while writing: all tracked
   folder.publish();

@@ -8,11 +8,11 @@
     plot_results.py alignment --data DIR --out alignment.png [--title T]
         DIR/source.csv (x,y,z,aligned_x,aligned_y,aligned_z) and DIR/target.csv (x,y,z,weight): the two
         landmark clouds before and after alignment, top view, the target coloured by weight.
-    plot_results.py merge --data DIR --out merge.png [--title T]
-        DIR/sessions.csv (session,t,x,y,z: each merged session's camera path in the first session's frame),
-        DIR/names.txt (one legend label per session) and DIR/loops.csv (qx,qy,qz,mx,my,mz,used: the loops between
-        sessions, their two keyframes' positions): the paths seen along the direction they vary least ("from
-        above" whatever the frame) and from the side, loops as segments (dotted: refused by the pose graph).
+    plot_results.py paths --data DIR --out paths.png [--title T]
+        DIR/paths.csv (path,t,x,y,z: camera paths in one frame, one run's or each merged session's), DIR/names.txt
+        (one legend label per path) and DIR/loops.csv (qx,qy,qz,mx,my,mz,used: the loops, their two keyframes'
+        positions): the paths seen along the direction they vary least ("from above" whatever the frame) and
+        from the side, loops as segments (dotted: refused by the pose graph).
 
 Exit status: 0 written, 1 bad input, 3 matplotlib is not installed (the tools turn that into a warning).
 """
@@ -107,9 +107,9 @@ def principal_axes(points):
     return [list(vectors[:, k]) for k in (2, 1, 0)]
 
 
-def merge_figure(plt, data, title):
-    """The merged sessions' paths from above and from the side, loops between sessions as segments."""
-    paths = load(os.path.join(data, "sessions.csv"))
+def paths_figure(plt, data, title):
+    """Camera paths from above and from the side, loops as segments."""
+    paths = load(os.path.join(data, "paths.csv"))
     loops = load(os.path.join(data, "loops.csv"))
     try:
         with open(os.path.join(data, "names.txt")) as handle:
@@ -117,7 +117,7 @@ def merge_figure(plt, data, title):
     except OSError as error:
         sys.exit(f"plot_results.py: names.txt: {error.strerror}")
     if not paths:
-        sys.exit("plot_results.py: no merged session has a pose; nothing to draw")
+        sys.exit("plot_results.py: no path has a pose; nothing to draw")
     points = list(zip(paths["x"], paths["y"], paths["z"]))
     axes = principal_axes(points)
 
@@ -130,7 +130,7 @@ def merge_figure(plt, data, title):
     colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     for panel, (a, b, label) in zip(panels, views):
         for s, name in enumerate(names):
-            rows = [k for k, session in enumerate(paths["session"]) if int(session) == s]
+            rows = [k for k, path in enumerate(paths["path"]) if int(path) == s]
             if not rows:
                 continue
             xy = [project(paths["x"][k], paths["y"][k], paths["z"][k], a, b) for k in rows]
@@ -149,18 +149,18 @@ def merge_figure(plt, data, title):
         panel.set(xlabel="principal axis 1 (m)", ylabel=f"principal axis {b + 1} (m)", title=label)
     used = sum(1 for u in loops.get("used", []) if u > 0.5)
     panels[0].plot([], [], color="k", linewidth=0.8, marker="x", markersize=4,
-                   label=f"loops between sessions ({used})")
+                   label=f"loops ({used})")
     if used < len(loops.get("used", [])):
         panels[0].plot([], [], color="#d62728", linewidth=0.8, linestyle=":", marker="x", markersize=4,
                        label=f"refused by the pose graph ({len(loops['used']) - used})")
     panels[0].legend(loc="best", fontsize="small")
-    figure.suptitle(title + "  (o: a session's first frame)")
+    figure.suptitle(title + "  (o: a path's first frame)")
     return figure
 
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("kind", choices=["trajectory", "alignment", "merge"])
+    parser.add_argument("kind", choices=["trajectory", "alignment", "paths"])
     parser.add_argument("--data", required=True, help="folder with the tables")
     parser.add_argument("--out", required=True, help="the PNG to write")
     parser.add_argument("--title", default="")
@@ -173,7 +173,7 @@ def main():
         print(f"plot_results.py: matplotlib is not installed for {sys.executable} (Debian: python3-matplotlib)",
               file=sys.stderr)
         return NO_MATPLOTLIB
-    draw = {"trajectory": trajectory_figure, "alignment": alignment_figure, "merge": merge_figure}[args.kind]
+    draw = {"trajectory": trajectory_figure, "alignment": alignment_figure, "paths": paths_figure}[args.kind]
     figure = draw(plt, args.data, args.title)
     figure.savefig(args.out, dpi=110, format="png")
     return 0

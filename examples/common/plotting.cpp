@@ -200,27 +200,27 @@ bool plotAlignment(const std::string& tool, const LandmarkMap& source, const Lan
   return plotAlignment(tool, positions(source), positions(target), weights, transformation, png, title);
 }
 
-bool plotMerge(const std::string& tool, const std::vector<Trajectory>& sessions, const std::vector<std::string>& names,
+bool plotPaths(const std::string& tool, const std::vector<Trajectory>& paths, const std::vector<std::string>& names,
                const std::vector<PlottedLoop>& loops, const std::string& png, const std::string& title) {
   try {
-    if (names.size() != sessions.size()) throw std::invalid_argument("one name per session is needed");
+    if (names.size() != paths.size()) throw std::invalid_argument("one name per path is needed");
     ScratchFolder scratch;
     std::vector<std::vector<double>> path_rows, loop_rows;
-    for (std::size_t s = 0; s < sessions.size(); ++s)
-      for (const auto& [t, pose] : sessions[s]) {
+    for (std::size_t s = 0; s < paths.size(); ++s)
+      for (const auto& [t, pose] : paths[s]) {
         const Eigen::Vector3d p = pose.translation();
         path_rows.push_back({static_cast<double>(s), t, p.x(), p.y(), p.z()});
       }
     for (const PlottedLoop& loop : loops)
       loop_rows.push_back({loop.query.x(), loop.query.y(), loop.query.z(), loop.match.x(), loop.match.y(),
                            loop.match.z(), loop.used ? 1.0 : 0.0});
-    writeTable(scratch.path() / "sessions.csv", "session,t,x,y,z", path_rows);
+    writeTable(scratch.path() / "paths.csv", "path,t,x,y,z", path_rows);
     writeTable(scratch.path() / "loops.csv", "qx,qy,qz,mx,my,mz,used", loop_rows);
     std::ofstream labels(scratch.path() / "names.txt");
     for (const std::string& name : names) labels << name << '\n';
-    if (!labels) throw std::runtime_error("cannot write the session names");
+    if (!labels) throw std::runtime_error("cannot write the paths' names");
     labels.close();
-    return draw(tool, "merge", scratch.path(), png, title);
+    return draw(tool, "paths", scratch.path(), png, title);
   } catch (const std::exception& e) {
     std::cerr << tool << ": warning: no plot " << png << ": " << e.what() << '\n';
     return false;

@@ -63,27 +63,27 @@ bool plotAlignment(const std::string& tool, const LandmarkMap& source, const Lan
                    const WeightFunction& weight, const Eigen::Matrix4d& transformation, const std::string& png,
                    const std::string& title);
 
-/// @brief One loop between sessions as plotMerge() draws it: the two keyframes' positions in the first session's frame.
+/// @brief One loop as plotPaths() draws it: the positions of its two keyframes' cameras.
 struct PlottedLoop {
   /// @brief The query keyframe's camera position.
   Eigen::Vector3d query = Eigen::Vector3d::Zero();
   /// @brief The match keyframe's camera position.
   Eigen::Vector3d match = Eigen::Vector3d::Zero();
-  /// @brief Whether the joint pose graph admitted it.
+  /// @brief Whether the pose graph admitted it.
   bool used = true;
 };
 
-/// @brief A merge of sessions at a glance: each merged session's camera path in the first session's frame, seen
-/// along the direction the paths vary least ("from above", whatever the frame) and from the side, and the loops
-/// between sessions as segments joining their keyframes.
+/// @brief Camera paths at a glance, where there is no ground truth to compare with: one run's path (wicp_rgbd_slam)
+/// or each merged session's in the first session's frame (wicp_merge), seen along the direction the paths vary
+/// least ("from above", whatever the frame) and from the side, and the loops as segments joining their keyframes.
 /// @param tool      the tool's name, for the warning when no picture is drawn
-/// @param sessions  one trajectory per merged session, in the first session's frame
+/// @param paths     the trajectories, in one frame
 /// @param names     one legend label per trajectory
-/// @param loops     the loops between sessions
+/// @param loops     the loops
 /// @param png       the picture, written atomically
 /// @param title     the figure's title
 /// @return true when the picture was written; false after a warning on stderr
-bool plotMerge(const std::string& tool, const std::vector<Trajectory>& sessions, const std::vector<std::string>& names,
+bool plotPaths(const std::string& tool, const std::vector<Trajectory>& paths, const std::vector<std::string>& names,
                const std::vector<PlottedLoop>& loops, const std::string& png, const std::string& title);
 
 }  // namespace weighted_icp::tools
