@@ -27,7 +27,6 @@
 #include <map>
 #include <memory>
 #include <optional>
-#include <set>
 #include <sstream>
 
 #include <boost/program_options.hpp>
@@ -291,26 +290,16 @@ std::map<std::string, std::size_t> writeLoopCandidates(const fs::path& path, con
     const auto found = timestamps.find(id);
     return found == timestamps.end() ? std::numeric_limits<double>::quiet_NaN() : found->second;
   };
-  std::set<std::pair<frontend::KeyframeId, frontend::KeyframeId>> accepted;
-  for (const mapping::LoopConstraint& loop : slam.acceptedLoops()) accepted.emplace(loop.query, loop.match);
   std::map<std::string, std::size_t> refusals;
   std::ostringstream out;
   out << "# query_id match_id query_timestamp match_timestamp score verdict reason\n" << std::fixed;
-  for (const mapping::LoopCandidateRecord& c :
-       detector ? detector->candidates() : std::vector<mapping::LoopCandidateRecord>{}) {
-    std::string verdict = c.refused_by, reason = c.reason;
-    if (verdict.empty() && accepted.count({c.query, c.edge_match})) {
-      verdict = "accepted";
-      if (c.edge_match != c.match)
-        reason += (reason.empty() ? "" : " ") + ("edge to keyframe " + std::to_string(c.edge_match)) +
-                  ", which saw the most PnP inliers";
-    } else if (verdict.empty()) {
-      verdict = "pose_graph";
-      reason = "verified, but not admitted by the pose graph's consistency test";
-    }
-    if (verdict != "accepted") ++refusals[verdict];
+  const std::vector<mapping::LoopCandidateRecord> none;
+  for (const mapping::LoopCandidateVerdict& v :
+       mapping::candidateVerdicts(detector ? detector->candidates() : none, slam.acceptedLoops())) {
+    if (v.verdict != "accepted") ++refusals[v.verdict];
+    const mapping::LoopCandidateRecord& c = v.candidate;
     out << c.query << ' ' << c.match << ' ' << std::setprecision(6) << timestamp(c.query) << ' ' << timestamp(c.match)
-        << ' ' << std::setprecision(3) << c.score << ' ' << verdict << ' ' << reason << '\n';
+        << ' ' << std::setprecision(3) << c.score << ' ' << v.verdict << ' ' << v.reason << '\n';
   }
   tools::writeTextFile(path.string(), out.str());
   return refusals;

@@ -1,7 +1,9 @@
 // Place recognition + geometric verification as the loop closer's detector.
 #include "weighted_icp/mapping/loop_detector.h"
 
+#include <set>
 #include <stdexcept>
+#include <string>
 #include <utility>
 
 #include "weighted_icp/mapping/keyframe_snapshot.h"
@@ -91,6 +93,28 @@ LoopDetectorStats BowLoopDetector::stats() const {
   stats.candidates = candidates_.size();
   for (const LoopCandidateRecord& record : candidates_) stats.verified += record.refused_by.empty() ? 1 : 0;
   return stats;
+}
+
+std::vector<LoopCandidateVerdict> candidateVerdicts(const std::vector<LoopCandidateRecord>& candidates,
+                                                    const std::vector<LoopConstraint>& accepted) {
+  // An admitted loop names the keyframe its edge joins, which a verified candidate records as edge_match.
+  std::set<std::pair<frontend::KeyframeId, frontend::KeyframeId>> admitted;
+  for (const LoopConstraint& loop : accepted) admitted.emplace(loop.query, loop.match);
+  std::vector<LoopCandidateVerdict> verdicts;
+  for (const LoopCandidateRecord& c : candidates) {
+    LoopCandidateVerdict v{c, c.refused_by, c.reason};
+    if (v.verdict.empty() && admitted.count({c.query, c.edge_match})) {
+      v.verdict = "accepted";
+      if (c.edge_match != c.match)
+        v.reason += (v.reason.empty() ? "" : " ") + ("edge to keyframe " + std::to_string(c.edge_match)) +
+                    ", which saw the most PnP inliers";
+    } else if (v.verdict.empty()) {
+      v.verdict = "pose_graph";
+      v.reason = "verified, but not admitted by the pose graph's consistency test";
+    }
+    verdicts.push_back(std::move(v));
+  }
+  return verdicts;
 }
 
 LoopDetector asLoopDetector(const BowLoopDetector::Ptr& detector) {

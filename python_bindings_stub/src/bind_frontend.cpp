@@ -1,6 +1,8 @@
 // The RGB-D SLAM for Python: RgbdSlam (tracking, bundle adjustment, loop closing) on a TUM folder or frame by frame,
 // the GIL released while it works.
+#include <cstdint>
 #include <filesystem>
+#include <limits>
 #include <map>
 #include <mutex>
 #include <optional>
@@ -72,9 +74,13 @@ PinholeCamera toCamera(const py::handle& camera) {
 /// the ground truth of run().
 class PythonSlam {
  public:
-  PythonSlam(const PinholeCamera& camera, mapping::LoopDetector detector,
+  /// @param detector  the loop detector (null without loop closure), kept to read its candidates
+  PythonSlam(const PinholeCamera& camera, mapping::BowLoopDetector::Ptr detector,
              const mapping::LoopClosingSlamOptions& options)
-      : camera_(camera), slam_(std::make_unique<mapping::LoopClosingSlam>(camera, std::move(detector), options)) {}
+      : camera_(camera),
+        detector_(detector),
+        slam_(std::make_unique<mapping::LoopClosingSlam>(
+            camera, detector ? mapping::asLoopDetector(detector) : mapping::LoopDetector{}, options)) {}
 
   TrackResult track(const py::array& color, const py::array& depth, double timestamp, bool bgr) {
     RgbdFrame frame;
@@ -128,6 +134,15 @@ class PythonSlam {
   auto lockedClosing(F f) const {
     std::lock_guard<std::mutex> lock(mutex_);
     return f(static_cast<const mapping::LoopClosingSlam&>(*slam_));
+  }
+
+  /// Every loop candidate's verdict, after finish() (the detector is read only when it is not running).
+  std::vector<mapping::LoopCandidateVerdict> candidateVerdicts() {
+    finish();
+    py::gil_scoped_release unlocked;
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!detector_) return {};
+    return mapping::candidateVerdicts(detector_->candidates(), slam_->acceptedLoops());
   }
 
   /// The session folder wicp_merge reads (as wicp_rgbd_slam's session/), after finish().
@@ -207,6 +222,7 @@ class PythonSlam {
   }
 
   PinholeCamera camera_;
+  mapping::BowLoopDetector::Ptr detector_;  // shared with the loop closer's detector function
   std::unique_ptr<mapping::LoopClosingSlam> slam_;
   mutable std::mutex mutex_;
   py::object color_owner_, depth_owner_;
@@ -236,9 +252,8 @@ std::unique_ptr<PythonSlam> makeSlam(const py::object& camera, std::size_t minim
   options.loop_closure = loop_closure;
   const PinholeCamera cam = toCamera(camera);
   // The detector as wicp_rgbd_slam builds it (LoopDetectorOptions' defaults), loaded before any frame is tracked.
-  mapping::LoopDetector detector;
-  if (loop_closure)
-    detector = mapping::asLoopDetector(std::make_shared<mapping::BowLoopDetector>(loadVocabulary(vocabulary), cam));
+  mapping::BowLoopDetector::Ptr detector;
+  if (loop_closure) detector = std::make_shared<mapping::BowLoopDetector>(loadVocabulary(vocabulary), cam);
   return std::make_unique<PythonSlam>(cam, std::move(detector), options);
 }
 
@@ -350,6 +365,56 @@ std::vector<LoopRecord> loopRecords(const PythonSlam& slam) {
   });
 }
 
+/// One loop candidate as Python reads it (weighted_icp.LoopCandidate).
+struct CandidateRecord {
+  std::uint64_t query = 0, match = 0, edge_match = 0;
+  double query_timestamp = 0.0, match_timestamp = 0.0, score = 0.0;
+  std::string verdict, reason;
+};
+
+/// RgbdSlam.loop_candidates(): every candidate place recognition proposed, with its verdict and timestamps.
+std::vector<CandidateRecord> candidateRecords(PythonSlam& slam) {
+  const std::vector<mapping::LoopCandidateVerdict> verdicts = slam.candidateVerdicts();
+  const std::map<frontend::KeyframeId, double> timestamps = slam.locked([](const frontend::RgbdSlam& s) {
+    std::map<frontend::KeyframeId, double> t;
+    for (const frontend::Keyframe& keyframe : s.map().keyframes()) t[keyframe.id] = keyframe.timestamp;
+    return t;
+  });
+  const auto timestamp = [&](frontend::KeyframeId id) {
+    const auto found = timestamps.find(id);
+    return found == timestamps.end() ? std::numeric_limits<double>::quiet_NaN() : found->second;
+  };
+  std::vector<CandidateRecord> records;
+  for (const mapping::LoopCandidateVerdict& v : verdicts) {
+    const mapping::LoopCandidateRecord& c = v.candidate;
+    records.push_back(
+        {c.query, c.match, c.edge_match, timestamp(c.query), timestamp(c.match), c.score, v.verdict, v.reason});
+  }
+  return records;
+}
+
+void bindLoopCandidate(py::module_& m) {
+  py::class_<CandidateRecord>(m, "LoopCandidate",
+                              "A keyframe place recognition proposed as a revisit, and what became of it, as "
+                              "wicp_rgbd_slam's loop_candidates.txt lists it.")
+      .def_readonly("query", &CandidateRecord::query, "The query keyframe's id.")
+      .def_readonly("match", &CandidateRecord::match, "The proposed older keyframe's id.")
+      .def_readonly("edge_match", &CandidateRecord::edge_match,
+                    "The keyframe a verified loop's edge joins (the candidate's neighbour that saw the most PnP "
+                    "inliers, often the candidate itself).")
+      .def_readonly("query_timestamp", &CandidateRecord::query_timestamp,
+                    "The query keyframe's timestamp (s; NaN for a keyframe bundle adjustment removed since).")
+      .def_readonly("match_timestamp", &CandidateRecord::match_timestamp, "The candidate's timestamp (s; or NaN).")
+      .def_readonly("score", &CandidateRecord::score, "Place recognition's normalised score (0..1).")
+      .def_readonly("verdict", &CandidateRecord::verdict,
+                    "'accepted', 'pose_graph' (verified, not admitted by the pose graph's consistency test) or the "
+                    "verification check that refused it.")
+      .def_readonly("reason", &CandidateRecord::reason, "Why, with the measured values.")
+      .def("__repr__", [](const CandidateRecord& c) {
+        return "<LoopCandidate " + std::to_string(c.query) + " -> " + std::to_string(c.match) + ": " + c.verdict + ">";
+      });
+}
+
 /// RgbdSlam.loop_stats: report.json's loop counters.
 std::map<std::string, std::size_t> loopStats(const PythonSlam& slam) {
   const mapping::LoopClosingStats stats =
@@ -386,6 +451,9 @@ void bindSlam(py::module_& m) {
            "finish(), then writes the session folder merge_sessions() and wicp_merge read (wicp_rgbd_slam's "
            "session/), published by one rename; a non-empty folder is refused without overwrite=True.")
       .def_property_readonly("loops", &loopRecords, "The loops closed so far (Loop), in order, as loops.txt.")
+      .def("loop_candidates", &candidateRecords,
+           "finish(), then every candidate place recognition proposed (LoopCandidate) with its verdict and reason, "
+           "as loop_candidates.txt: where to look when a run closes no loop.")
       .def_property_readonly("loop_stats", &loopStats,
                              "{'loops_detected', 'loops_accepted', 'pose_graph_optimisations'}, as report.json.")
       .def_property_readonly(
@@ -472,6 +540,7 @@ void bindTumRuns(py::module_& m) {
 void bindFrontend(py::module_& m) {
   bindCamera(m);
   bindTrackResult(m);
+  bindLoopCandidate(m);
   bindSlam(m);
   bindTumRuns(m);
 }

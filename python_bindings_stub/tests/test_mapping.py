@@ -69,9 +69,20 @@ def test_a_run_closes_the_loops_the_tool_closes(revisit: Path, tmp_path: Path) -
         np.testing.assert_allclose(loop.query_in_match[:3, 3], row[2:5], atol=1e-9)
         assert loop.inliers == int(row[9]) and loop.query > loop.match
 
+    # Every candidate with its verdict, as loop_candidates.txt lists them.
+    listed = [line.split(maxsplit=6) for line in (tmp_path / "tool" / "loop_candidates.txt").read_text().splitlines()
+              if not line.startswith("#")]
+    candidates = slam.loop_candidates()
+    assert len(candidates) == len(listed) > len(loops)
+    for candidate, fields in zip(candidates, listed):
+        assert (candidate.query, candidate.match, candidate.verdict) == (int(fields[0]), int(fields[1]), fields[5])
+        assert candidate.query_timestamp == pytest.approx(float(fields[2]), abs=1e-6)
+        assert candidate.reason == (fields[6] if len(fields) > 6 else "")
+    assert sum(c.verdict == "accepted" for c in candidates) == len(loops)
+
     # Closing loops is what changes the trajectory: without it, none is closed and the poses differ.
     open_loop = wi.run_tum(str(revisit), deterministic=True, loop_closure=False)
-    assert open_loop.loops == [] and open_loop.loop_stats["loops_detected"] == 0
+    assert open_loop.loops == [] and open_loop.loop_candidates() == [] and open_loop.loop_stats["loops_detected"] == 0
     assert not np.allclose(open_loop.trajectory, slam.trajectory, atol=1e-6)
 
 

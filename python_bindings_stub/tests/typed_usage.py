@@ -35,6 +35,7 @@ def contract(path: str, source_xyz: npt.NDArray[np.float64], target_xyz: npt.NDA
 def mapping(folder: str, vocabulary: str) -> float:
     slam = wi.run_tum(folder, deterministic=True, vocabulary=vocabulary, first_frame=2, max_frames=50)
     loops: list[wi.Loop] = slam.loops
+    refused = [c.reason for c in slam.loop_candidates() if c.verdict != "accepted" and c.score > 0.1]
     closed: int = slam.loop_stats["loops_accepted"]
     slam.save_session("a", overwrite=True)
     wi.RgbdSlam("fr1", loop_closure=False).run(folder, first_frame=40)
@@ -42,6 +43,6 @@ def mapping(folder: str, vocabulary: str) -> float:
                                                progress=lambda name, done, total: None)
     second: wi.MergedSession = merge.sessions[1]
     frames = second.trajectory
-    return (float(merge.trajectory.sum()) + float(second.world_in_first[0, 3]) + len(merge.map) + closed +
+    return (float(merge.trajectory.sum()) + float(second.world_in_first[0, 3]) + len(merge.map) + closed + len(refused) +
             sum(loop.inliers + float(loop.query_in_match[0, 3]) for loop in loops + merge.loops) +
             (0.0 if frames is None else float(frames.sum())))

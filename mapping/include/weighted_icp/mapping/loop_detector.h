@@ -106,6 +106,24 @@ class BowLoopDetector {
   std::vector<LoopCandidateRecord> candidates_;
 };
 
+/// @brief A candidate's verdict once the run is over (loop_candidates.txt; where to look when a run closes no loop).
+struct LoopCandidateVerdict {
+  /// @brief What the detector recorded.
+  LoopCandidateRecord candidate;
+  /// @brief "accepted" (its loop was admitted), "pose_graph" (verified, but not admitted by the pose graph's
+  /// consistency test) or the verification check that refused it (LoopCandidateRecord::refused_by).
+  std::string verdict;
+  /// @brief Why, with the measured values; for an accepted loop whose edge joins another keyframe than the
+  /// candidate, which one.
+  std::string reason;
+};
+
+/// @brief The verdict of every candidate, in the detector's order.
+/// @param candidates What BowLoopDetector::candidates() recorded.
+/// @param accepted The loops admitted (LoopCloser::acceptedLoops(), LoopClosingSlam::acceptedLoops()).
+std::vector<LoopCandidateVerdict> candidateVerdicts(const std::vector<LoopCandidateRecord>& candidates,
+                                                    const std::vector<LoopConstraint>& accepted);
+
 /// @brief The detector in the form LoopCloser and LoopClosingSlam take; the returned function shares `detector`.
 /// @param detector The detector (not null: std::invalid_argument).
 LoopDetector asLoopDetector(const BowLoopDetector::Ptr& detector);
