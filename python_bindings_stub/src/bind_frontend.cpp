@@ -353,14 +353,18 @@ const std::string& slamInitDoc() {
   return doc;
 }
 
-/// RgbdSlam.loops: the loops the run closed, with their keyframes' timestamps.
+/// RgbdSlam.loops: the loops the run closed, with their keyframes' timestamps; as loops.txt, a loop one of whose
+/// keyframes bundle adjustment has culled since is left out.
 std::vector<LoopRecord> loopRecords(const PythonSlam& slam) {
   return slam.lockedClosing([](const mapping::LoopClosingSlam& s) {
     std::map<frontend::KeyframeId, double> timestamps;
     for (const frontend::Keyframe& keyframe : s.slam().map().keyframes()) timestamps[keyframe.id] = keyframe.timestamp;
     std::vector<LoopRecord> records;
-    for (const mapping::LoopConstraint& loop : s.acceptedLoops())
-      records.push_back(toLoopRecord(loop, 0, timestamps.at(loop.query), timestamps.at(loop.match), true));
+    for (const mapping::LoopConstraint& loop : s.acceptedLoops()) {
+      const auto query = timestamps.find(loop.query), match = timestamps.find(loop.match);
+      if (query != timestamps.end() && match != timestamps.end())
+        records.push_back(toLoopRecord(loop, 0, query->second, match->second, true));
+    }
     return records;
   });
 }
@@ -450,7 +454,9 @@ void bindSlam(py::module_& m) {
       .def("save_session", &PythonSlam::saveSession, py::arg("folder"), py::arg("overwrite") = false,
            "finish(), then writes the session folder merge_sessions() and wicp_merge read (wicp_rgbd_slam's "
            "session/), published by one rename; a non-empty folder is refused without overwrite=True.")
-      .def_property_readonly("loops", &loopRecords, "The loops closed so far (Loop), in order, as loops.txt.")
+      .def_property_readonly("loops", &loopRecords,
+                             "The loops closed so far (Loop), in order, as loops.txt (which leaves out a loop whose "
+                             "keyframe bundle adjustment culled since).")
       .def("loop_candidates", &candidateRecords,
            "finish(), then every candidate place recognition proposed (LoopCandidate) with its verdict and reason, "
            "as loop_candidates.txt: where to look when a run closes no loop.")

@@ -1,5 +1,6 @@
 // The mapping layer for Python: the loops a run closed (Loop) and merge_sessions(), which merges the session folders
 // RgbdSlam.save_session() and wicp_rgbd_slam write, as wicp_merge does, the GIL released while it works.
+#include <cstdint>
 #include <map>
 #include <memory>
 #include <string>
