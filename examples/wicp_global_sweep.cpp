@@ -191,6 +191,8 @@ po::options_description searchOptions(GlobalAlignmentSettings& g) {
        "best refined hypotheses searched again from where they ended while their inliers grow (0-360; 0: none)")
       ("climb-rounds", tools::rangedValue(&g.climb_rounds, 0u, 100u)->default_value(g.climb_rounds),
        "most times each is searched again (0-100)")
+      ("tilted-hypotheses", tools::rangedValue(&g.tilted_hypotheses, 0u, 360u)->default_value(g.tilted_hypotheses),
+       "best refined hypotheses tilted where the maps' up axes may disagree (0-360; 0: none)")
       ("final-tilt-range", tools::rangedValue(&g.final_tilt_range_deg, 0.0, 30.0)->default_value(g.final_tilt_range_deg),
        "the final pass also starts from the winner tilted this far (deg, 0-30; 0: none)")
       ("final-tilt-step", tools::rangedValue(&g.final_tilt_step_deg, 0.01, 30.0)->default_value(g.final_tilt_step_deg),
