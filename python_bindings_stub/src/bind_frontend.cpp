@@ -353,12 +353,18 @@ const std::string& slamInitDoc() {
   return doc;
 }
 
+/// Each keyframe's timestamp, by id (loops and loop candidates name keyframes by their timestamps too).
+std::map<frontend::KeyframeId, double> keyframeTimestamps(const frontend::RgbdSlam& slam) {
+  std::map<frontend::KeyframeId, double> timestamps;
+  for (const frontend::Keyframe& keyframe : slam.map().keyframes()) timestamps[keyframe.id] = keyframe.timestamp;
+  return timestamps;
+}
+
 /// RgbdSlam.loops: the loops the run closed, with their keyframes' timestamps; as loops.txt, a loop one of whose
 /// keyframes bundle adjustment has culled since is left out.
 std::vector<LoopRecord> loopRecords(const PythonSlam& slam) {
   return slam.lockedClosing([](const mapping::LoopClosingSlam& s) {
-    std::map<frontend::KeyframeId, double> timestamps;
-    for (const frontend::Keyframe& keyframe : s.slam().map().keyframes()) timestamps[keyframe.id] = keyframe.timestamp;
+    const std::map<frontend::KeyframeId, double> timestamps = keyframeTimestamps(s.slam());
     std::vector<LoopRecord> records;
     for (const mapping::LoopConstraint& loop : s.acceptedLoops()) {
       const auto query = timestamps.find(loop.query), match = timestamps.find(loop.match);
@@ -379,11 +385,7 @@ struct CandidateRecord {
 /// RgbdSlam.loop_candidates(): every candidate place recognition proposed, with its verdict and timestamps.
 std::vector<CandidateRecord> candidateRecords(PythonSlam& slam) {
   const std::vector<mapping::LoopCandidateVerdict> verdicts = slam.candidateVerdicts();
-  const std::map<frontend::KeyframeId, double> timestamps = slam.locked([](const frontend::RgbdSlam& s) {
-    std::map<frontend::KeyframeId, double> t;
-    for (const frontend::Keyframe& keyframe : s.map().keyframes()) t[keyframe.id] = keyframe.timestamp;
-    return t;
-  });
+  const std::map<frontend::KeyframeId, double> timestamps = slam.locked(keyframeTimestamps);
   const auto timestamp = [&](frontend::KeyframeId id) {
     const auto found = timestamps.find(id);
     return found == timestamps.end() ? std::numeric_limits<double>::quiet_NaN() : found->second;
