@@ -497,7 +497,7 @@ struct SlamCommand {
 std::map<std::string, std::string> defaultChoiceWords(const frontend::FrontendOptions& options) {
   std::map<std::string, std::string> words;
   for (const char* key : {"describe", "gate-free-retry", "motion-timing", "keyframe-before-loss", "feature-width",
-                          "pnp-thresholds", "pnp-prediction"})
+                          "pnp-thresholds", "pnp-prediction", "feature-smoothing"})
     words[key] = frontend::frontendChoiceWord(options, key);
   return words;
 }
@@ -594,16 +594,19 @@ po::options_description syntheticOptions(simulation::SyntheticRgbdOptions& synth
   return options;
 }
 
-/// The papers' techniques, each an option off by default (issue #11; docs/frontend_ablation.md). Each name is read
-/// by the library's parser, so the names and the error listing them exist once.
-po::options_description ablationOptions(frontend::FrontendOptions& f, std::map<std::string, std::string>& words) {
+/// A front-end choice read as a word by frontend::setFrontendChoice, its default the options' own.
+auto choiceWord(std::map<std::string, std::string>& words, const char* key) {
+  std::string& value = words.at(key);
+  return po::value(&value)->default_value(value);
+}
+
+/// The papers' techniques and the choices since, in the images: features, descriptors, matching (issue #11;
+/// docs/frontend_ablation.md). Each name is read by the library's parser, so the names and the error listing them
+/// exist once.
+void addImageOptions(po::options_description& ablation, frontend::FrontendOptions& f,
+                     std::map<std::string, std::string>& words) {
   const auto name = [](auto value) { return frontend::toString(value); };
-  // A choice read as a word, its default the options' own.
-  const auto word = [&words](const char* key) {
-    std::string& value = words.at(key);
-    return po::value(&value)->default_value(value);
-  };
-  po::options_description ablation("The papers' techniques, for the ablation (docs/frontend_ablation.md)");
+  const auto word = [&words](const char* key) { return choiceWord(words, key); };
   // clang-format off
   ablation.add_options()
       ("descriptor", tools::namedValue(&f.features.descriptor, frontend::parseDescriptorKind, frontend::descriptorKindName),
@@ -616,20 +619,39 @@ po::options_description ablationOptions(frontend::FrontendOptions& f, std::map<s
        "much a result depends on them)")
       ("match-region", tools::namedValue(&f.match_region, frontend::parseMatchRegion, frontend::matchRegionName),
        "everywhere, projection (regions of interest around projected points) or homography (KD-tree paper, Eq. 8)")
-      ("dynamic-distance", tools::namedValue(&f.dynamic_distance, frontend::parseDynamicDistanceKind,
-                                             frontend::dynamicDistanceKindName),
-       "displacement (3D), epipolar-history (front-end paper, Eq. 6, against the point's earlier values) or both")
       ("quality-measure", tools::namedValue(&f.quality.measure, frontend::parseQualityMeasure, name),
        "relative gate's measure: sharpness (log10 Laplacian variance, every frame) or brisque (keyframe candidates)")
-      ("dense-odometry", tools::namedValue(&f.dense_odometry.use, frontend::parseDenseOdometryUse, name),
-       "OpenCV's dense RGB-D odometry as the PnP motion prior, as the pose when 3D-2D tracking fails, both, or off")
-      ("dense-odometry-kind", tools::namedValue(&f.dense_odometry.kind, frontend::parseDenseOdometryKind, name),
-       "which: cv::rgbd::RgbdOdometry, ICPOdometry or RgbdICPOdometry")
       ("equalization", tools::namedValue(&f.features.equalization, frontend::parseEqualizationMethod, name),
        "a frame with too few corners: CLAHE, global histogram equalisation (the front-end paper) or none")
       ("describe", word("describe"),
        "an equalised frame's corners described in the frame as it is (original) or in the equalised image "
        "(equalized, before 2026-11-26)")
+      ("feature-width", word("feature-width"),
+       "MIN-MAX: frames narrower than MIN pixels are doubled, wider than MAX halved (until they are not) for "
+       "finding and describing features, the keypoints kept in the frame's pixels (0: never); full: every frame at "
+       "its own size")
+      ("feature-smoothing", word("feature-smoothing"),
+       "SIGMA: features are found, refined and described in the frame blurred by a Gaussian of SIGMA pixels (0-5) "
+       "at the width they are found at: fewer corners made by JPEG and noise, but it cost the runs that close loops "
+       "(README); off: no blur");
+  // clang-format on
+}
+
+/// The papers' techniques and the choices since, in the geometry: dynamic points, dense odometry, PnP, tracking
+/// losses (issue #11; docs/frontend_ablation.md).
+void addGeometryOptions(po::options_description& ablation, frontend::FrontendOptions& f,
+                        std::map<std::string, std::string>& words) {
+  const auto name = [](auto value) { return frontend::toString(value); };
+  const auto word = [&words](const char* key) { return choiceWord(words, key); };
+  // clang-format off
+  ablation.add_options()
+      ("dynamic-distance", tools::namedValue(&f.dynamic_distance, frontend::parseDynamicDistanceKind,
+                                             frontend::dynamicDistanceKindName),
+       "displacement (3D), epipolar-history (front-end paper, Eq. 6, against the point's earlier values) or both")
+      ("dense-odometry", tools::namedValue(&f.dense_odometry.use, frontend::parseDenseOdometryUse, name),
+       "OpenCV's dense RGB-D odometry as the PnP motion prior, as the pose when 3D-2D tracking fails, both, or off")
+      ("dense-odometry-kind", tools::namedValue(&f.dense_odometry.kind, frontend::parseDenseOdometryKind, name),
+       "which: cv::rgbd::RgbdOdometry, ICPOdometry or RgbdICPOdometry")
       ("pnp", tools::namedValue(&f.pnp.method, frontend::parsePnpMethod, name),
        "RANSAC PnP solver: ap3p (AP3P sets, EPnP) or iterative (the paper's iterative 5-point solution)")
       ("gate-free-retry", word("gate-free-retry"),
@@ -641,10 +663,6 @@ po::options_description ablationOptions(frontend::FrontendOptions& f, std::map<s
       ("keyframe-before-loss", word("keyframe-before-loss"),
        "on: when tracking is lost, the last frame 3D-2D tracked becomes the segment's last keyframe, for the next "
        "segment's bridge to find; off: as before 2026-11-27 (afternoon)")
-      ("feature-width", word("feature-width"),
-       "MIN-MAX: frames narrower than MIN pixels are doubled, wider than MAX halved (until they are not) for "
-       "finding and describing features, the keypoints kept in the frame's pixels (0: never); full: every frame at "
-       "its own size")
       ("pnp-thresholds", word("pnp-thresholds"),
        "working: PnP's RANSAC threshold and Huber scale in pixels of the image features are found at (a frame "
        "halved for them: twice its own pixels); frame: in the frame's own pixels (as before 2026-11-27)")
@@ -656,6 +674,14 @@ po::options_description ablationOptions(frontend::FrontendOptions& f, std::map<s
                                     ->default_value(f.pnp.ransac_iterations),
        "most RANSAC draws a frame's PnP makes; fewer when the inliers found already give 99 % confidence (1-100000)");
   // clang-format on
+}
+
+/// The papers' techniques, each an option off by default, and the choices made since (issue #11;
+/// docs/frontend_ablation.md).
+po::options_description ablationOptions(frontend::FrontendOptions& f, std::map<std::string, std::string>& words) {
+  po::options_description ablation("The papers' techniques, for the ablation (docs/frontend_ablation.md)");
+  addImageOptions(ablation, f, words);
+  addGeometryOptions(ablation, f, words);
   return ablation;
 }
 

@@ -63,6 +63,7 @@ std::vector<Option> ablationOptions() {
       {"equalization-none", [](RgbdSlamOptions& o) { o.frontend.features.equalization = EqualizationMethod::None; }},
       {"pnp-iterative", [](RgbdSlamOptions& o) { o.frontend.pnp.method = PnpMethod::Iterative; }},
       {"quality-brisque", [](RgbdSlamOptions& o) { o.frontend.quality.measure = QualityMeasure::Brisque; }},
+      {"feature-smoothing", [](RgbdSlamOptions& o) { o.frontend.features.smoothing_sigma = 1.0; }},
   };
 }
 

@@ -65,7 +65,7 @@ TEST(FrontendChoices, EachKeySetsItsOption) {
   EXPECT_EQ(options.dense_odometry.kind, DenseOdometryKind::Icp);
   EXPECT_EQ(options.quality.mode, QualityGateMode::Absolute);
   EXPECT_EQ(options.matcher.kind, MatcherKind::KdTree);
-  EXPECT_EQ(frontendChoiceKeys().size(), 17u);
+  EXPECT_EQ(frontendChoiceKeys().size(), 18u);
   // The widths features are found at: full, or MIN-MAX pixels.
   EXPECT_EQ(FrontendOptions{}.features.min_working_width, 427);
   EXPECT_EQ(FrontendOptions{}.features.max_working_width, 960);
@@ -86,6 +86,19 @@ TEST(FrontendChoices, EachKeySetsItsOption) {
        {"800", "500-800", "10-800", "0-40", "400-800px", "", "half", "-960", "400--800", "+400-800"})
     EXPECT_THROW(setFrontendChoice(options, "feature-width", wrong), std::invalid_argument) << wrong;
   EXPECT_EQ(options.features.max_working_width, 800);
+  // The feature blur: off, or a Gaussian sigma in pixels in [0, 5].
+  EXPECT_EQ(FrontendOptions{}.features.smoothing_sigma, 0.0);
+  setFrontendChoice(options, "feature-smoothing", "0.8");
+  EXPECT_EQ(options.features.smoothing_sigma, 0.8);
+  setFrontendChoice(options, "feature-smoothing", "off");
+  EXPECT_EQ(options.features.smoothing_sigma, 0.0);
+  setFrontendChoice(options, "feature-smoothing", "1");
+  setFrontendChoice(options, "feature-smoothing", "0");  // no blur, as off
+  EXPECT_EQ(frontendChoiceWord(options, "feature-smoothing"), "off");
+  setFrontendChoice(options, "feature-smoothing", "1");
+  for (const char* wrong : {"-0.5", "-1", "5.5", "1px", "nan", "inf", "", "on"})
+    EXPECT_THROW(setFrontendChoice(options, "feature-smoothing", wrong), std::invalid_argument) << wrong;
+  EXPECT_EQ(options.features.smoothing_sigma, 1.0);
 }
 
 TEST(FrontendChoices, EachKeysWordSetsBackTheSameChoice) {
@@ -97,6 +110,7 @@ TEST(FrontendChoices, EachKeysWordSetsBackTheSameChoice) {
   setFrontendChoice(changed, "gate-free-retry", "off");
   setFrontendChoice(changed, "feature-width", "400-800");
   setFrontendChoice(changed, "dense-odometry", "prior");
+  setFrontendChoice(changed, "feature-smoothing", "0.8");
   for (const FrontendOptions& source : {FrontendOptions{}, changed}) {
     FrontendOptions copy;
     for (const std::string& key : frontendChoiceKeys()) setFrontendChoice(copy, key, frontendChoiceWord(source, key));
@@ -107,6 +121,8 @@ TEST(FrontendChoices, EachKeysWordSetsBackTheSameChoice) {
   EXPECT_EQ(frontendChoiceWord(changed, "feature-width"), "400-800");
   EXPECT_EQ(frontendChoiceWord(changed, "gate-free-retry"), "off");
   EXPECT_EQ(frontendChoiceWord(FrontendOptions{}, "gate-free-retry"), "on");
+  EXPECT_EQ(frontendChoiceWord(changed, "feature-smoothing"), "0.8");
+  EXPECT_EQ(frontendChoiceWord(FrontendOptions{}, "feature-smoothing"), "off");
   EXPECT_THROW(frontendChoiceWord(changed, "pnp-method"), std::invalid_argument);
 }
 

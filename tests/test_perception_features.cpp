@@ -4,9 +4,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <iostream>
+#include <limits>
+#include <vector>
 
 #include <gtest/gtest.h>
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "test_perception_support.h"
@@ -310,6 +314,70 @@ TEST(FeatureExtractor, RefusesBadInputAndOptions) {
   options = {};
   options.clahe.clip_limit = 0.0;
   EXPECT_THROW(FeatureExtractor{options}, std::invalid_argument);
+  for (const double sigma : {-1.0, 5.5, std::numeric_limits<double>::quiet_NaN()}) {
+    options = {};
+    options.smoothing_sigma = sigma;
+    EXPECT_THROW(FeatureExtractor{options}, std::invalid_argument) << sigma;
+  }
+}
+
+/// `gray` compressed as JPEG of `quality` with its 8x8 blocks laid `dx`, `dy` pixels off: two such views of one frame
+/// differ as two frames of a JPEG camera do where the scene is the same (their blocking and ringing moved).
+cv::Mat jpegView(const cv::Mat& gray, int quality, int dx, int dy) {
+  const cv::Mat there = (cv::Mat_<double>(2, 3) << 1, 0, dx, 0, 1, dy);
+  const cv::Mat back = (cv::Mat_<double>(2, 3) << 1, 0, -dx, 0, 1, -dy);
+  cv::Mat shifted, view;
+  cv::warpAffine(gray, shifted, there, gray.size());
+  std::vector<std::uint8_t> bytes;
+  cv::imencode(".jpg", shifted, bytes, {cv::IMWRITE_JPEG_QUALITY, quality});
+  cv::warpAffine(cv::imdecode(bytes, cv::IMREAD_GRAYSCALE), view, back, gray.size());
+  return view;
+}
+
+/// How many of `a`'s keypoints have one of `b`'s within a pixel.
+int repeated(const ExtractedFeatures& a, const ExtractedFeatures& b) {
+  int count = 0;
+  for (const cv::KeyPoint& k : a.keypoints)
+    count += std::any_of(b.keypoints.begin(), b.keypoints.end(),
+                         [&](const cv::KeyPoint& l) { return cv::norm(k.pt - l.pt) < 1.0; });
+  return count;
+}
+
+// The feature blur against JPEG: corners found in the blurred views of a real frame compressed twice with their
+// blocks laid differently repeat far more often (measured 190 of 661 without, 293 of 587 at sigma 1), and the
+// response floor lowered with the blur keeps most of a clean frame's corners (without it, 438 of 646).
+TEST(FeatureExtractor, CornersFoundInTheBlurredFrameRepeatAcrossJpegViewsAndTheCleanFrameKeepsItsCorners) {
+  WEIGHTED_ICP_REQUIRE_FILE(fr3Dir() / "rgb.txt");
+  const cv::Mat frame = grayFrame(fr3Dir(), 3, 10);
+  FeatureExtractorOptions unblurred, blurred;
+  unblurred.smoothing_sigma = 0.0;
+  blurred.smoothing_sigma = 1.0;
+  const FeatureExtractor plain(unblurred), smoothing(blurred);
+  const cv::Mat a = jpegView(frame, 75, 3, 2), b = jpegView(frame, 75, 6, 4);
+  const ExtractedFeatures plain_a = plain.extract(a), plain_b = plain.extract(b);
+  const cv::Mat a_before = a.clone();
+  const ExtractedFeatures smoothed_a = smoothing.extract(a), smoothed_b = smoothing.extract(b);
+  EXPECT_EQ(cv::norm(a, a_before, cv::NORM_INF), 0.0) << "the caller's frame was blurred";
+  ASSERT_GT(plain_a.keypoints.size(), 300u);
+  ASSERT_GT(smoothed_a.keypoints.size(), 300u);
+  const double plain_share = static_cast<double>(repeated(plain_a, plain_b)) / plain_a.keypoints.size();
+  const double smoothed_share = static_cast<double>(repeated(smoothed_a, smoothed_b)) / smoothed_a.keypoints.size();
+  EXPECT_GT(smoothed_share, 1.5 * plain_share) << plain_share << " repeated without the blur";
+  EXPECT_GT(repeated(smoothed_a, smoothed_b), repeated(plain_a, plain_b));
+  // Found, refined and described in the blurred frame: ORB describes a keypoint there as the extractor did.
+  ASSERT_EQ(smoothed_a.descriptors.rows, static_cast<int>(smoothed_a.keypoints.size()));
+  cv::Mat blurred_a;
+  cv::GaussianBlur(a, blurred_a, cv::Size(0, 0), 1.0);
+  const cv::Ptr<cv::ORB> orb = cv::ORB::create(1000, 1.2f, 1, 31, 0, 2, cv::ORB::HARRIS_SCORE, 31);
+  std::vector<cv::KeyPoint> first{smoothed_a.keypoints.front()};
+  cv::Mat row;
+  orb->compute(blurred_a, first, row);
+  ASSERT_EQ(first.size(), 1u);
+  EXPECT_EQ(cv::norm(row, smoothed_a.descriptors.row(0), cv::NORM_HAMMING), 0);
+
+  const std::size_t clean_plain = plain.extract(frame).keypoints.size();
+  const std::size_t clean_smoothed = smoothing.extract(frame).keypoints.size();
+  EXPECT_GT(clean_smoothed, clean_plain * 8 / 10) << clean_plain << " without the blur";
 }
 
 }  // namespace

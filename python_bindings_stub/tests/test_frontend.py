@@ -121,7 +121,7 @@ def test_options_choose_the_papers_techniques_by_the_tools_names(tum_folder: Pat
 def test_the_constructors_help_names_every_option_key() -> None:
     doc = wi.RgbdSlam.__init__.__doc__ or ""
     listed = doc.split("(keys: ")[1].split(";")[0].split(", ")
-    assert {"gate-free-retry", "motion-timing", "keyframe-before-loss"} <= set(listed)
+    assert {"gate-free-retry", "motion-timing", "keyframe-before-loss", "feature-smoothing"} <= set(listed)
     for key in listed:
 #A key the front end knows : its value is what is refused, not the key.
         with pytest.raises(ValueError, match=f"options: {key}: "):

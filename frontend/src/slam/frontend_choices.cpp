@@ -1,8 +1,10 @@
 // The front end's named choices by wicp_rgbd_slam's option names: one table of keys for every caller.
 #include "weighted_icp/frontend/slam/frontend_choices.h"
 
+#include <cmath>
 #include <exception>
 #include <functional>
+#include <sstream>
 #include <stdexcept>
 #include <tuple>
 #include <utility>
@@ -53,6 +55,31 @@ std::pair<int, int> parseFeatureWidths(const std::string& value) {
 std::string featureWidthsWord(const FeatureExtractorOptions& features) {
   if (features.min_working_width == 0 && features.max_working_width == 0) return "full";
   return std::to_string(features.min_working_width) + "-" + std::to_string(features.max_working_width);
+}
+
+/// "off" or the feature blur's Gaussian sigma in pixels, 0 (off) to 5 (FeatureExtractorOptions::smoothing_sigma).
+double parseFeatureSmoothing(const std::string& value) {
+  if (value == "off") return 0.0;
+  const auto fail = [&] {
+    return std::invalid_argument("'" + value + "' (expected off or a Gaussian sigma in pixels from 0 (off) to 5)");
+  };
+  std::size_t used = 0;
+  double sigma = 0.0;
+  try {
+    sigma = std::stod(value, &used);
+  } catch (const std::exception&) {
+    throw fail();
+  }
+  if (used != value.size() || !std::isfinite(sigma) || sigma < 0.0 || sigma > 5.0) throw fail();
+  return sigma;
+}
+
+/// The word of feature-smoothing's value: "off" or the sigma as a number ("1", "0.8").
+std::string featureSmoothingWord(double sigma) {
+  if (sigma == 0.0) return "off";
+  std::ostringstream word;
+  word << sigma;
+  return word.str();
 }
 
 /// One named choice: how its word sets the options and which word the options hold, side by side so that the two
@@ -117,6 +144,9 @@ const std::vector<Choice>& choices() {
          std::tie(o.features.min_working_width, o.features.max_working_width) = parseFeatureWidths(v);
        },
        [](const FrontendOptions& o) { return featureWidthsWord(o.features); }},
+      {"feature-smoothing",
+       [](FrontendOptions& o, const std::string& v) { o.features.smoothing_sigma = parseFeatureSmoothing(v); },
+       [](const FrontendOptions& o) { return featureSmoothingWord(o.features.smoothing_sigma); }},
       {"dense-odometry",
        [](FrontendOptions& o, const std::string& v) { o.dense_odometry.use = parseDenseOdometryUse(v); },
        [](const FrontendOptions& o) { return toString(o.dense_odometry.use); }},
