@@ -122,6 +122,11 @@ TEST(FrontendChoices, EachKeysWordSetsBackTheSameChoice) {
   EXPECT_EQ(frontendChoiceWord(changed, "gate-free-retry"), "off");
   EXPECT_EQ(frontendChoiceWord(FrontendOptions{}, "gate-free-retry"), "on");
   EXPECT_EQ(frontendChoiceWord(changed, "feature-smoothing"), "0.8");
+  FrontendOptions fine;  // a sigma six digits do not hold reads back exactly
+  setFrontendChoice(fine, "feature-smoothing", "1.23456789012");
+  FrontendOptions read_back;
+  setFrontendChoice(read_back, "feature-smoothing", frontendChoiceWord(fine, "feature-smoothing"));
+  EXPECT_EQ(read_back.features.smoothing_sigma, 1.23456789012);
   EXPECT_EQ(frontendChoiceWord(FrontendOptions{}, "feature-smoothing"), "off");
   EXPECT_THROW(frontendChoiceWord(changed, "pnp-method"), std::invalid_argument);
 }

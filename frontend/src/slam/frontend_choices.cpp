@@ -4,6 +4,7 @@
 #include <cmath>
 #include <exception>
 #include <functional>
+#include <iomanip>
 #include <sstream>
 #include <stdexcept>
 #include <tuple>
@@ -74,12 +75,17 @@ double parseFeatureSmoothing(const std::string& value) {
   return sigma;
 }
 
-/// The word of feature-smoothing's value: "off" or the sigma as a number ("1", "0.8").
+/// The word of feature-smoothing's value: "off" or the sigma as a number, as short as reads back exactly ("1", "0.8").
 std::string featureSmoothingWord(double sigma) {
   if (sigma == 0.0) return "off";
-  std::ostringstream word;
-  word << sigma;
-  return word.str();
+  std::string shortest;
+  for (const int digits : {6, 17}) {
+    std::ostringstream word;
+    word << std::setprecision(digits) << sigma;
+    shortest = word.str();
+    if (std::stod(shortest) == sigma) break;
+  }
+  return shortest;
 }
 
 /// One named choice: how its word sets the options and which word the options hold, side by side so that the two
