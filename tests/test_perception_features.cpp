@@ -344,8 +344,9 @@ int repeated(const ExtractedFeatures& a, const ExtractedFeatures& b) {
 }
 
 // The feature blur against JPEG: corners found in the blurred views of a real frame compressed twice with their
-// blocks laid differently repeat far more often (measured 190 of 661 without, 293 of 587 at sigma 1), and the
-// response floor lowered with the blur keeps most of a clean frame's corners (without it, 438 of 646).
+// blocks laid differently repeat far more often (measured 190 of 661 without, 287 of 628 at sigma 1), and the
+// response floor lowered with the blur keeps most of a clean frame's corners (646 without the blur: 612 with it, 483
+// without the lowering).
 TEST(FeatureExtractor, CornersFoundInTheBlurredFrameRepeatAcrossJpegViewsAndTheCleanFrameKeepsItsCorners) {
   WEIGHTED_ICP_REQUIRE_FILE(fr3Dir() / "rgb.txt");
   const cv::Mat frame = grayFrame(fr3Dir(), 3, 10);
@@ -362,7 +363,7 @@ TEST(FeatureExtractor, CornersFoundInTheBlurredFrameRepeatAcrossJpegViewsAndTheC
   ASSERT_GT(smoothed_a.keypoints.size(), 300u);
   const double plain_share = static_cast<double>(repeated(plain_a, plain_b)) / plain_a.keypoints.size();
   const double smoothed_share = static_cast<double>(repeated(smoothed_a, smoothed_b)) / smoothed_a.keypoints.size();
-  EXPECT_GT(smoothed_share, 1.5 * plain_share) << plain_share << " repeated without the blur";
+  EXPECT_GT(smoothed_share, 1.3 * plain_share) << plain_share << " repeated without the blur";
   EXPECT_GT(repeated(smoothed_a, smoothed_b), repeated(plain_a, plain_b));
   // Found, refined and described in the blurred frame: ORB describes a keypoint there as the extractor did.
   ASSERT_EQ(smoothed_a.descriptors.rows, static_cast<int>(smoothed_a.keypoints.size()));
