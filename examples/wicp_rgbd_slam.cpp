@@ -632,8 +632,8 @@ void addImageOptions(po::options_description& ablation, frontend::FrontendOption
        "its own size")
       ("feature-smoothing", word("feature-smoothing"),
        "SIGMA: features are found, refined and described in the frame blurred by a Gaussian of SIGMA pixels (0-5) "
-       "at the width they are found at: fewer corners made by JPEG and noise, but it cost the runs that close loops "
-       "(README); off: no blur");
+       "at the width they are found at: fewer corners made by JPEG and noise, better in the dark, but it cost the "
+       "revisits in good light that close loops (README); off: no blur");
   // clang-format on
 }
 

@@ -64,8 +64,9 @@ struct FeatureExtractorOptions {
   /// lowered by what the blur takes from an edge's response, 0.5 / (0.5 + sigma^2). Noise and JPEG's blocks make
   /// corners of their own that move from frame to frame: on a real frame compressed twice with its blocks laid
   /// differently, 46 % of the corners found in the blurred views repeat within a pixel against 29 % without. 0: no
-  /// blur, the default: at 1 px it lowered the frame-to-frame error on 26 of 31 sequences but cost the revisiting runs
-  /// that close loops (docs/frontend_generalisation.md, "Features in a blurred frame").
+  /// blur, the default: at 1 px it lowered the frame-to-frame error on 26 of 31 sequences and helped most in the dark,
+  /// but cost the revisits in good light that close loops (docs/frontend_generalisation.md, "Features in a blurred
+  /// frame").
   double smoothing_sigma = 0.0;
 };
 
