@@ -20,8 +20,7 @@ constexpr int kOrbHalfPatch = kOrbPatchSize / 2;
 // ORB describes keypoints at least its edgeThreshold from the border; corners
 // are only sought inside that margin so that none is detected in vain.
 constexpr int kOrbBorder = kOrbPatchSize;
-constexpr double kMaxSubpixelShift = 0.5;   // pixels
-constexpr double kMaxSmoothingSigma = 5.0;  // pixels: beyond it corners of a 640-pixel frame blur together
+constexpr double kMaxSubpixelShift = 0.5;  // pixels
 
 void requireOption(bool valid, const std::string& what) {
   if (!valid) throw std::invalid_argument("FeatureExtractor: " + what);
@@ -42,8 +41,10 @@ void validate(const FeatureExtractorOptions& o) {
   requireOption(o.min_working_width == 0 || o.max_working_width == 0 || 2 * o.min_working_width <= o.max_working_width,
                 "min_working_width must be at most half max_working_width (a width between them is reached by "
                 "halving or doubling)");
-  requireOption(std::isfinite(o.smoothing_sigma) && o.smoothing_sigma >= 0.0 && o.smoothing_sigma <= kMaxSmoothingSigma,
-                "smoothing_sigma must be 0 (no blur) to 5 pixels");
+  requireOption(
+      std::isfinite(o.smoothing_sigma) && o.smoothing_sigma >= 0.0 &&
+          o.smoothing_sigma <= FeatureExtractorOptions::kMaxSmoothingSigma,
+      cv::format("smoothing_sigma must be 0 (no blur) to %g pixels", FeatureExtractorOptions::kMaxSmoothingSigma));
 }
 
 /// ORB's orientation (Rublee et al. 2011): the direction from the keypoint to

@@ -58,23 +58,6 @@ std::string featureWidthsWord(const FeatureExtractorOptions& features) {
   return std::to_string(features.min_working_width) + "-" + std::to_string(features.max_working_width);
 }
 
-/// "off" or the feature blur's Gaussian sigma in pixels, 0 (off) to 5 (FeatureExtractorOptions::smoothing_sigma).
-double parseFeatureSmoothing(const std::string& value) {
-  if (value == "off") return 0.0;
-  const auto fail = [&] {
-    return std::invalid_argument("'" + value + "' (expected off or a Gaussian sigma in pixels from 0 (off) to 5)");
-  };
-  std::size_t used = 0;
-  double sigma = 0.0;
-  try {
-    sigma = std::stod(value, &used);
-  } catch (const std::exception&) {
-    throw fail();
-  }
-  if (used != value.size() || !std::isfinite(sigma) || sigma < 0.0 || sigma > 5.0) throw fail();
-  return sigma;
-}
-
 /// The word of feature-smoothing's value: "off" or the sigma as a number, as short as reads back exactly ("1", "0.8").
 std::string featureSmoothingWord(double sigma) {
   if (sigma == 0.0) return "off";
@@ -86,6 +69,26 @@ std::string featureSmoothingWord(double sigma) {
     if (std::stod(shortest) == sigma) break;
   }
   return shortest;
+}
+
+/// "off" or the feature blur's Gaussian sigma in pixels, 0 (off) to 5 (FeatureExtractorOptions::smoothing_sigma).
+double parseFeatureSmoothing(const std::string& value) {
+  if (value == "off") return 0.0;
+  const auto fail = [&] {
+    return std::invalid_argument("'" + value + "' (expected off or a Gaussian sigma in pixels from 0 (off) to " +
+                                 featureSmoothingWord(FeatureExtractorOptions::kMaxSmoothingSigma) + ")");
+  };
+  std::size_t used = 0;
+  double sigma = 0.0;
+  try {
+    sigma = std::stod(value, &used);
+  } catch (const std::exception&) {
+    throw fail();
+  }
+  if (used != value.size() || !std::isfinite(sigma) || sigma < 0.0 ||
+      sigma > FeatureExtractorOptions::kMaxSmoothingSigma)
+    throw fail();
+  return sigma;
 }
 
 /// One named choice: how its word sets the options and which word the options hold, side by side so that the two

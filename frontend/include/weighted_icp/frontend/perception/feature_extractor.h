@@ -68,6 +68,8 @@ struct FeatureExtractorOptions {
   /// but cost the revisits in good light that close loops (docs/frontend_generalisation.md, "Features in a blurred
   /// frame").
   double smoothing_sigma = 0.0;
+  /// The largest smoothing_sigma accepted, in pixels: beyond it the corners of a 640-pixel frame blur together.
+  static constexpr double kMaxSmoothingSigma = 5.0;
 };
 
 struct ExtractedFeatures {
