@@ -1,10 +1,9 @@
 // wicp_rgbd_slam's issue #11 ablation options (--quality-measure, --dense-odometry,
 // --dense-odometry-kind, --equalization, --pnp) and --quality-gate: a name outside the list is a
 // command-line error naming the option and the accepted names (read by the library's own parser);
-// accepted names run.
+// accepted names run. scripts/run_ablation.py runs option sets over variants and sums them up.
 
-#include <fstream>
-#include <sstream>
+#include <filesystem>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -15,6 +14,7 @@
 namespace {
 
 namespace fs = std::filesystem;
+using weighted_icp::testing::readFile;
 using weighted_icp::testing::scratchDir;
 using weighted_icp::testing::ToolRun;
 
@@ -55,10 +55,43 @@ TEST(AblationOptions, EveryOptionRunsOnAFewSyntheticFrames) {
       out.string();
   const ToolRun r = run(args, scratch);
   ASSERT_EQ(r.status, 0) << r.err;
-  std::ifstream report(out / "report.json");
-  std::stringstream text;
-  text << report.rdbuf();
-  EXPECT_NE(text.str().find("\"tracked_frames\":5"), std::string::npos) << text.str();
+  const std::string report = readFile(out / "report.json");
+  EXPECT_NE(report.find("\"tracked_frames\":5"), std::string::npos) << report;
+}
+
+TEST(AblationRunner, WritesEveryRowAndASummaryOfEachSetAgainstTheFirst) {
+  const fs::path scratch = scratchDir("ablation_runner");
+  const fs::path table = scratch / "table.md";
+  // Two rows (one a variant of two kinds joined by "+"), two option sets: the first is the baseline.
+  const ToolRun r = weighted_icp::testing::runScript(
+      "run_ablation.py",
+      "--scratch '" + (scratch / "work").string() + "' --out '" + table.string() +
+          "' --sequences synthetic --variants original,jpeg+blur --synthetic-frames 6 --set base= "
+          "--set iterative='--pnp iterative'",
+      scratch);
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::string text = readFile(table);
+  EXPECT_NE(text.find("| sequence | base | iterative |"), std::string::npos) << text;
+  EXPECT_NE(text.find("| synthetic | "), std::string::npos) << text;
+  EXPECT_NE(text.find("| synthetic, jpeg+blur | "), std::string::npos) << text;
+  EXPECT_EQ(text.find("| failed |"), std::string::npos) << text;  // no run failed
+  // The baseline against itself: ratio 1, nothing lower or higher, no rise; the other set has its own line.
+  EXPECT_NE(text.find("| base | 1.000 | 0 / 0 | none | 1.000 | 0 | 1.000 | 0 |"), std::string::npos) << text;
+  EXPECT_NE(text.find("| iterative | "), std::string::npos) << text;
+  EXPECT_EQ(text, r.out.substr(r.out.size() - text.size())) << "the table printed is the one written";
+  EXPECT_TRUE(fs::is_directory(scratch / "work" / "variants" / "synthetic_jpeg+blur"));
+}
+
+TEST(AblationRunner, FlagsTheToolRefusesStopTheRunNamingThem) {
+  const fs::path scratch = scratchDir("ablation_runner_bad");
+  const ToolRun r = weighted_icp::testing::runScript(
+      "run_ablation.py",
+      "--scratch '" + (scratch / "work").string() +
+          "' --sequences synthetic --variants original --synthetic-frames 4 --set bad='--pnp epnp'",
+      scratch);
+  EXPECT_EQ(r.status, 1) << r.err;
+  EXPECT_NE(r.err.find("refused the flags '--pnp epnp'"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(scratch / "work" / "ablation.md"));
 }
 
 }  // namespace
