@@ -63,7 +63,7 @@ DEFAULT_SETS = [
 ]
 # "kinect" is the held-out Kinect's format, as in wicp_benchmark_cross_sequence.
 VARIANT_KINDS = {"kinect": "jpeg,mm-depth,focal"}
-SAME_CM = 0.02  # ATE differences below this are counted as none (run_ablation's summary)
+SAME_CM = 0.02  # ATE differences (cm) up to this count as none in the summary: below what one LSH draw moves
 TUM_FOLDERS = {"fr1_head": "tum_fr1_xyz_head", "fr3_head": "tum_fr3_teddy_head"}
 
 
